@@ -1,0 +1,42 @@
+#pragma once
+/// \file
+/// Argument checking shared by every public entry point: a failed check throws
+/// std::invalid_argument with a message that names the function and the offending value.
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace affine_orb::detail {
+
+/// Throws std::invalid_argument(`what`) unless `condition` holds.
+inline void require(bool condition, const std::string& what) {
+  if (!condition) throw std::invalid_argument("affine_orb: " + what);
+}
+
+/// True for a finite value strictly greater than zero (rejects NaN and infinity).
+inline bool positive_finite(double value) { return std::isfinite(value) && value > 0.0; }
+
+/// Name of an OpenCV matrix type ("CV_8UC3") for error messages.
+inline std::string type_name(int type) { return cv::typeToString(type); }
+
+/// Checks that `image` is a non-empty single-channel 8-bit image (CV_8UC1); `who` names the caller.
+inline void require_gray8(const cv::Mat& image, const char* who) {
+  require(!image.empty(), std::string(who) + ": the image is empty");
+  require(image.type() == CV_8UC1, std::string(who) + ": the image must be CV_8UC1 (grey, 8-bit), got " +
+                                       type_name(image.type()) + "; convert colour images with cv::cvtColor");
+}
+
+/// Checks that `mask` is empty (no mask) or a CV_8UC1 matrix of exactly `size`.
+inline void require_mask(const cv::Mat& mask, cv::Size size, const char* who) {
+  if (mask.empty()) return;
+  require(mask.type() == CV_8UC1,
+          std::string(who) + ": the mask must be CV_8UC1, got " + type_name(mask.type()));
+  require(mask.size() == size, std::string(who) + ": the mask is " + std::to_string(mask.cols) + "x" +
+                                   std::to_string(mask.rows) + " but the image is " +
+                                   std::to_string(size.width) + "x" + std::to_string(size.height));
+}
+
+}  // namespace affine_orb::detail

@@ -1,0 +1,59 @@
+#pragma once
+/// \file
+/// Binary descriptors and the feature set every extractor returns.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace affine_orb {
+
+/// A binary descriptor of `Bits` bits stored as 64-bit words.
+///
+/// Bit b is bit (b % 64) of word b / 64. On a little-endian machine the bytes of the words are
+/// therefore exactly OpenCV's byte layout (byte b / 8, bit b % 8), so a row of
+/// descriptors_to_mat() is what cv::ORB or cv::BRISK would write for the same bits.
+template <int Bits>
+using BinaryDescriptor = std::array<std::uint64_t, static_cast<std::size_t>(Bits / 64)>;
+
+/// Keypoints and their descriptors, row i of `descriptors` belonging to `keypoints[i]`.
+///
+/// Keypoint fields (cv::KeyPoint):
+/// - `pt`: position in pixels of the original (level-0) image, pixel centres at integer coordinates;
+/// - `angle`: orientation in degrees in [0, 360), measured in the original image (x right, y down);
+/// - `octave`: pyramid level l the keypoint was detected at, 0 = full resolution;
+/// - `size`: diameter of the descriptor support in original pixels, patch_size · scale, where
+///   scale = s^l for the scale factor s (times √t for a keypoint from a view of tilt t);
+/// - `response`: detector score (FAST or Harris, see DetectorOptions), larger is stronger.
+///
+/// `views[i]` is the index of the simulated view keypoint i was detected in (0 = the original,
+/// untilted image; see affine_views.hpp).
+template <int Bits>
+struct Features {
+  static constexpr int kBits = Bits;
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<BinaryDescriptor<Bits>> descriptors;
+  std::vector<int> views;
+
+  std::size_t size() const { return keypoints.size(); }
+  bool empty() const { return keypoints.empty(); }
+};
+
+/// Copies descriptors into an N x (Bits/8) CV_8U matrix, the layout OpenCV's matchers and
+/// ORB-SLAM's ORBmatcher read. Requires a little-endian host (checked at compile time).
+template <int Bits>
+cv::Mat descriptors_to_mat(const std::vector<BinaryDescriptor<Bits>>& descriptors) {
+  static_assert(Bits % 64 == 0, "descriptor size must be a multiple of 64 bits");
+#if defined(__BYTE_ORDER__) && (__BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__)
+  static_assert(Bits < 0, "descriptors_to_mat assumes a little-endian host");
+#endif
+  cv::Mat mat(static_cast<int>(descriptors.size()), Bits / 8, CV_8U);
+  if (!descriptors.empty()) std::memcpy(mat.data, descriptors.data(), descriptors.size() * (Bits / 8));
+  return mat;
+}
+
+}  // namespace affine_orb

@@ -6,6 +6,8 @@
 /// of a simulated view). It provides:
 ///
 /// - `static constexpr int kBits;` descriptor length, a multiple of 64;
+/// - `static constexpr float kPatchSize;` diameter of the described support in level pixels, reported
+///   as cv::KeyPoint::size (times the keypoint scale);
 /// - `using Options = ...;` a plain options struct with `void check() const` (throws
 ///   std::invalid_argument);
 /// - `using LevelData = ...;` what the policy precomputes once per level image (a smoothed copy, an

@@ -1,0 +1,124 @@
+#pragma once
+/// \file
+/// Corner candidates of one image (a pyramid level of the original image or of a simulated view):
+/// FAST-9 with non-maximum suppression, on a grid whose cells fall back to a lower threshold when
+/// they have no corner at the initial one (SPEC §2, ORB-SLAM2's iniThFAST/minThFAST behaviour).
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/detail/check.hpp"
+#include "affine_orb/fast.hpp"
+#include "affine_orb/harris.hpp"
+
+namespace affine_orb {
+
+/// How candidates are ranked by the budget and the spatial spreading.
+enum class ScoreType {
+  kFast,    ///< FAST score (largest threshold at which the pixel is a corner); ORB-SLAM2's choice.
+  kHarris,  ///< Harris response on a 7x7 block, k = 0.04; cv::ORB's default.
+};
+
+/// Corner detection parameters.
+struct DetectorOptions {
+  /// FAST threshold in grey levels tried first in every grid cell; ORB-SLAM2's iniThFAST = 20.
+  int initial_threshold = 20;
+  /// FAST threshold for cells that have no corner at initial_threshold; ORB-SLAM2's minThFAST = 7.
+  /// Needed in texture-poor regions. Must be in [1, initial_threshold].
+  int min_threshold = 7;
+  /// Side of the grid cells in level pixels; ORB-SLAM2 uses 30.
+  int cell_size = 30;
+  /// Ranking score for the budget and the spreading.
+  ScoreType score = ScoreType::kFast;
+  /// Harris block side in pixels (odd) when score == kHarris; ORB uses 7.
+  int harris_block_size = 7;
+  /// Harris k when score == kHarris; ORB and Harris & Stephens use 0.04.
+  float harris_k = 0.04f;
+
+  void check() const {
+    detail::require(initial_threshold >= 1 && initial_threshold <= 254,
+                    "DetectorOptions::initial_threshold must be in [1, 254], got " + std::to_string(initial_threshold));
+    detail::require(min_threshold >= 1 && min_threshold <= initial_threshold,
+                    "DetectorOptions::min_threshold must be in [1, initial_threshold], got " +
+                        std::to_string(min_threshold));
+    detail::require(cell_size >= 4 && cell_size <= 4096,
+                    "DetectorOptions::cell_size must be in [4, 4096], got " + std::to_string(cell_size));
+    detail::require(score == ScoreType::kFast || score == ScoreType::kHarris, "DetectorOptions::score is invalid");
+    detail::require(harris_block_size >= 3 && harris_block_size <= 15 && harris_block_size % 2 == 1,
+                    "DetectorOptions::harris_block_size must be odd and in [3, 15]");
+    detail::require(std::isfinite(harris_k) && harris_k >= 0.0f && harris_k <= 0.25f,
+                    "DetectorOptions::harris_k must be in [0, 0.25]");
+  }
+
+  /// Pixels around a candidate that ranking reads (FAST circle, or the Harris block with Sobel).
+  int support_radius() const {
+    return score == ScoreType::kHarris ? std::max(kFastRadius, harris_radius(harris_block_size)) : kFastRadius;
+  }
+};
+
+/// Candidates of one image, all inside `roi`: integer positions, FAST scores, and the ranking
+/// response (FAST score or Harris response per DetectorOptions::score).
+struct Candidates {
+  std::vector<Corner> corners;
+  std::vector<float> responses;
+};
+
+/// Detects candidates inside `roi` of a CV_8UC1 image. `scores` is a caller-owned buffer reused
+/// across calls (the FAST score map). The caller keeps `roi` at least options.support_radius()
+/// pixels inside the image. Every grid cell (cell_size x cell_size, anchored at roi's corner) keeps
+/// its non-maximum-suppressed corners at initial_threshold, or at min_threshold if it has none.
+inline Candidates detect_candidates(const cv::Mat& image, cv::Rect roi, const DetectorOptions& options,
+                                    cv::Mat& scores) {
+  Candidates out;
+  roi &= cv::Rect(0, 0, image.cols, image.rows);
+  if (roi.empty()) return out;
+  // Pass 1: scores at the initial threshold, one pixel beyond the roi so that suppression at its
+  // edge sees the true neighbours.
+  const cv::Rect margin(-1, -1, 2, 2);
+  fast_score_map(image, roi + margin.tl() + margin.size(), options.initial_threshold, scores);
+  std::vector<Corner> corners = non_max_suppression(scores, roi, options.initial_threshold);
+
+  // Pass 2: cells without a corner are scored again at the minimum threshold (with the same
+  // one-pixel margin). A weak score never suppresses a strong corner, so this gives exactly the
+  // corners of a single map scored at min_threshold, filtered cell by cell.
+  if (options.min_threshold < options.initial_threshold) {
+    const int cols = (roi.width + options.cell_size - 1) / options.cell_size;
+    const int rows = (roi.height + options.cell_size - 1) / options.cell_size;
+    std::vector<char> strong(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows), 0);
+    for (const Corner& c : corners) {
+      strong[static_cast<std::size_t>((c.y - roi.y) / options.cell_size) * static_cast<std::size_t>(cols) +
+             static_cast<std::size_t>((c.x - roi.x) / options.cell_size)] = 1;
+    }
+    for (int row = 0; row < rows; ++row) {
+      for (int col = 0; col < cols; ++col) {
+        if (strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)]) {
+          continue;
+        }
+        const cv::Rect cell =
+            cv::Rect(roi.x + col * options.cell_size, roi.y + row * options.cell_size, options.cell_size,
+                     options.cell_size) &
+            roi;
+        fast_score_rect(image, cell + margin.tl() + margin.size(), options.min_threshold, scores);
+        const std::vector<Corner> weak = non_max_suppression(scores, cell, options.min_threshold);
+        corners.insert(corners.end(), weak.begin(), weak.end());
+      }
+    }
+  }
+  std::sort(corners.begin(), corners.end(),
+            [](const Corner& a, const Corner& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); });
+
+  out.responses.reserve(corners.size());
+  for (const Corner& c : corners) {
+    out.responses.push_back(options.score == ScoreType::kHarris
+                                ? harris_response(image, c.x, c.y, options.harris_block_size, options.harris_k)
+                                : static_cast<float>(c.score));
+  }
+  out.corners = std::move(corners);
+  return out;
+}
+
+}  // namespace affine_orb

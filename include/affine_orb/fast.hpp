@@ -1,0 +1,277 @@
+#pragma once
+/// \file
+/// FAST-9 corner detection on the 16-pixel Bresenham circle of radius 3 (Rosten & Drummond, 2006),
+/// with the FAST score and 3x3 non-maximum suppression.
+///
+/// Definitions used throughout (pixels of a CV_8UC1 image, x right, y down):
+/// - a pixel p with intensity I_p is a corner at threshold t when 9 contiguous pixels of its circle
+///   are all brighter than I_p + t or all darker than I_p − t (strict inequalities);
+/// - its FAST score is the largest t for which it is still a corner (0 when it is not a corner at
+///   t = 0). A pixel is a corner at threshold t exactly when its score is >= t.
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "affine_orb/detail/check.hpp"
+
+namespace affine_orb {
+
+/// Radius of the FAST circle in pixels: a pixel closer than this to the image border has no score.
+inline constexpr int kFastRadius = 3;
+
+/// The 16 circle offsets (dx, dy), clockwise from the top, as in Rosten & Drummond (2006), fig. 1.
+inline constexpr std::array<std::array<int, 2>, 16> kFastCircle = {{{0, -3},
+                                                                    {1, -3},
+                                                                    {2, -2},
+                                                                    {3, -1},
+                                                                    {3, 0},
+                                                                    {3, 1},
+                                                                    {2, 2},
+                                                                    {1, 3},
+                                                                    {0, 3},
+                                                                    {-1, 3},
+                                                                    {-2, 2},
+                                                                    {-3, 1},
+                                                                    {-3, 0},
+                                                                    {-3, -1},
+                                                                    {-2, -2},
+                                                                    {-1, -3}}};
+
+namespace detail {
+
+/// Arc strength of a pixel from its 16 circle differences d_k >= 0 (saturated at 0): the largest
+/// value v such that some 9 contiguous d_k are all >= v. For d_k = max(I_k − I_p, 0) (bright) or
+/// max(I_p − I_k, 0) (dark), the pixel is a corner at threshold t >= 1 iff the larger of its two
+/// arc strengths S exceeds t, and its FAST score is max(S − 1, 0).
+inline int arc_strength(const std::array<int, 16>& d) {
+  std::array<int, 16> m2{};
+  std::array<int, 16> m4{};
+  int best = 0;
+  for (int k = 0; k < 16; ++k) m2[k] = std::min(d[k], d[(k + 1) & 15]);
+  for (int k = 0; k < 16; ++k) m4[k] = std::min(m2[k], m2[(k + 2) & 15]);
+  for (int k = 0; k < 16; ++k) {
+    const int m8 = std::min(m4[k], m4[(k + 4) & 15]);
+    best = std::max(best, std::min(m8, d[(k + 8) & 15]));
+  }
+  return best;
+}
+
+/// max(bright, dark) arc strength of the pixel at p; see arc_strength().
+inline int pixel_strength(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset) {
+  const int center = p[0];
+  std::array<int, 16> bright{};
+  std::array<int, 16> dark{};
+  for (int k = 0; k < 16; ++k) {
+    const int v = p[offset[k]];
+    bright[k] = std::max(v - center, 0);
+    dark[k] = std::max(center - v, 0);
+  }
+  return std::max(arc_strength(bright), arc_strength(dark));
+}
+
+/// Scalar scoring of pixels [x0, x1) of one row (see fast_score_map()); the portable path and the
+/// reference the SIMD path is tested against.
+inline void score_row_scalar(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                             int threshold, std::uint8_t* out) {
+  for (int x = x0; x < x1; ++x) {
+    const std::uint8_t* p = row + x;
+    const int center = p[0];
+    const int hi = center + threshold;
+    const int lo = center - threshold;
+    // Any arc of 9 contains one of the pixels 0/8 and one of 4/12: reject early.
+    const int p0 = p[offset[0]], p4 = p[offset[4]], p8 = p[offset[8]], p12 = p[offset[12]];
+    const bool bright_possible = (p0 > hi || p8 > hi) && (p4 > hi || p12 > hi);
+    const bool dark_possible = (p0 < lo || p8 < lo) && (p4 < lo || p12 < lo);
+    if (!bright_possible && !dark_possible) {
+      out[x] = 0;
+      continue;
+    }
+    const int strength = pixel_strength(p, offset);
+    out[x] = static_cast<std::uint8_t>(strength > threshold ? strength - 1 : 0);
+  }
+}
+
+#if defined(__SSE2__)
+#if defined(__GNUC__) || defined(__clang__)
+#define AFFINE_ORB_UNROLL _Pragma("GCC unroll 16")
+#else
+#define AFFINE_ORB_UNROLL
+#endif
+
+/// arc_strength() of 16 pixels at once from their circle pixels c[k] and centres v, for the bright
+/// (c − v) or dark (v − c) polarity, in saturated 8-bit arithmetic.
+inline __m128i arc_strength_sse2(const __m128i (&c)[16], __m128i v, bool bright) {
+  __m128i d[16];
+  AFFINE_ORB_UNROLL
+  for (int k = 0; k < 16; ++k) d[k] = bright ? _mm_subs_epu8(c[k], v) : _mm_subs_epu8(v, c[k]);
+  __m128i m2[16];
+  AFFINE_ORB_UNROLL
+  for (int k = 0; k < 16; ++k) m2[k] = _mm_min_epu8(d[k], d[(k + 1) & 15]);
+  __m128i m4[16];
+  AFFINE_ORB_UNROLL
+  for (int k = 0; k < 16; ++k) m4[k] = _mm_min_epu8(m2[k], m2[(k + 2) & 15]);
+  __m128i strength = _mm_setzero_si128();
+  AFFINE_ORB_UNROLL
+  for (int k = 0; k < 16; ++k) {
+    strength = _mm_max_epu8(strength, _mm_min_epu8(_mm_min_epu8(m4[k], m4[(k + 4) & 15]), d[(k + 8) & 15]));
+  }
+  return strength;
+}
+
+/// SSE2 scoring of pixels [x0, x1) of one row, 16 at a time, equal to score_row_scalar() bit for
+/// bit: saturated differences, arc minima by doubling (runs of 2, 4, 8, then 9), max over starts.
+inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                           int threshold, std::uint8_t* out) {
+  const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
+  const __m128i one = _mm_set1_epi8(1);
+  const __m128i zero = _mm_setzero_si128();
+  int x = x0;
+  for (; x + 16 <= x1; x += 16) {
+    const std::uint8_t* p = row + x;
+    auto load = [p](std::ptrdiff_t o) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + o)); };
+    const __m128i v = load(0);
+    const __m128i hi = _mm_adds_epu8(v, t);
+    const __m128i lo = _mm_subs_epu8(v, t);
+    auto brighter = [&](__m128i a) { return _mm_subs_epu8(a, hi); };  // non-zero where a > hi
+    auto darker = [&](__m128i a) { return _mm_subs_epu8(lo, a); };    // non-zero where a < lo
+    const __m128i c0 = load(offset[0]), c4 = load(offset[4]), c8 = load(offset[8]), c12 = load(offset[12]);
+    auto both = [&](__m128i a, __m128i b) {  // non-zero lanes: a and b both non-zero
+      return _mm_andnot_si128(_mm_or_si128(_mm_cmpeq_epi8(a, zero), _mm_cmpeq_epi8(b, zero)), _mm_set1_epi8(-1));
+    };
+    const __m128i possible =
+        _mm_or_si128(both(_mm_or_si128(brighter(c0), brighter(c8)), _mm_or_si128(brighter(c4), brighter(c12))),
+                     both(_mm_or_si128(darker(c0), darker(c8)), _mm_or_si128(darker(c4), darker(c12))));
+    if (_mm_movemask_epi8(possible) == 0) {
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), zero);
+      continue;
+    }
+    __m128i c[16];
+    AFFINE_ORB_UNROLL
+    for (int k = 0; k < 16; ++k) c[k] = load(offset[k]);
+    const __m128i strength = _mm_max_epu8(arc_strength_sse2(c, v, true), arc_strength_sse2(c, v, false));
+    const __m128i not_corner = _mm_cmpeq_epi8(_mm_subs_epu8(strength, t), zero);  // strength <= t
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm_andnot_si128(not_corner, _mm_subs_epu8(strength, one)));
+  }
+  score_row_scalar(row, offset, x, x1, threshold, out);
+}
+#endif
+
+/// The 16 circle offsets in bytes for a row step of `step` bytes.
+inline std::array<std::ptrdiff_t, 16> circle_offsets(std::ptrdiff_t step) {
+  std::array<std::ptrdiff_t, 16> offset{};
+  for (int i = 0; i < 16; ++i) offset[i] = kFastCircle[i][1] * step + kFastCircle[i][0];
+  return offset;
+}
+
+}  // namespace detail
+
+/// FAST score of the pixel at `p` (pointer into a CV_8UC1 image with row step `step` bytes); the
+/// caller guarantees the 7x7 neighbourhood is inside the image.
+inline int fast_score(const std::uint8_t* p, std::ptrdiff_t step) {
+  return std::max(detail::pixel_strength(p, detail::circle_offsets(step)) - 1, 0);
+}
+
+/// Writes the FAST scores of the pixels of `rect` whose score is at least `threshold` into the
+/// CV_8UC1 map `scores` (of the image size), 0 for the other pixels of `rect`; pixels outside `rect`
+/// are left as they are. `rect` is clipped to the pixels whose circle lies inside the image.
+/// Uses SSE2 where the target has it (every x86-64), a scalar loop elsewhere; both write identical
+/// maps.
+inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, cv::Mat& scores) {
+  detail::require_gray8(image, "fast_score_rect");
+  detail::require(threshold >= 1 && threshold <= 255,
+                  "fast_score_rect: threshold must be in [1, 255], got " + std::to_string(threshold));
+  detail::require(scores.type() == CV_8UC1 && scores.size() == image.size(),
+                  "fast_score_rect: the score map must be CV_8UC1 of the image size");
+  rect &= cv::Rect(kFastRadius, kFastRadius, image.cols - 2 * kFastRadius, image.rows - 2 * kFastRadius);
+  if (rect.empty()) return;
+  const std::array<std::ptrdiff_t, 16> offset = detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+#if defined(__SSE2__)
+    detail::score_row_sse2(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, threshold,
+                           scores.ptr<std::uint8_t>(y));
+#else
+    detail::score_row_scalar(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, threshold,
+                             scores.ptr<std::uint8_t>(y));
+#endif
+  }
+}
+
+/// Per-pixel FAST scores of `image` restricted to the rectangle `roi`, for pixels whose score is at
+/// least `threshold` (in [1, 255]): `scores` is resized to the image size (CV_8UC1, its buffer
+/// reused across calls) and holds those scores inside `roi`, 0 everywhere else. Scores never exceed
+/// 254. This is the detection pass; see detect_fast() for a one-call interface.
+inline void fast_score_map(const cv::Mat& image, cv::Rect roi, int threshold, cv::Mat& scores) {
+  detail::require_gray8(image, "fast_score_map");
+  scores.create(image.size(), CV_8UC1);
+  scores.setTo(0);
+  fast_score_rect(image, roi, threshold, scores);
+}
+
+/// A detected corner: integer pixel position in the image it was detected in, and its FAST score.
+struct Corner {
+  int x = 0;
+  int y = 0;
+  int score = 0;
+};
+
+/// Non-maximum suppression on a score map: the pixels of `roi` whose score is at least `threshold`
+/// and strictly greater than each of their 8 neighbours' scores, in raster order.
+inline std::vector<Corner> non_max_suppression(const cv::Mat& scores, cv::Rect roi, int threshold) {
+  detail::require(!scores.empty() && scores.type() == CV_8UC1, "non_max_suppression: scores must be CV_8UC1");
+  std::vector<Corner> corners;
+  roi &= cv::Rect(1, 1, scores.cols - 2, scores.rows - 2);
+  if (roi.empty()) return corners;
+  threshold = std::max(threshold, 1);
+  for (int y = roi.y; y < roi.y + roi.height; ++y) {
+    const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
+    const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
+    const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
+    const int x_end = roi.x + roi.width;
+    for (int x = roi.x; x < x_end; ++x) {
+      // Score maps are mostly zero: skip 8 empty pixels at a time.
+      if (x + 8 <= x_end) {
+        std::uint64_t word = 0;
+        std::memcpy(&word, row + x, sizeof(word));
+        if (word == 0) {
+          x += 7;
+          continue;
+        }
+      }
+      const int s = row[x];
+      if (s < threshold) continue;
+      if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s > row[x + 1] &&
+          s > below[x - 1] && s > below[x] && s > below[x + 1]) {
+        corners.push_back({x, y, s});
+      }
+    }
+  }
+  return corners;
+}
+
+/// FAST-9 corners of a CV_8UC1 image at `threshold` (in [1, 255]), optionally non-maximum
+/// suppressed, in raster order. Pixels closer than kFastRadius to the border are never corners.
+inline std::vector<Corner> detect_fast(const cv::Mat& image, int threshold, bool suppress_non_max = true) {
+  cv::Mat scores;
+  const cv::Rect all(0, 0, image.cols, image.rows);
+  fast_score_map(image, all, threshold, scores);
+  if (suppress_non_max) return non_max_suppression(scores, all, threshold);
+  std::vector<Corner> corners;
+  for (int y = 0; y < scores.rows; ++y) {
+    const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
+    for (int x = 0; x < scores.cols; ++x) {
+      if (row[x] >= threshold) corners.push_back({x, y, row[x]});
+    }
+  }
+  return corners;
+}
+
+}  // namespace affine_orb

@@ -1,0 +1,84 @@
+#pragma once
+/// \file
+/// Scale pyramid: level l is the image resized by 1/s^l (s = scale factor), as in ORB and ORB-SLAM2.
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "affine_orb/detail/check.hpp"
+
+namespace affine_orb {
+
+/// Scale pyramid parameters. Defaults are ORB-SLAM2's (SPEC §2: factor 1.2, 8 levels).
+struct PyramidOptions {
+  /// Ratio s between the sizes of consecutive levels; level l is s^l times smaller. Must be > 1.
+  double scale_factor = 1.2;
+  /// Number of levels including the full-resolution level 0; in [1, 32].
+  int levels = 8;
+
+  void check() const {
+    detail::require(std::isfinite(scale_factor) && scale_factor > 1.0 && scale_factor <= 4.0,
+                    "PyramidOptions::scale_factor must be in (1, 4], got " + std::to_string(scale_factor));
+    detail::require(levels >= 1 && levels <= 32,
+                    "PyramidOptions::levels must be in [1, 32], got " + std::to_string(levels));
+  }
+
+  /// Nominal scale of level l, s^l.
+  double scale(int level) const { return std::pow(scale_factor, level); }
+};
+
+/// Size of level l of an image of size `size`: round(W / s^l) x round(H / s^l), at least 1x1.
+inline cv::Size pyramid_level_size(cv::Size size, const PyramidOptions& options, int level) {
+  const double inv = 1.0 / options.scale(level);
+  return {std::max(1, static_cast<int>(std::lround(size.width * inv))),
+          std::max(1, static_cast<int>(std::lround(size.height * inv)))};
+}
+
+/// An image pyramid whose buffers are reused across build() calls of same-sized images.
+///
+/// Level l is produced from level l−1 by cv::resize with bilinear interpolation (OpenCV's
+/// pixel-centre convention), so a level-l pixel (x_l, y_l) corresponds to the level-0 point
+/// ((x_l + 0.5)·W/W_l − 0.5, (y_l + 0.5)·H/H_l − 0.5): the ratios telescope across levels.
+class Pyramid {
+ public:
+  explicit Pyramid(PyramidOptions options = {}) : options_(options) { options_.check(); }
+
+  /// Builds the levels of a CV_8UC1 image (non-continuous ROIs are fine). Level 0 shares no
+  /// memory with `image` (it is copied), so the pyramid stays valid if the caller's image changes.
+  void build(const cv::Mat& image) {
+    detail::require_gray8(image, "Pyramid::build");
+    levels_.resize(static_cast<std::size_t>(options_.levels));
+    image.copyTo(levels_[0]);
+    for (int l = 1; l < options_.levels; ++l) {
+      const cv::Size size = pyramid_level_size(image.size(), options_, l);
+      cv::resize(levels_[static_cast<std::size_t>(l - 1)], levels_[static_cast<std::size_t>(l)], size, 0, 0,
+                 cv::INTER_LINEAR);
+    }
+  }
+
+  const PyramidOptions& options() const { return options_; }
+  int levels() const { return options_.levels; }
+  bool empty() const { return levels_.empty(); }
+  const cv::Mat& level(int l) const { return levels_.at(static_cast<std::size_t>(l)); }
+  const std::vector<cv::Mat>& images() const { return levels_; }
+
+  /// Maps a point in level-l pixel coordinates to level-0 pixel coordinates (exact for the
+  /// resizing convention above, whatever the rounding of the level sizes).
+  cv::Point2f to_level0(cv::Point2f p, int l) const {
+    const cv::Mat& base = levels_.front();
+    const cv::Mat& level_image = level(l);
+    const float rx = static_cast<float>(base.cols) / static_cast<float>(level_image.cols);
+    const float ry = static_cast<float>(base.rows) / static_cast<float>(level_image.rows);
+    return {(p.x + 0.5f) * rx - 0.5f, (p.y + 0.5f) * ry - 0.5f};
+  }
+
+ private:
+  PyramidOptions options_;
+  std::vector<cv::Mat> levels_;
+};
+
+}  // namespace affine_orb

@@ -1,0 +1,168 @@
+#pragma once
+/// \file
+/// rBRIEF-256, ORB's steered BRIEF descriptor (Rublee et al., ICCV 2011, section 4.3), as a
+/// descriptor policy for Extractor<Rbrief> (see descriptor.hpp).
+///
+/// Definition, for a keypoint at level pixel p (rounded to the nearest integer pixel c) with
+/// orientation θ, on the level image smoothed by a 7x7 Gaussian of σ = 2 (border reflected, 101):
+/// test i of ORB's published pair table (detail/orb_pattern.hpp) rotates both points by θ,
+/// (x', y') = (round(x cos θ − y sin θ), round(x sin θ + y cos θ)), and bit i is 1 iff
+/// I_s(c + a'_i) < I_s(c + b'_i). Rounding is OpenCV's cvRound (round half to even), as in ORB.
+/// With the default options the bits are those of ORB for the same keypoint and angle, so DBoW2
+/// vocabularies trained on ORB (ORB-SLAM2's ORBvoc.txt) remain valid.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "affine_orb/descriptor.hpp"
+#include "affine_orb/detail/check.hpp"
+#include "affine_orb/detail/orb_pattern.hpp"
+#include "affine_orb/features.hpp"
+#include "affine_orb/orientation.hpp"
+
+namespace affine_orb {
+
+/// rBRIEF parameters. Changing any of them breaks bit compatibility with ORB.
+struct RbriefOptions {
+  /// Radius in level pixels of the intensity-centroid disc; ORB uses half its 31-pixel patch: 15.
+  int orientation_radius = 15;
+  /// Side of the Gaussian smoothing kernel in pixels (odd); ORB and ORB-SLAM2 use 7.
+  int blur_kernel = 7;
+  /// σ of the Gaussian smoothing in pixels; ORB and ORB-SLAM2 use 2.
+  double blur_sigma = 2.0;
+
+  void check() const {
+    detail::require(orientation_radius >= 3 && orientation_radius <= 64,
+                    "RbriefOptions::orientation_radius must be in [3, 64], got " + std::to_string(orientation_radius));
+    detail::require(blur_kernel >= 1 && blur_kernel <= 31 && blur_kernel % 2 == 1,
+                    "RbriefOptions::blur_kernel must be odd and in [1, 31], got " + std::to_string(blur_kernel));
+    detail::require(detail::positive_finite(blur_sigma) && blur_sigma <= 16.0,
+                    "RbriefOptions::blur_sigma must be in (0, 16], got " + std::to_string(blur_sigma));
+  }
+};
+
+/// The rBRIEF-256 descriptor policy.
+class Rbrief {
+ public:
+  static constexpr int kBits = 256;
+  /// Diameter in level pixels of ORB's patch; cv::KeyPoint::size is this times the keypoint scale.
+  static constexpr float kPatchSize = 31.0f;
+  using Options = RbriefOptions;
+
+  /// Per-level data: the level image (shallow) for the orientation and its smoothed copy for the tests.
+  struct LevelData {
+    cv::Mat image;
+    cv::Mat smoothed;
+  };
+
+  explicit Rbrief(const Options& options = {}) : options_(options), disc_((options.check(), options.orientation_radius)) {
+    int extent = 0;
+    for (const auto& pair : detail::kOrbTestPairs) {
+      const double ra = std::hypot(pair.xa, pair.ya);
+      const double rb = std::hypot(pair.xb, pair.yb);
+      extent = std::max(extent, static_cast<int>(std::lround(std::max(ra, rb))));
+    }
+    // A rotated test point has |x'|, |y'| <= round(|(x, y)|), the rounded radius.
+    border_ = std::max(extent, options_.orientation_radius);
+  }
+
+  const Options& options() const { return options_; }
+
+  /// Minimal distance in level pixels between a keypoint and the level border (18 by default).
+  int border() const { return border_; }
+
+  void prepare(const cv::Mat& level, LevelData& data) const {
+    detail::require_gray8(level, "Rbrief::prepare");
+    data.image = level;
+    cv::GaussianBlur(level, data.smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel), options_.blur_sigma,
+                     options_.blur_sigma, cv::BORDER_REFLECT_101);
+  }
+
+  /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it.
+  float orientation(const LevelData& data, cv::Point2f pt) const {
+    return disc_.angle(data.image, cvRound(pt.x), cvRound(pt.y));
+  }
+
+  BinaryDescriptor<kBits> describe(const LevelData& data, cv::Point2f pt, float angle) const {
+    const float a = std::cos(angle);
+    const float b = std::sin(angle);
+    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(data.smoothed.step[0]);
+    const std::uint8_t* center = data.smoothed.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x);
+    // Byte offsets of the rotated test points: offset = round(x sin + y cos)·step + round(x cos − y sin).
+    alignas(16) std::array<std::int32_t, 2 * kBits> offset{};
+    rotated_offsets(a, b, static_cast<std::int32_t>(step), offset.data());
+    BinaryDescriptor<kBits> descriptor{};
+    for (int i = 0; i < kBits; ++i) {
+      const int ia = center[offset[static_cast<std::size_t>(2 * i)]];
+      const int ib = center[offset[static_cast<std::size_t>(2 * i + 1)]];
+      descriptor[static_cast<std::size_t>(i / 64)] |= static_cast<std::uint64_t>(ia < ib) << (i % 64);
+    }
+    return descriptor;
+  }
+
+ private:
+  /// The test points of the pattern as floats, interleaved a_0, b_0, a_1, b_1, ... (x and y apart).
+  struct PatternPoints {
+    alignas(16) std::array<float, 2 * kBits> x{};
+    alignas(16) std::array<float, 2 * kBits> y{};
+  };
+
+  static const PatternPoints& pattern_points() {
+    static const PatternPoints points = [] {
+      PatternPoints p;
+      for (std::size_t i = 0; i < detail::kOrbTestPairs.size(); ++i) {
+        const auto& pair = detail::kOrbTestPairs[i];
+        p.x[2 * i] = pair.xa;
+        p.y[2 * i] = pair.ya;
+        p.x[2 * i + 1] = pair.xb;
+        p.y[2 * i + 1] = pair.yb;
+      }
+      return p;
+    }();
+    return points;
+  }
+
+  /// Rounded rotated positions of all 512 test points as byte offsets, rounding half to even
+  /// (cvRound's rule, which cvtps2dq applies under the default rounding mode).
+  static void rotated_offsets(float a, float b, std::int32_t step, std::int32_t* out) {
+    const PatternPoints& p = pattern_points();
+#if defined(__SSE2__)
+    const __m128 va = _mm_set1_ps(a);
+    const __m128 vb = _mm_set1_ps(b);
+    const __m128i vstep = _mm_set1_epi32(step);
+    for (std::size_t i = 0; i < 2 * kBits; i += 4) {
+      const __m128 x = _mm_load_ps(p.x.data() + i);
+      const __m128 y = _mm_load_ps(p.y.data() + i);
+      const __m128i rx = _mm_cvtps_epi32(_mm_sub_ps(_mm_mul_ps(x, va), _mm_mul_ps(y, vb)));
+      const __m128i ry = _mm_cvtps_epi32(_mm_add_ps(_mm_mul_ps(x, vb), _mm_mul_ps(y, va)));
+      // ry·step with SSE2 only: the low 32 bits of the unsigned 32x32 products are the signed
+      // products modulo 2^32, exact since |ry·step| < 2^31.
+      const __m128i lo = _mm_mul_epu32(ry, vstep);
+      const __m128i hi = _mm_mul_epu32(_mm_srli_si128(ry, 4), _mm_srli_si128(vstep, 4));
+      const __m128i product = _mm_unpacklo_epi32(_mm_shuffle_epi32(lo, _MM_SHUFFLE(0, 0, 2, 0)),
+                                                 _mm_shuffle_epi32(hi, _MM_SHUFFLE(0, 0, 2, 0)));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), _mm_add_epi32(product, rx));
+    }
+#else
+    for (std::size_t i = 0; i < 2 * kBits; ++i) {
+      out[i] = cvRound(p.x[i] * b + p.y[i] * a) * step + cvRound(p.x[i] * a - p.y[i] * b);
+    }
+#endif
+  }
+
+  Options options_;
+  CentroidDisc disc_;
+  int border_ = 0;
+};
+
+}  // namespace affine_orb

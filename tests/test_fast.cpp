@@ -1,0 +1,155 @@
+// FAST-9 against a brute-force segment test written from the definition, pixel for pixel.
+#include <doctest/doctest.h>
+
+#include <random>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/fast.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+// The 16 circle pixels listed independently of the library (Rosten & Drummond 2006, fig. 1).
+const int kCircleX[16] = {0, 1, 2, 3, 3, 3, 2, 1, 0, -1, -2, -3, -3, -3, -2, -1};
+const int kCircleY[16] = {-3, -3, -2, -1, 0, 1, 2, 3, 3, 3, 2, 1, 0, -1, -2, -3};
+
+bool naive_is_corner(const cv::Mat& image, int x, int y, int t) {
+  const int c = image.at<uchar>(y, x);
+  for (int start = 0; start < 16; ++start) {
+    bool all_bright = true;
+    bool all_dark = true;
+    for (int k = 0; k < 9; ++k) {
+      const int i = (start + k) % 16;
+      const int v = image.at<uchar>(y + kCircleY[i], x + kCircleX[i]);
+      all_bright = all_bright && v > c + t;
+      all_dark = all_dark && v < c - t;
+    }
+    if (all_bright || all_dark) return true;
+  }
+  return false;
+}
+
+// Largest t in [0, 255] at which the pixel is a corner, 0 if it is not one at t = 0; found by a
+// linear scan from the top so that no assumption about monotonicity is needed.
+int naive_score(const cv::Mat& image, int x, int y) {
+  for (int t = 255; t >= 0; --t) {
+    if (naive_is_corner(image, x, y, t)) return t;
+  }
+  return 0;
+}
+
+void check_score_map(const cv::Mat& image, int threshold) {
+  cv::Mat scores;
+  affine_orb::fast_score_map(image, cv::Rect(0, 0, image.cols, image.rows), threshold, scores);
+  REQUIRE(scores.size() == image.size());
+  int mismatches = 0;
+  int corners = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      int expected = 0;
+      if (x >= 3 && y >= 3 && x < image.cols - 3 && y < image.rows - 3) {
+        const int s = naive_score(image, x, y);
+        if (s >= threshold && naive_is_corner(image, x, y, threshold)) expected = s;
+      }
+      corners += expected > 0;
+      mismatches += scores.at<uchar>(y, x) != expected;
+    }
+  }
+  CHECK(mismatches == 0);
+  CHECK(corners > 0);
+}
+
+std::vector<affine_orb::Corner> naive_nms(const cv::Mat& image, int threshold) {
+  cv::Mat score(image.size(), CV_32S, cv::Scalar(0));
+  for (int y = 3; y < image.rows - 3; ++y) {
+    for (int x = 3; x < image.cols - 3; ++x) {
+      if (naive_is_corner(image, x, y, threshold)) score.at<int>(y, x) = naive_score(image, x, y);
+    }
+  }
+  std::vector<affine_orb::Corner> out;
+  for (int y = 1; y < image.rows - 1; ++y) {
+    for (int x = 1; x < image.cols - 1; ++x) {
+      const int s = score.at<int>(y, x);
+      if (s == 0) continue;
+      bool is_max = true;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if ((dx || dy) && score.at<int>(y + dy, x + dx) >= s) is_max = false;
+        }
+      }
+      if (is_max) out.push_back({x, y, s});
+    }
+  }
+  return out;
+}
+
+cv::Mat random_image(int width, int height, std::uint64_t seed, int levels) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> value(0, levels - 1);
+  cv::Mat image(height, width, CV_8UC1);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) image.at<uchar>(y, x) = static_cast<uchar>(value(rng) * (255 / (levels - 1)));
+  }
+  return image;
+}
+
+}  // namespace
+
+TEST_CASE("FAST score map equals the brute-force segment test on random images") {
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    // Few grey levels make many exact ties with the threshold, the case strict inequalities decide.
+    const cv::Mat coarse = random_image(61, 47, seed, 4);
+    const cv::Mat fine = random_image(53, 41, seed + 100, 256);
+    for (int threshold : {1, 7, 20, 60}) {
+      CAPTURE(seed);
+      CAPTURE(threshold);
+      check_score_map(coarse, threshold);
+      check_score_map(fine, threshold);
+    }
+  }
+}
+
+TEST_CASE("FAST score map equals the brute-force segment test on a real photo") {
+  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(300, 250, 120, 90)).clone();
+  for (int threshold : {7, 20}) {
+    CAPTURE(threshold);
+    check_score_map(graf, threshold);
+  }
+  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(100, 100, 100, 80));
+  check_score_map(boat, 20);  // a non-continuous ROI of a larger image
+}
+
+TEST_CASE("non-maximum suppression keeps exactly the strict local maxima") {
+  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(200, 300, 150, 100)).clone();
+  const cv::Mat noise = random_image(70, 50, 7, 256);
+  for (const cv::Mat* image : {&graf, &noise}) {
+    for (int threshold : {7, 20}) {
+      const auto expected = naive_nms(*image, threshold);
+      const auto got = affine_orb::detect_fast(*image, threshold, true);
+      REQUIRE(got.size() == expected.size());
+      for (std::size_t i = 0; i < got.size(); ++i) {
+        CHECK(got[i].x == expected[i].x);
+        CHECK(got[i].y == expected[i].y);
+        CHECK(got[i].score == expected[i].score);
+      }
+      CHECK_FALSE(got.empty());
+    }
+  }
+}
+
+TEST_CASE("FAST rejects bad input") {
+  cv::Mat scores;
+  const cv::Mat ok(20, 20, CV_8UC1, cv::Scalar(0));
+  CHECK_THROWS_AS(affine_orb::fast_score_map(cv::Mat(), cv::Rect(0, 0, 1, 1), 20, scores), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::fast_score_map(cv::Mat(20, 20, CV_8UC3), cv::Rect(0, 0, 20, 20), 20, scores),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::fast_score_map(cv::Mat(20, 20, CV_16UC1), cv::Rect(0, 0, 20, 20), 20, scores),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::fast_score_map(ok, cv::Rect(0, 0, 20, 20), 0, scores), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::fast_score_map(ok, cv::Rect(0, 0, 20, 20), 256, scores), std::invalid_argument);
+  // Smaller than the circle: a valid image with no corners.
+  CHECK(affine_orb::detect_fast(cv::Mat(5, 5, CV_8UC1, cv::Scalar(9)), 20).empty());
+  CHECK(affine_orb::detect_fast(ok, 20).empty());
+}

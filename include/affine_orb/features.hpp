@@ -43,16 +43,15 @@ struct Features {
   bool empty() const { return keypoints.empty(); }
 };
 
-/// Copies descriptors into an N x (Bits/8) CV_8U matrix, the layout OpenCV's matchers and
+/// Copies descriptors into an N x (8·Words) CV_8U matrix, the layout OpenCV's matchers and
 /// ORB-SLAM's ORBmatcher read. Requires a little-endian host (checked at compile time).
-template <int Bits>
-cv::Mat descriptors_to_mat(const std::vector<BinaryDescriptor<Bits>>& descriptors) {
-  static_assert(Bits % 64 == 0, "descriptor size must be a multiple of 64 bits");
+template <std::size_t Words>
+cv::Mat descriptors_to_mat(const std::vector<std::array<std::uint64_t, Words>>& descriptors) {
 #if defined(__BYTE_ORDER__) && (__BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__)
-  static_assert(Bits < 0, "descriptors_to_mat assumes a little-endian host");
+  static_assert(Words == 0, "descriptors_to_mat assumes a little-endian host");
 #endif
-  cv::Mat mat(static_cast<int>(descriptors.size()), Bits / 8, CV_8U);
-  if (!descriptors.empty()) std::memcpy(mat.data, descriptors.data(), descriptors.size() * (Bits / 8));
+  cv::Mat mat(static_cast<int>(descriptors.size()), static_cast<int>(8 * Words), CV_8U);
+  if (!descriptors.empty()) std::memcpy(mat.data, descriptors.data(), descriptors.size() * 8 * Words);
   return mat;
 }
 

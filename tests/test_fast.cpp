@@ -73,10 +73,14 @@ std::vector<affine_orb::Corner> naive_nms(const cv::Mat& image, int threshold) {
     for (int x = 1; x < image.cols - 1; ++x) {
       const int s = score.at<int>(y, x);
       if (s == 0) continue;
+      // Strictly above the neighbours that come earlier in raster order, at least equal to the later ones.
       bool is_max = true;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
-          if ((dx || dy) && score.at<int>(y + dy, x + dx) >= s) is_max = false;
+          if (!dx && !dy) continue;
+          const bool earlier = dy < 0 || (dy == 0 && dx < 0);
+          const int n = score.at<int>(y + dy, x + dx);
+          if (earlier ? n >= s : n > s) is_max = false;
         }
       }
       if (is_max) out.push_back({x, y, s});
@@ -121,7 +125,7 @@ TEST_CASE("FAST score map equals the brute-force segment test on a real photo") 
   check_score_map(boat, 20);  // a non-continuous ROI of a larger image
 }
 
-TEST_CASE("non-maximum suppression keeps exactly the strict local maxima") {
+TEST_CASE("non-maximum suppression keeps exactly the local maxima, ties broken in raster order") {
   const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(200, 300, 150, 100)).clone();
   const cv::Mat noise = random_image(70, 50, 7, 256);
   for (const cv::Mat* image : {&graf, &noise}) {
@@ -137,6 +141,14 @@ TEST_CASE("non-maximum suppression keeps exactly the strict local maxima") {
       CHECK_FALSE(got.empty());
     }
   }
+}
+
+TEST_CASE("a plateau of equal scores keeps exactly one corner") {
+  // A dark 16x16 square on a flat background: neighbouring corner pixels have equal scores.
+  cv::Mat image(40, 40, CV_8UC1, cv::Scalar(200));
+  image(cv::Rect(12, 12, 16, 16)).setTo(40);
+  const auto corners = affine_orb::detect_fast(image, 20);
+  CHECK(corners.size() == 4);  // one per square corner
 }
 
 TEST_CASE("FAST rejects bad input") {

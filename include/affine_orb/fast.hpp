@@ -224,7 +224,10 @@ struct Corner {
 };
 
 /// Non-maximum suppression on a score map: the pixels of `roi` whose score is at least `threshold`
-/// and strictly greater than each of their 8 neighbours' scores, in raster order.
+/// and a local maximum of their 3x3 neighbourhood, in raster order. Ties are broken in raster
+/// order: a pixel must be strictly greater than its 4 neighbours that precede it (the row above
+/// and its left neighbour) and at least equal to the 4 that follow, so a plateau of equal scores
+/// (common in synthetic and saturated images) keeps one pixel instead of none.
 inline std::vector<Corner> non_max_suppression(const cv::Mat& scores, cv::Rect roi, int threshold) {
   detail::require(!scores.empty() && scores.type() == CV_8UC1, "non_max_suppression: scores must be CV_8UC1");
   std::vector<Corner> corners;
@@ -248,8 +251,8 @@ inline std::vector<Corner> non_max_suppression(const cv::Mat& scores, cv::Rect r
       }
       const int s = row[x];
       if (s < threshold) continue;
-      if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s > row[x + 1] &&
-          s > below[x - 1] && s > below[x] && s > below[x + 1]) {
+      if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s >= row[x + 1] &&
+          s >= below[x - 1] && s >= below[x] && s >= below[x + 1]) {
         corners.push_back({x, y, s});
       }
     }

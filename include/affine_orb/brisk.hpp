@@ -11,11 +11,16 @@
 /// - Smoothing: point i of ring k stands for the image smoothed by a Gaussian of
 ///   σ_k = sigma_factor · r_k · sin(π/n_k) (σ_0 = centre_sigma for the centre). Approximation: the
 ///   Gaussian is replaced by the mean over a box of s_k × s_k pixels, s_k the odd integer nearest to
-///   √(12σ_k² + 1) (same variance; 3, 3, 5, 5, 7 with the defaults), read from an integral image
-///   (four reads per point), and the box is centred on the pixel nearest to the rotated point:
-///   I_i = mean of the box centred on c + ⌊R(θ)·p_i + ½⌋. No interpolation: a sample is up to half a
-///   pixel from its exact position. Means are compared exactly (integer box sums scaled by
-///   lcm(areas) / area).
+///   √(12σ_k² + 1) (same variance; 3, 3, 5, 5, 7 with the defaults), read from an integral image.
+///   The box mean at the rotated point q = c + R(θ)·p_i is interpolated bilinearly between the four
+///   boxes centred on the pixels (X, Y), (X + 1, Y), (X, Y + 1), (X + 1, Y + 1) around q, with the
+///   fraction of q quantised to the nearest 1/256 pixel:
+///   q = (X + f_x/256, Y + f_y/256), X, Y integers, f in [0, 256), and
+///   I_i = Σ_{a,b ∈ {0,1}} w_a(f_x) w_b(f_y) · box mean centred on (X + a, Y + b), w_0(f) = 256 − f,
+///   w_1(f) = f (16 integral-image reads per point). The mean is the integer weighted sum divided by
+///   area in double precision (the mean × 65536, below 2^24), which orders any two such means
+///   exactly: equal means give equal doubles, and different ones differ by at least
+///   1/(area_i · area_j), more than the spacing of doubles below 2^24 for box sides up to 127.
 /// - Orientation (eqs. 5–6), on the unrotated pattern: g = mean over the long pairs (i, j), those
 ///   longer than δ_min, of (p_j − p_i)·(I_j − I_i)/‖p_j − p_i‖² with the exact (unrounded) point
 ///   positions; θ = atan2(g_y, g_x), radians in (−π, π].
@@ -25,9 +30,9 @@
 ///   ring, 0 = centre). With the defaults there are exactly 512 short pairs and 870 long pairs of the
 ///   1770.
 ///
-/// The rotated box positions for all 1024 steps are tabulated in the constructor (about 240 KB), so
-/// orientation() and describe() do 4 integral-image reads and one multiplication per point, then 512
-/// integer comparisons, without allocating.
+/// The rotated sample positions for all 1024 steps are tabulated in the constructor (about 360 KB),
+/// so orientation() and describe() do 16 integral-image reads, a few integer multiplications and one
+/// division per point, then 512 comparisons, without allocating.
 
 #include <algorithm>
 #include <array>
@@ -55,6 +60,8 @@ namespace affine_orb {
 struct BriskOptions {
   /// Scale at which the reference implementation states its pair thresholds and centre σ.
   static constexpr double kReferencePatternScale = 0.85;
+  /// Largest smoothing box side (pixels) for which box means compare exactly in double precision.
+  static constexpr int kMaxBoxSide = 127;
 
   /// Multiplier from the published ring radii {0, 2.9, 4.9, 7.4, 10.8} to level pixels. 0.85 is the
   /// reference implementation's factor (outer ring radius 9.18 px).
@@ -92,8 +99,8 @@ struct BriskOptions {
 
   /// Throws std::invalid_argument for a zero, negative or non-finite value, for a combination that
   /// does not give exactly 512 short pairs (the descriptor width is fixed at compile time) or no
-  /// long pair, and for a pattern too large for the 16-bit offset table or the exact 64-bit
-  /// comparison of box means (box sides of roughly 60 px and more).
+  /// long pair, and for a pattern whose boxes exceed 127 pixels (the limit of the exact comparison of
+  /// box means) or whose radius exceeds 30000 pixels (16-bit offsets); use the pyramid for scale.
   void check() const {
     const std::array<std::pair<const char*, double>, 6> values = {{{"pattern_scale", pattern_scale},
                                                                    {"sigma_factor", sigma_factor},
@@ -112,13 +119,12 @@ struct BriskOptions {
                         " px) but the descriptor has 512 bits; keep short_pair_factor · pair_scale at 5.85");
     detail::require(!p.long_pairs.empty(), "BriskOptions: no pair is longer than δ_min = " +
                                                std::to_string(min_long_distance()) + " px, so no orientation");
-    double extent = 0.0;
     for (std::size_t k = 0; k < p.ring_radius.size(); ++k) {
-      extent = std::max(extent, p.ring_radius[k] + p.ring_box[k]);
+      detail::require(p.ring_box[k] <= kMaxBoxSide && p.ring_radius[k] < 30000.0,
+                      "BriskOptions: ring " + std::to_string(k) + " has radius " + std::to_string(p.ring_radius[k]) +
+                          " px and a smoothing box of " + std::to_string(p.ring_box[k]) + " px (at most " +
+                          std::to_string(kMaxBoxSide) + "); use the pyramid for scale");
     }
-    detail::require(extent < 30000.0 && detail::brisk_area_lcm(p).has_value(),
-                    "BriskOptions: the pattern is too large (pattern_scale " + std::to_string(pattern_scale) +
-                        ", sigma_factor " + std::to_string(sigma_factor) + "); use the pyramid for scale");
   }
 };
 
@@ -126,11 +132,11 @@ struct BriskOptions {
 class Brisk {
  public:
   static constexpr int kBits = 512;
-  /// Diameter in level pixels of the pixels read around a keypoint with the default options
-  /// (2 · 12 + 1: outer ring radius 9.18 px, rounded, plus the 7-pixel box); reported as
-  /// cv::KeyPoint::size times the keypoint scale. Fixed at compile time: other pattern scales change
-  /// the support but not this value.
-  static constexpr float kPatchSize = 25.0f;
+  /// Diameter in level pixels of the smoothed support with the default options, 2 · (9.18 + 3.5):
+  /// outer ring radius plus half the outer ring's 7-pixel box; reported as cv::KeyPoint::size times
+  /// the keypoint scale. Fixed at compile time: other pattern scales change the support but not this
+  /// value.
+  static constexpr float kPatchSize = 25.36f;
   /// Number of discretised pattern rotations; angular resolution 2π / 1024 (0.35°).
   static constexpr int kAngleSteps = 1024;
   /// Number of pattern points.
@@ -148,12 +154,11 @@ class Brisk {
 
   /// Checks the options (std::invalid_argument) and tabulates the pattern for every rotation step.
   explicit Brisk(const Options& options = {}) : options_((options.check(), options)), pattern_(options_.pattern()) {
-    const std::int64_t lcm = *detail::brisk_area_lcm(pattern_);
     for (int k = 0; k < kPoints; ++k) {
       const auto ring = static_cast<std::size_t>(pattern_.points[static_cast<std::size_t>(k)].ring);
       const int side = pattern_.ring_box[ring];
       side_[static_cast<std::size_t>(k)] = side;
-      weight_[static_cast<std::size_t>(k)] = lcm / (static_cast<std::int64_t>(side) * side);
+      area_[static_cast<std::size_t>(k)] = static_cast<double>(side) * side;
     }
     for (int b = 0; b < kBits; ++b) {
       const auto& pair = pattern_.short_pairs[static_cast<std::size_t>(b)];
@@ -161,8 +166,8 @@ class Brisk {
       short_j_[static_cast<std::size_t>(b)] = static_cast<std::uint8_t>(pair.j);
     }
     // g is linear in the intensities: Σ_long (p_j − p_i)(I_j − I_i)/d² / count = Σ_k c_k I_k. The
-    // coefficients also divide out the lcm so that g is in grey levels per pixel.
-    const double norm = 1.0 / (static_cast<double>(pattern_.long_pairs.size()) * static_cast<double>(lcm));
+    // coefficients also divide out the 65536 of the interpolation weights: g is in grey levels per pixel.
+    const double norm = 1.0 / (static_cast<double>(pattern_.long_pairs.size()) * 65536.0);
     for (const auto& pair : pattern_.long_pairs) {
       const auto& a = pattern_.points[static_cast<std::size_t>(pair.i)];
       const auto& b = pattern_.points[static_cast<std::size_t>(pair.j)];
@@ -172,7 +177,7 @@ class Brisk {
       gradient_y_[static_cast<std::size_t>(pair.j)] += (b.y - a.y) * w;
       gradient_y_[static_cast<std::size_t>(pair.i)] -= (b.y - a.y) * w;
     }
-    offsets_.resize(static_cast<std::size_t>(kAngleSteps) * kPoints * 2);
+    taps_.resize(static_cast<std::size_t>(kAngleSteps) * kPoints);
     for (int step = 0; step < kAngleSteps; ++step) {
       const double theta = 2.0 * CV_PI * step / kAngleSteps;
       for (int k = 0; k < kPoints; ++k) {
@@ -181,13 +186,15 @@ class Brisk {
         const double alpha = 2.0 * CV_PI * point.index_on_ring /
                              detail::kBriskRingPoints[static_cast<std::size_t>(point.ring)];
         const int half = (side_[static_cast<std::size_t>(k)] - 1) / 2;
-        const int x0 = static_cast<int>(std::floor(radius * std::cos(alpha + theta) + 0.5)) - half;
-        const int y0 = static_cast<int>(std::floor(radius * std::sin(alpha + theta) + 0.5)) - half;
-        const std::size_t at = (static_cast<std::size_t>(step) * kPoints + static_cast<std::size_t>(k)) * 2;
-        offsets_[at] = static_cast<std::int16_t>(x0);
-        offsets_[at + 1] = static_cast<std::int16_t>(y0);
-        const int last = 2 * half;
-        extent_ = std::max({extent_, -x0, -y0, x0 + last, y0 + last});
+        const auto [x, fx] = split_position(radius * std::cos(alpha + theta));
+        const auto [y, fy] = split_position(radius * std::sin(alpha + theta));
+        Tap& tap = taps_[static_cast<std::size_t>(step) * kPoints + static_cast<std::size_t>(k)];
+        tap.x0 = static_cast<std::int16_t>(x - half);
+        tap.y0 = static_cast<std::int16_t>(y - half);
+        tap.fx = static_cast<std::uint8_t>(fx);
+        tap.fy = static_cast<std::uint8_t>(fy);
+        // Pixels read: x − half … x + 1 + half (the second box of the interpolation), likewise y.
+        extent_ = std::max({extent_, half - x, half - y, x + 1 + half, y + 1 + half});
       }
     }
   }
@@ -197,9 +204,9 @@ class Brisk {
   const detail::BriskPattern& pattern() const { return pattern_; }
 
   /// Minimal distance in level pixels between a keypoint and the level border: the farthest pixel
-  /// read at any rotation (12 px with the defaults: outer radius 9.18 rounds to 9, plus the 3-pixel
-  /// half box) plus one pixel, so that every real position in [border(), size − border()) is safe
-  /// after rounding to the nearest pixel. 13 with the defaults.
+  /// read at any rotation (13 px with the defaults: outer radius 9.18 lies between pixels 9 and 10,
+  /// plus the 3-pixel half box) plus one pixel, so that every real position in
+  /// [border(), size − border()) is safe after rounding to the nearest pixel. 14 with the defaults.
   int border() const { return extent_ + 1; }
 
   /// Fills `data` with the integral image of `level` (CV_8UC1, else std::invalid_argument), reusing
@@ -221,14 +228,14 @@ class Brisk {
   /// edge (any pt with border() <= x < width − border(), likewise y, is accepted).
   float orientation(const LevelData& data, cv::Point2f pt) const {
     const cv::Point c = checked_centre(data, pt);
-    std::array<std::int64_t, kPoints> values;
+    std::array<double, kPoints> values;
     sample(data, c, 0, values);
     // The coefficients sum to zero, so subtracting the centre's value changes nothing but makes g
     // exactly 0 (θ = 0) on a uniform patch instead of rounding noise.
     double gx = 0.0;
     double gy = 0.0;
     for (std::size_t k = 1; k < values.size(); ++k) {
-      const auto v = static_cast<double>(values[k] - values[0]);
+      const double v = values[k] - values[0];
       gx += gradient_x_[k] * v;
       gy += gradient_y_[k] * v;
     }
@@ -241,7 +248,7 @@ class Brisk {
   BinaryDescriptor<kBits> describe(const LevelData& data, cv::Point2f pt, float angle) const {
     const cv::Point c = checked_centre(data, pt);
     if (!std::isfinite(angle)) detail::require(false, "Brisk::describe: the angle is not finite");
-    std::array<std::int64_t, kPoints> values;
+    std::array<double, kPoints> values;
     sample(data, c, angle_step(angle), values);
     BinaryDescriptor<kBits> descriptor;
     for (std::size_t w = 0; w < descriptor.size(); ++w) {
@@ -279,18 +286,40 @@ class Brisk {
     return {static_cast<int>(std::floor(pt.x + 0.5f)), static_cast<int>(std::floor(pt.y + 0.5f))};
   }
 
-  // Box means × lcm of the 60 points rotated by `step`, around the pixel c.
-  void sample(const LevelData& data, cv::Point c, int step, std::array<std::int64_t, kPoints>& values) const {
+  // Interpolated box means × 65536 of the 60 points rotated by `step`, around the pixel c.
+  void sample(const LevelData& data, cv::Point c, int step, std::array<double, kPoints>& values) const {
     const auto stride = static_cast<std::ptrdiff_t>(data.integral.step1());
     const auto* centre = reinterpret_cast<const std::uint32_t*>(data.integral.ptr<std::int32_t>(c.y)) + c.x;
-    const std::int16_t* offset = offsets_.data() + static_cast<std::size_t>(step) * kPoints * 2;
-    for (std::size_t k = 0; k < values.size(); ++k) {
+    const Tap* tap = taps_.data() + static_cast<std::size_t>(step) * kPoints;
+    for (std::size_t k = 0; k < values.size(); ++k, ++tap) {
       const std::ptrdiff_t side = side_[k];
-      const std::uint32_t* top = centre + offset[2 * k + 1] * stride + offset[2 * k];
-      const std::uint32_t* bottom = top + side * stride;
-      const std::uint32_t sum = bottom[side] - bottom[0] - top[side] + top[0];
-      values[k] = static_cast<std::int64_t>(sum) * weight_[k];
+      // Rows y0, y0 + 1, y0 + side, y0 + side + 1 of the integral image, from column x0.
+      const std::uint32_t* r0 = centre + tap->y0 * stride + tap->x0;
+      const std::uint32_t* r1 = r0 + stride;
+      const std::uint32_t* r2 = r0 + side * stride;
+      const std::uint32_t* r3 = r2 + stride;
+      const std::uint32_t s00 = r2[side] - r2[0] - r0[side] + r0[0];
+      const std::uint32_t s10 = r2[side + 1] - r2[1] - r0[side + 1] + r0[1];
+      const std::uint32_t s01 = r3[side] - r3[0] - r1[side] + r1[0];
+      const std::uint32_t s11 = r3[side + 1] - r3[1] - r1[side + 1] + r1[1];
+      const std::int64_t fx = tap->fx;
+      const std::int64_t fy = tap->fy;
+      const std::int64_t top = (256 - fx) * s00 + fx * s10;
+      const std::int64_t bottom = (256 - fx) * s01 + fx * s11;
+      values[k] = static_cast<double>((256 - fy) * top + fy * bottom) / area_[k];
     }
+  }
+
+  // Splits a coordinate into its integer part and its fraction in 1/256 pixel, rounded to nearest
+  // (a fraction that rounds to 256 carries into the integer part).
+  static std::pair<int, int> split_position(double v) {
+    int whole = static_cast<int>(std::floor(v));
+    int fraction = static_cast<int>(std::floor((v - whole) * 256.0 + 0.5));
+    if (fraction == 256) {
+      fraction = 0;
+      ++whole;
+    }
+    return {whole, fraction};
   }
 
   // Integral image of a level too large for cv::integral's 32-bit sums: unsigned 32-bit arithmetic
@@ -315,13 +344,21 @@ class Brisk {
   Options options_;
   detail::BriskPattern pattern_;
   std::array<int, kPoints> side_{};
-  std::array<std::int64_t, kPoints> weight_{};
+  std::array<double, kPoints> area_{};
   std::array<double, kPoints> gradient_x_{};
   std::array<double, kPoints> gradient_y_{};
   std::array<std::uint8_t, kBits> short_i_{};
   std::array<std::uint8_t, kBits> short_j_{};
-  // (x0, y0) of the top-left pixel of each point's box relative to the keypoint pixel, per step.
-  std::vector<std::int16_t> offsets_;
+  // One sample position: top-left pixel (x0, y0) of the first of the four interpolated boxes,
+  // relative to the keypoint pixel, and the fraction (fx, fy) in 1/256 pixel.
+  struct Tap {
+    std::int16_t x0;
+    std::int16_t y0;
+    std::uint8_t fx;
+    std::uint8_t fy;
+  };
+  // kPoints taps per rotation step.
+  std::vector<Tap> taps_;
   int extent_ = 0;
 };
 

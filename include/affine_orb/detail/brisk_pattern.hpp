@@ -7,10 +7,6 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
-#include <cstdint>
-#include <limits>
-#include <numeric>
-#include <optional>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -100,21 +96,6 @@ inline BriskPattern make_brisk_pattern(double pattern_scale, double sigma_factor
     }
   }
   return pattern;
-}
-
-/// The least common multiple L of the box areas (side²) of the rings, or nothing when 255·L does not
-/// fit a signed 64-bit integer. A box sum times L / area is the box mean times L, an integer, so that
-/// means of boxes of different sizes compare exactly.
-inline std::optional<std::int64_t> brisk_area_lcm(const BriskPattern& pattern) {
-  const std::int64_t limit = std::numeric_limits<std::int64_t>::max() / 255;
-  std::int64_t result = 1;
-  for (const int side : pattern.ring_box) {
-    const std::int64_t area = static_cast<std::int64_t>(side) * side;
-    const std::int64_t factor = area / std::gcd(result, area);
-    if (result > limit / factor) return std::nullopt;
-    result *= factor;
-  }
-  return result;
 }
 
 }  // namespace affine_orb::detail

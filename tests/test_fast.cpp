@@ -143,6 +143,32 @@ TEST_CASE("non-maximum suppression keeps exactly the local maxima, ties broken i
   }
 }
 
+TEST_CASE("scoring a rectangle touches only that rectangle and equals the portable scalar path") {
+  const cv::Mat image = random_image(97, 40, 5, 256);
+  const auto offset = affine_orb::detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
+  std::mt19937 rng(9);
+  for (int width = 1; width <= 60; ++width) {
+    for (int threshold : {3, 20}) {
+      const int x0 = 3 + static_cast<int>(rng() % static_cast<unsigned>(97 - 6 - width + 1));
+      cv::Mat scores(image.size(), CV_8UC1, cv::Scalar(77));
+      affine_orb::fast_score_rect(image, cv::Rect(x0, 10, width, 5), threshold, scores);
+      std::vector<std::uint8_t> expected(static_cast<std::size_t>(image.cols), 77);
+      for (int y = 0; y < image.rows; ++y) {
+        std::fill(expected.begin(), expected.end(), 77);
+        if (y >= 10 && y < 15) {
+          affine_orb::detail::score_row_scalar(image.ptr<std::uint8_t>(y), offset, x0, x0 + width, threshold,
+                                               expected.data());
+        }
+        int mismatches = 0;
+        for (int x = 0; x < image.cols; ++x) mismatches += scores.at<uchar>(y, x) != expected[static_cast<std::size_t>(x)];
+        CAPTURE(width);
+        CAPTURE(y);
+        CHECK(mismatches == 0);
+      }
+    }
+  }
+}
+
 TEST_CASE("a plateau of equal scores keeps exactly one corner") {
   // A dark 16x16 square on a flat background: neighbouring corner pixels have equal scores.
   cv::Mat image(40, 40, CV_8UC1, cv::Scalar(200));

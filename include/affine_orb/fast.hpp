@@ -134,8 +134,13 @@ inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdif
   const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
   const __m128i one = _mm_set1_epi8(1);
   const __m128i zero = _mm_setzero_si128();
-  int x = x0;
-  for (; x + 16 <= x1; x += 16) {
+  if (x1 - x0 < 16) {
+    score_row_scalar(row, offset, x0, x1, threshold, out);
+    return;
+  }
+  // The last chunk overlaps the previous one so that it ends exactly at x1: scoring a pixel twice
+  // writes the same value, and nothing outside [x0, x1) is touched.
+  for (int x = x0;; x = std::min(x + 16, x1 - 16)) {
     const std::uint8_t* p = row + x;
     auto load = [p](std::ptrdiff_t o) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + o)); };
     const __m128i v = load(0);
@@ -152,6 +157,7 @@ inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdif
                      both(_mm_or_si128(darker(c0), darker(c8)), _mm_or_si128(darker(c4), darker(c12))));
     if (_mm_movemask_epi8(possible) == 0) {
       _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), zero);
+      if (x + 16 >= x1) break;
       continue;
     }
     __m128i c[16];
@@ -160,8 +166,8 @@ inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdif
     const __m128i strength = _mm_max_epu8(arc_strength_sse2(c, v, true), arc_strength_sse2(c, v, false));
     const __m128i not_corner = _mm_cmpeq_epi8(_mm_subs_epu8(strength, t), zero);  // strength <= t
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm_andnot_si128(not_corner, _mm_subs_epu8(strength, one)));
+    if (x + 16 >= x1) break;
   }
-  score_row_scalar(row, offset, x, x1, threshold, out);
 }
 #endif
 

@@ -1,0 +1,43 @@
+#pragma once
+// Shared by the benchmarks: interleaved timing of several methods in one run, medians, and the
+// data paths. Every method is run in turn, round after round, so that machine noise hits all of
+// them alike; the figures to quote are medians and ratios, not single absolute times.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace affine_orb::bench {
+
+inline std::string data_dir() { return AFFINE_ORB_DATA_DIR; }
+inline std::string opencv_samples_dir() { return AFFINE_ORB_OPENCV_SAMPLES_DIR; }
+
+inline double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+struct Method {
+  std::string name;
+  std::function<void()> run;
+  std::vector<double> ms;
+};
+
+/// Runs every method once as a warm-up, then `rounds` interleaved rounds; fills Method::ms.
+inline void time_interleaved(std::vector<Method>& methods, int rounds) {
+  for (Method& m : methods) m.run();
+  for (int r = 0; r < rounds; ++r) {
+    for (Method& m : methods) {
+      const auto start = std::chrono::steady_clock::now();
+      m.run();
+      m.ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    }
+  }
+}
+
+}  // namespace affine_orb::bench

@@ -94,8 +94,12 @@ void run(const char* name, const cv::Mat& query_mat, const cv::Mat& train_mat, i
 int main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 21;
   const std::string data_dir = argc > 2 ? argv[2] : AFFINE_ORB_DATA_DIR;
-  std::printf("hardware popcount in hamming_distance: %s; knn2 lane vector: %d bits\n",
-              AFFINE_ORB_HARDWARE_POPCOUNT ? "yes" : "no", static_cast<int>(8 * sizeof(affine_orb::detail::LaneVector)));
+  if (AFFINE_ORB_KNN2_VPOPCNTDQ) {
+    std::printf("knn2: AVX-512 VPOPCNTDQ search\n");
+  } else {
+    std::printf("knn2: bit-sliced search, %d-bit lanes\n", static_cast<int>(8 * sizeof(affine_orb::detail::LaneVector)));
+  }
+  std::printf("hardware popcount in hamming_distance: %s\n", AFFINE_ORB_HARDWARE_POPCOUNT ? "yes" : "no");
 
   std::mt19937_64 rng(2024);
   cv::Mat random_query(2000, 32, CV_8U);

@@ -13,7 +13,12 @@
 /// whole block of train descriptors at once, with about six logic instructions per descriptor bit
 /// and block. A bit-serial comparison of the counter with the current second-best distance tells
 /// which lanes (usually none) can enter the two best; only those are looked at one by one.
+///
+/// Where the target has AVX-512 VPOPCNTDQ (AFFINE_ORB_KNN2_VPOPCNTDQ, chosen at compile time) a
+/// plain XOR + VPOPCNTQ search over eight queries per register replaces it. Both give the same
+/// results; the default x86-64 build (SSE2 only) uses the bit-sliced search.
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -26,6 +31,15 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+
+#if defined(__AVX512F__) && defined(__AVX512VPOPCNTDQ__)
+#include <immintrin.h>
+/// 1 when knn2() uses the AVX-512 VPOPCNTDQ search (the target has it, e.g. -march=native on Ice
+/// Lake or Zen 4 and later), 0 when it uses the bit-sliced search.
+#define AFFINE_ORB_KNN2_VPOPCNTDQ 1
+#else
+#define AFFINE_ORB_KNN2_VPOPCNTDQ 0
+#endif
 
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/popcount.hpp"
@@ -301,22 +315,34 @@ inline void keep_two_smallest(std::uint64_t key, std::uint64_t& best, std::uint6
   }
 }
 
+/// knn2()'s result before the search: one entry per query, count = min(2, train_count).
+inline std::vector<KnnMatch> knn2_frame(std::size_t query_count, std::size_t train_count) {
+  constexpr std::size_t kMaxCount = static_cast<std::size_t>(std::numeric_limits<int>::max());
+  require(query_count <= kMaxCount && train_count <= kMaxCount,
+          "knn2: more than INT_MAX descriptors (indices are int)");
+  std::vector<KnnMatch> result(query_count);
+  for (std::size_t i = 0; i < query_count; ++i) {
+    result[i].query = static_cast<int>(i);
+    result[i].count = static_cast<int>(train_count < 2 ? train_count : 2);
+  }
+  return result;
+}
+
+/// Stores the two smallest keys (kNoKey: none) of neighbour_key() as neighbours.
+inline void set_neighbours(KnnMatch& m, std::uint64_t best, std::uint64_t second) noexcept {
+  if (best != kNoKey) m.best = {static_cast<int>(best & 0xffffffffU), static_cast<int>(best >> 32)};
+  if (second != kNoKey) m.second = {static_cast<int>(second & 0xffffffffU), static_cast<int>(second >> 32)};
+}
+
 /// knn2() with an explicit lane vector type V (std::uint64_t or a GCC/Clang vector of them).
 template <class V, std::size_t Words>
 std::vector<KnnMatch> knn2_bitsliced(const std::vector<std::array<std::uint64_t, Words>>& query,
                                      const std::vector<std::array<std::uint64_t, Words>>& train) {
   static_assert(Words > 0, "a descriptor has at least one 64-bit word");
   constexpr int Bits = static_cast<int>(64 * Words);
-  constexpr std::size_t kMaxCount = static_cast<std::size_t>(std::numeric_limits<int>::max());
-  require(query.size() <= kMaxCount && train.size() <= kMaxCount,
-          "knn2: more than INT_MAX descriptors (indices are int)");
   constexpr std::size_t kLanes = 64 * kLaneWords<V>;
   const std::size_t n = train.size();
-  std::vector<KnnMatch> result(query.size());
-  for (std::size_t i = 0; i < query.size(); ++i) {
-    result[i].query = static_cast<int>(i);
-    result[i].count = static_cast<int>(n < 2 ? n : 2);
-  }
+  std::vector<KnnMatch> result = knn2_frame(query.size(), n);
   if (query.empty() || n == 0) return result;
 
   const std::vector<V> planes = bit_planes<Bits, V>(train);
@@ -353,12 +379,82 @@ std::vector<KnnMatch> knn2_bitsliced(const std::vector<std::array<std::uint64_t,
         clear_lane(candidates, lane);
       }
     }
-    KnnMatch& m = result[i];
-    m.best = {static_cast<int>(best & 0xffffffffU), static_cast<int>(best >> 32)};
-    if (second != kNoKey) m.second = {static_cast<int>(second & 0xffffffffU), static_cast<int>(second >> 32)};
+    set_neighbours(result[i], best, second);
   }
   return result;
 }
+
+#if AFFINE_ORB_KNN2_VPOPCNTDQ
+/// knn2() with AVX-512 VPOPCNTDQ: eight queries per 512-bit register, one per 64-bit lane, and two
+/// such groups at a time. Each train descriptor is broadcast word by word, XOR-ed with the queries
+/// and counted with VPOPCNTQ; the two best are kept per lane as neighbour_key()s with unsigned
+/// 64-bit min/max, updated only when some lane beats its current second-best distance.
+template <std::size_t Words>
+std::vector<KnnMatch> knn2_vpopcntdq(const std::vector<std::array<std::uint64_t, Words>>& query,
+                                     const std::vector<std::array<std::uint64_t, Words>>& train) {
+  static_assert(Words > 0, "a descriptor has at least one 64-bit word");
+  const std::size_t nq = query.size();
+  const std::size_t nt = train.size();
+  std::vector<KnnMatch> result = knn2_frame(nq, nt);
+  if (nq == 0 || nt == 0) return result;
+  // Word w of query 8g + l at [(g · Words + w) · 8 + l]; the last group is padded with the last query.
+  const std::size_t groups = (nq + 7) / 8;
+  std::vector<std::uint64_t> lanes(groups * Words * 8);
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t w = 0; w < Words; ++w) {
+      for (std::size_t l = 0; l < 8; ++l) lanes[(g * Words + w) * 8 + l] = query[std::min(nq - 1, 8 * g + l)][w];
+    }
+  }
+  // Shifts and min/max use the zero-masked forms with every lane selected: the same instructions,
+  // but GCC 12's unmasked intrinsics trip -Wmaybe-uninitialized on their undefined pass-through.
+  constexpr __mmask8 kAll = 0xff;
+  const __m512i none = _mm512_set1_epi64(-1);
+  for (std::size_t g = 0; g < groups; g += 2) {
+    const std::size_t h = g + 1 < groups ? g + 1 : g;  // the second group (the first again at the end)
+    __m512i qa[Words];
+    __m512i qb[Words];
+    for (std::size_t w = 0; w < Words; ++w) {
+      qa[w] = _mm512_loadu_si512(lanes.data() + (g * Words + w) * 8);
+      qb[w] = _mm512_loadu_si512(lanes.data() + (h * Words + w) * 8);
+    }
+    __m512i best_a = none;
+    __m512i second_a = none;
+    __m512i best_b = none;
+    __m512i second_b = none;
+    __m512i limit_a = _mm512_maskz_srli_epi64(kAll, none, 32);  // second-best distances
+    __m512i limit_b = limit_a;
+    for (std::size_t j = 0; j < nt; ++j) {
+      __m512i da = _mm512_setzero_si512();
+      __m512i db = _mm512_setzero_si512();
+      for (std::size_t w = 0; w < Words; ++w) {
+        const __m512i t = _mm512_set1_epi64(static_cast<long long>(train[j][w]));
+        da = _mm512_add_epi64(da, _mm512_popcnt_epi64(_mm512_xor_si512(qa[w], t)));
+        db = _mm512_add_epi64(db, _mm512_popcnt_epi64(_mm512_xor_si512(qb[w], t)));
+      }
+      if ((_mm512_cmplt_epu64_mask(da, limit_a) | _mm512_cmplt_epu64_mask(db, limit_b)) == 0) continue;
+      const __m512i index = _mm512_set1_epi64(static_cast<long long>(j));
+      const __m512i key_a = _mm512_or_si512(_mm512_maskz_slli_epi64(kAll, da, 32), index);
+      const __m512i key_b = _mm512_or_si512(_mm512_maskz_slli_epi64(kAll, db, 32), index);
+      second_a = _mm512_maskz_min_epu64(kAll, second_a, _mm512_maskz_max_epu64(kAll, best_a, key_a));
+      best_a = _mm512_maskz_min_epu64(kAll, best_a, key_a);
+      second_b = _mm512_maskz_min_epu64(kAll, second_b, _mm512_maskz_max_epu64(kAll, best_b, key_b));
+      best_b = _mm512_maskz_min_epu64(kAll, best_b, key_b);
+      limit_a = _mm512_maskz_srli_epi64(kAll, second_a, 32);
+      limit_b = _mm512_maskz_srli_epi64(kAll, second_b, 32);
+    }
+    std::uint64_t keys[4][8];
+    _mm512_storeu_si512(keys[0], best_a);
+    _mm512_storeu_si512(keys[1], second_a);
+    _mm512_storeu_si512(keys[2], best_b);
+    _mm512_storeu_si512(keys[3], second_b);
+    for (std::size_t l = 0; l < 8; ++l) {
+      if (8 * g + l < nq) set_neighbours(result[8 * g + l], keys[0][l], keys[1][l]);
+      if (8 * h + l < nq) set_neighbours(result[8 * h + l], keys[2][l], keys[3][l]);
+    }
+  }
+  return result;
+}
+#endif
 
 /// Copies the rows of a CV_8UC1 matrix with 8 · Words columns into descriptors.
 template <std::size_t Words>
@@ -377,7 +473,11 @@ std::vector<std::array<std::uint64_t, Words>> descriptors_from_mat(const cv::Mat
 template <std::size_t Words>
 std::vector<KnnMatch> knn2(const std::vector<std::array<std::uint64_t, Words>>& query,
                            const std::vector<std::array<std::uint64_t, Words>>& train) {
+#if AFFINE_ORB_KNN2_VPOPCNTDQ
+  return detail::knn2_vpopcntdq(query, train);
+#else
   return detail::knn2_bitsliced<detail::LaneVector>(query, train);
+#endif
 }
 
 /// Nearest-neighbour matches of query to train that pass the tests of `options` (ratio, maximum

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
 
   affine_orb::ExtractorOptions options;
   options.features = 1000;
+  options.views.max_tilt = 1.0;
   affine_orb::Extractor<affine_orb::Rbrief> rbrief(options);
   affine_orb::Extractor<affine_orb::Brisk> brisk(options);
   const cv::Ptr<cv::ORB> orb = cv::ORB::create(1000, 1.2f, 8, 31, 0, 2, cv::ORB::FAST_SCORE);

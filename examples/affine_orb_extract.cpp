@@ -1,4 +1,5 @@
-// affine_orb_extract IMAGE [--features N] [--descriptor rbrief|brisk] [--repeat R] [--out PNG] [--json]
+// affine_orb_extract IMAGE [--features N] [--descriptor rbrief|brisk] [--max-tilt T] [--threads K]
+//                    [--repeat R] [--out PNG] [--json]
 //
 // Extracts features from one image and reports how many were found and how long it took; --repeat
 // extracts R times with the same extractor (for timing and profiling; the median is reported);
@@ -20,9 +21,12 @@
 namespace {
 
 const char* const kUsage =
-    "usage: affine_orb_extract IMAGE [--features N] [--descriptor rbrief|brisk] [--repeat R] [--out PNG] [--json]\n";
+    "usage: affine_orb_extract IMAGE [--features N] [--descriptor rbrief|brisk] [--max-tilt T] [--threads K]\n"
+    "                          [--repeat R] [--out PNG] [--json]\n"
+    "  --max-tilt T  largest simulated tilt (1 = no affine views; default 2.828 = 18 views)\n";
 
 struct Report {
+  std::size_t views = 0;
   std::size_t keypoints = 0;
   int descriptor_bytes = 0;
   double ms_extract = 0.0;
@@ -30,9 +34,7 @@ struct Report {
 };
 
 template <class Descriptor>
-Report run(const cv::Mat& image, int features, int repeat, const std::string& out) {
-  affine_orb::ExtractorOptions options;
-  options.features = features;
+Report run(const cv::Mat& image, affine_orb::ExtractorOptions options, int repeat, const std::string& out) {
   affine_orb::Extractor<Descriptor> extractor(options);
   std::vector<double> times;
   affine_orb::Features<Descriptor::kBits> result;
@@ -42,6 +44,7 @@ Report run(const cv::Mat& image, int features, int repeat, const std::string& ou
     times.push_back(affine_orb::examples::ms_since(start));
   }
   Report report;
+  report.views = extractor.views().size();
   report.keypoints = result.size();
   report.descriptor_bytes = Descriptor::kBits / 8;
   report.ms_extract = affine_orb::examples::median(times);
@@ -72,7 +75,10 @@ int main(int argc, char** argv) {
       std::fputs(kUsage, stdout);
       return 0;
     }
-    const int features = args.integer("--features", 1000);
+    affine_orb::ExtractorOptions options;
+    options.features = args.integer("--features", options.features);
+    options.views.max_tilt = args.real("--max-tilt", options.views.max_tilt);
+    options.threads = args.integer("--threads", options.threads);
     const std::string descriptor = args.value("--descriptor", "rbrief");
     const int repeat = args.integer("--repeat", 1);
     const std::string out = args.value("--out", "");
@@ -85,23 +91,26 @@ int main(int argc, char** argv) {
 
     Report report;
     if (descriptor == "rbrief") {
-      report = run<affine_orb::Rbrief>(image, features, repeat, out);
+      report = run<affine_orb::Rbrief>(image, options, repeat, out);
     } else if (descriptor == "brisk") {
-      report = run<affine_orb::Brisk>(image, features, repeat, out);
+      report = run<affine_orb::Brisk>(image, options, repeat, out);
     } else {
       throw std::invalid_argument("--descriptor must be rbrief or brisk, got " + descriptor);
     }
     if (json) {
       std::printf("{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"descriptor\": \"%s\", \"keypoints\": %zu, "
-                  "\"descriptor_bytes\": %d, \"repeat\": %d, \"ms_extract\": %.3f, \"per_level\": [",
+                  "\"descriptor_bytes\": %d, \"views\": %zu, \"max_tilt\": %.4f, \"threads\": %d, \"repeat\": %d, "
+                  "\"ms_extract\": %.3f, \"per_level\": [",
                   positional[0].c_str(), image.cols, image.rows, descriptor.c_str(), report.keypoints,
-                  report.descriptor_bytes, repeat, report.ms_extract);
+                  report.descriptor_bytes, report.views, options.views.max_tilt, options.threads, repeat,
+                  report.ms_extract);
       for (std::size_t l = 0; l < report.per_level.size(); ++l) std::printf("%s%d", l ? ", " : "", report.per_level[l]);
       std::printf("]}\n");
     } else {
-      std::printf("%s: %dx%d, %zu keypoints (%s, %d-byte descriptors), %.2f ms per extraction (median of %d)\n",
-                  positional[0].c_str(), image.cols, image.rows, report.keypoints, descriptor.c_str(),
-                  report.descriptor_bytes, report.ms_extract, repeat);
+      std::printf("%s: %dx%d, %zu keypoints from %zu views (%s, %d-byte descriptors), %.2f ms per extraction "
+                  "(median of %d, %d thread(s))\n",
+                  positional[0].c_str(), image.cols, image.rows, report.keypoints, report.views, descriptor.c_str(),
+                  report.descriptor_bytes, report.ms_extract, repeat, options.threads);
       if (!out.empty()) std::printf("keypoints drawn to %s\n", out.c_str());
     }
     return 0;

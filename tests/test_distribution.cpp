@@ -128,6 +128,7 @@ TEST_CASE("the extractor returns exactly the budget, geometric per level, spread
     CAPTURE(n);
     affine_orb::ExtractorOptions options;
     options.features = n;
+    options.views.max_tilt = 1.0;
     affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
     const auto features = extractor.extract(image);
     REQUIRE(static_cast<int>(features.size()) == n);

@@ -23,6 +23,7 @@ template <class Descriptor>
 affine_orb::Features<Descriptor::kBits> extract(const cv::Mat& image, int n, const cv::Mat& mask = cv::Mat()) {
   affine_orb::ExtractorOptions options;
   options.features = n;
+  options.views.max_tilt = 1.0;  // plain extraction; the affine views have their own tests
   affine_orb::Extractor<Descriptor> extractor(options);
   return extractor.extract(image, mask);
 }
@@ -107,10 +108,12 @@ TEST_CASE("a non-continuous ROI gives the same features as its copy") {
 
 TEST_CASE("extraction is deterministic across runs and instances") {
   const cv::Mat image = affine_orb::test::kitti_frame(10);
-  affine_orb::Extractor<affine_orb::Rbrief> one;
+  affine_orb::ExtractorOptions options;
+  options.views.max_tilt = 1.0;
+  affine_orb::Extractor<affine_orb::Rbrief> one(options);
   const auto first = one.extract(image);
   const auto again = one.extract(image);
-  const auto other = affine_orb::Extractor<affine_orb::Rbrief>().extract(image);
+  const auto other = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
   REQUIRE(first.size() == 1000);
   REQUIRE(again.size() == first.size());
   REQUIRE(other.size() == first.size());
@@ -123,7 +126,7 @@ TEST_CASE("extraction is deterministic across runs and instances") {
 }
 
 TEST_CASE("bad input gives std::invalid_argument, featureless input an empty result") {
-  affine_orb::Extractor<affine_orb::Rbrief> extractor;
+  affine_orb::Extractor<affine_orb::Rbrief> extractor;  // with the default affine views
   const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
   CHECK_THROWS_AS(extractor.extract(cv::Mat()), std::invalid_argument);
   CHECK_THROWS_AS(extractor.extract(cv::Mat(100, 100, CV_8UC3, cv::Scalar(1, 2, 3))), std::invalid_argument);
@@ -167,10 +170,19 @@ TEST_CASE("bad input gives std::invalid_argument, featureless input an empty res
   rejects([](auto& o) { o.detector.cell_size = 0; });
   rejects([](auto& o) { o.detector.harris_k = std::numeric_limits<float>::quiet_NaN(); });
   rejects([](auto& o) { o.detector.score = static_cast<affine_orb::ScoreType>(7); });
+  rejects([](auto& o) { o.views.max_tilt = 0.5; });
+  rejects([&](auto& o) { o.views.max_tilt = nan; });
+  rejects([](auto& o) { o.views.tilt_ratio = 1.0; });
+  rejects([](auto& o) { o.views.rotation_base_degrees = 0.0; });
+  rejects([](auto& o) { o.views.antialias = -1.0; });
+  rejects([](auto& o) { o.threads = 0; });
+  rejects([](auto& o) { o.merge_radius = 0.0; });
+  rejects([](auto& o) { o.duplicates = static_cast<affine_orb::DuplicatePolicy>(5); });
 }
 
 TEST_CASE("Harris ranking gives the budget too") {
   affine_orb::ExtractorOptions options;
+  options.views.max_tilt = 1.0;
   options.detector.score = affine_orb::ScoreType::kHarris;
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
   const auto f = extractor.extract(affine_orb::test::oxford_image("bark", 1));

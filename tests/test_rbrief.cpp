@@ -76,6 +76,7 @@ TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every 
   const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
   affine_orb::ExtractorOptions options;
   options.features = 1500;
+  options.views.max_tilt = 1.0;
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
   const auto features = extractor.extract(image);
   REQUIRE(features.size() == 1500);

@@ -211,6 +211,11 @@ class Brisk {
 
   /// Fills `data` with the integral image of `level` (CV_8UC1, else std::invalid_argument), reusing
   /// its buffer when the size is unchanged.
+  /// The same as prepare(level, data): the integral image costs one pass whatever the keypoints.
+  void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& /*points*/, LevelData& data) const {
+    prepare(level, data);
+  }
+
   void prepare(const cv::Mat& level, LevelData& data) const {
     detail::require_gray8(level, "Brisk::prepare");
     data.size = level.size();

@@ -18,6 +18,9 @@
 ///   border() <= x < width − border() (likewise y) so that nothing is read outside the level image;
 /// - `void prepare(const cv::Mat& level, LevelData& data) const;` fills `data` for a CV_8UC1 level
 ///   image (reusing its buffers); `data` may keep a shallow reference to `level`;
+/// - `void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& points, LevelData& data)
+///   const;` the same, for describing only keypoints at `points` (level pixels): a policy may then
+///   prepare just what those keypoints read, but must give the same results for them;
 /// - `float orientation(const LevelData& data, cv::Point2f pt) const;` the keypoint orientation in
 ///   radians, level pixel coordinates (x right, y down, angle from +x towards +y);
 /// - `BinaryDescriptor<kBits> describe(const LevelData& data, cv::Point2f pt, float angle) const;`

@@ -1,15 +1,23 @@
 #pragma once
 /// \file
-/// Extractor<Descriptor>: oriented FAST keypoints on a scale pyramid, spread over the image under an
-/// exact feature budget, described by a descriptor policy (Rbrief, Brisk).
+/// Extractor<Descriptor>: Affine-ORB feature extraction (paper section 3, SPEC §1–§3). Oriented FAST
+/// keypoints are detected on a scale pyramid of every simulated affine view, spread over the image
+/// under an exact feature budget, described in their view by a descriptor policy (Rbrief, Brisk),
+/// and mapped back to the original image.
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstddef>
+#include <exception>
 #include <string>
+#include <thread>
+#include <unordered_map>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "affine_orb/affine_views.hpp"
 #include "affine_orb/descriptor.hpp"
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detector.hpp"
@@ -19,36 +27,64 @@
 
 namespace affine_orb {
 
+/// What to do when several views return the same scene point (SPEC §2).
+enum class DuplicatePolicy {
+  kKeepAll,  ///< Keep every view's keypoint: best for wide-baseline matching of two images.
+  kMerge,    ///< Keep only the strongest of the keypoints of one level that different views put
+             ///< within ExtractorOptions::merge_radius of each other: for SLAM, one point per corner.
+};
+
 /// Extraction parameters (SPEC §2).
 struct ExtractorOptions {
   /// Number of features returned when the image has enough corners (exactly this many); ORB-SLAM2's
-  /// default configuration files use 1000 to 2000. Must be in [1, 1000000].
+  /// configuration files use 1000 to 2000. Must be in [1, 1000000].
   int features = 1000;
   PyramidOptions pyramid;
   DetectorOptions detector;
+  /// The simulated views; max_tilt = 1 gives a plain ORB-style extractor (one view, the image).
+  AffineViewOptions views;
+  DuplicatePolicy duplicates = DuplicatePolicy::kMerge;
+  /// Radius in original pixels, times the level scale s^l, within which kMerge treats keypoints of
+  /// different views on the same level as one; 2 px is the SPEC §7 duplicate cell size.
+  double merge_radius = 2.0;
+  /// Worker threads for the views (1 = the calling thread only). The output does not depend on it.
+  int threads = 1;
 
   void check() const {
     detail::require(features >= 1 && features <= 1000000,
                     "ExtractorOptions::features must be in [1, 1000000], got " + std::to_string(features));
     pyramid.check();
     detector.check();
+    views.check();
+    detail::require(duplicates == DuplicatePolicy::kKeepAll || duplicates == DuplicatePolicy::kMerge,
+                    "ExtractorOptions::duplicates is invalid");
+    detail::require(std::isfinite(merge_radius) && merge_radius > 0.0 && merge_radius <= 64.0,
+                    "ExtractorOptions::merge_radius must be in (0, 64], got " + std::to_string(merge_radius));
+    detail::require(threads >= 1 && threads <= 256,
+                    "ExtractorOptions::threads must be in [1, 256], got " + std::to_string(threads));
   }
 };
 
 /// Extracts keypoints and descriptors from grey images.
 ///
-/// Pipeline for an image of size W x H: a pyramid of PyramidOptions::levels levels; on each level,
-/// FAST candidates inside the band where the descriptor's support fits (Descriptor::border() level
-/// pixels from every edge), graded by DetectorOptions; candidates outside the mask are dropped;
-/// each level gets a geometric share of the budget (level_budgets(), shortfalls carried to the other
-/// levels by allocate_with_carry()) and keeps that many candidates by quadtree spreading
-/// (distribute_quadtree()); the kept ones are oriented and described on their level.
+/// For an image of size W x H and every view v of ExtractorOptions::views (affine_views.hpp):
+/// 1. the view is rendered and a pyramid of PyramidOptions::levels levels is built on it;
+/// 2. on each level, FAST candidates are graded by DetectorOptions; a candidate is kept only if the
+///    descriptor's support (a disc of Descriptor::border() level pixels) maps inside the original
+///    image and the mask pixel nearest to its original position is non-zero;
+/// 3. with DuplicatePolicy::kMerge, candidates of one level that other views put within
+///    merge_radius · s^l original pixels of a stronger one are dropped;
+/// 4. the budget is split over views in proportion to their area (1/t) and, within a view, over
+///    levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry()); each
+///    (view, level) keeps its share by quadtree spreading (distribute_quadtree()) in original
+///    coordinates;
+/// 5. kept keypoints are oriented and described in their view, then mapped back: position through
+///    the inverse view map, orientation by mapping the direction vector, scale s^l·√t (SPEC §1).
 ///
-/// Output order: grouped by level, level 0 first; raster order within a level.
+/// Output order: by level (level 0 first), then by view, then raster order in the view.
 ///
-/// An Extractor holds a workspace (pyramid, score maps, descriptor level data) reused across calls,
-/// so extract() allocates nothing for the pyramid once images keep their size. One instance must
-/// not be used by two threads at once; separate instances are independent (no shared state).
+/// An Extractor holds a workspace reused across calls. One instance must not be used by two
+/// threads at once; separate instances share nothing.
 template <class Descriptor>
 class Extractor {
  public:
@@ -56,57 +92,84 @@ class Extractor {
   using DescriptorOptions = typename Descriptor::Options;
 
   explicit Extractor(ExtractorOptions options = {}, DescriptorOptions descriptor_options = {})
-      : options_((options.check(), options)), descriptor_(descriptor_options), pyramid_(options_.pyramid) {}
+      : options_((options.check(), options)), descriptor_(descriptor_options) {}
 
   const ExtractorOptions& options() const { return options_; }
   const Descriptor& descriptor() const { return descriptor_; }
 
-  /// The pyramid of the last image passed to extract() (empty before the first call).
-  const Pyramid& pyramid() const { return pyramid_; }
+  /// The views used for the last image passed to extract() (empty before the first call).
+  std::vector<AffineView> views() const {
+    std::vector<AffineView> out;
+    for (const ViewWork& w : view_work_) out.push_back(w.view);
+    return out;
+  }
 
-  /// Keypoints and descriptors of a CV_8UC1 image (any ROI of a larger matrix is fine).
+  /// The pyramid of the original (untilted) image of the last extract() call.
+  const Pyramid& pyramid() const {
+    detail::require(!view_work_.empty(), "Extractor::pyramid: extract() was not called yet");
+    return view_work_.front().pyramid;
+  }
+
+  /// Keypoints (original pixel coordinates) and descriptors of a CV_8UC1 image (a ROI of a larger
+  /// matrix is fine); see Features for the keypoint fields.
   ///
   /// `mask`: empty (everything allowed) or CV_8UC1 of the image size; a keypoint is kept only where
-  /// the mask pixel nearest to its level-0 position is non-zero.
+  /// the mask pixel nearest to its original position is non-zero.
   ///
   /// Throws std::invalid_argument for an empty image, a type other than CV_8UC1, or a mask of the
   /// wrong size or type. A valid image with no corners (flat, or smaller than the descriptor
-  /// support 2·border()+1 on every level) gives an empty result.
+  /// support on every level) gives an empty result.
   Features<kBits> extract(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
     detail::require_gray8(image, "Extractor::extract");
     detail::require_mask(mask, image.size(), "Extractor::extract");
-    pyramid_.build(image);
-    const int levels = pyramid_.levels();
-    level_work_.resize(static_cast<std::size_t>(levels));
+    prepare_views(image.size());
+    const int n_views = static_cast<int>(view_work_.size());
+    const int levels = options_.pyramid.levels;
 
-    std::vector<int> available(static_cast<std::size_t>(levels), 0);
-    for (int l = 0; l < levels; ++l) {
-      LevelWork& work = level_work_[static_cast<std::size_t>(l)];
-      collect_candidates(l, mask, work);
-      available[static_cast<std::size_t>(l)] = static_cast<int>(work.level_points.size());
+    for_each_view([&](int v) { detect_view(image, mask, view_work_[static_cast<std::size_t>(v)]); });
+    if (options_.duplicates == DuplicatePolicy::kMerge && n_views > 1) merge_duplicates();
+
+    // Budget: views in proportion to their area 1/t, levels geometric within a view.
+    std::vector<int> budgets;
+    std::vector<int> available;
+    const std::vector<int> per_view = view_budgets();
+    for (int v = 0; v < n_views; ++v) {
+      const std::vector<int> per_level =
+          level_budgets(per_view[static_cast<std::size_t>(v)], options_.pyramid.scale_factor, levels);
+      for (int l = 0; l < levels; ++l) {
+        budgets.push_back(per_level[static_cast<std::size_t>(l)]);
+        available.push_back(static_cast<int>(level_of(v, l).alive.size()));
+      }
     }
-    const std::vector<int> take = allocate_with_carry(
-        level_budgets(options_.features, options_.pyramid.scale_factor, levels), available);
+    const std::vector<int> take = allocate_with_carry(budgets, available);
+    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(image.cols), static_cast<float>(image.rows));
+    for (int v = 0; v < n_views; ++v) {
+      for (int l = 0; l < levels; ++l) {
+        LevelWork& work = level_of(v, l);
+        std::vector<cv::Point2f> points;
+        std::vector<float> responses;
+        points.reserve(work.alive.size());
+        responses.reserve(work.alive.size());
+        for (int i : work.alive) {
+          points.push_back(work.original_points[static_cast<std::size_t>(i)]);
+          responses.push_back(work.responses[static_cast<std::size_t>(i)]);
+        }
+        work.kept.clear();
+        for (int k : distribute_quadtree(points, responses, region, take[static_cast<std::size_t>(v * levels + l)])) {
+          work.kept.push_back(work.alive[static_cast<std::size_t>(k)]);
+        }
+      }
+    }
+
+    for_each_view([&](int v) { describe_view(view_work_[static_cast<std::size_t>(v)]); });
 
     Features<kBits> features;
-    features.keypoints.reserve(static_cast<std::size_t>(options_.features));
-    features.descriptors.reserve(static_cast<std::size_t>(options_.features));
-    features.views.reserve(static_cast<std::size_t>(options_.features));
     for (int l = 0; l < levels; ++l) {
-      LevelWork& work = level_work_[static_cast<std::size_t>(l)];
-      if (take[static_cast<std::size_t>(l)] == 0) continue;
-      const std::vector<int> kept =
-          distribute_quadtree(work.level_points, work.responses, work.region, take[static_cast<std::size_t>(l)]);
-      descriptor_.prepare(pyramid_.level(l), work.descriptor_data);
-      const float scale = static_cast<float>(options_.pyramid.scale(l));
-      for (int index : kept) {
-        const cv::Point2f p = work.level_points[static_cast<std::size_t>(index)];
-        const float angle = descriptor_.orientation(work.descriptor_data, p);
-        features.descriptors.push_back(descriptor_.describe(work.descriptor_data, p, angle));
-        features.keypoints.emplace_back(pyramid_.to_level0(p, l), Descriptor::kPatchSize * scale,
-                                        radians_to_degrees_0_360(angle), work.responses[static_cast<std::size_t>(index)],
-                                        l);
-        features.views.push_back(0);
+      for (int v = 0; v < n_views; ++v) {
+        const LevelWork& work = level_of(v, l);
+        features.keypoints.insert(features.keypoints.end(), work.keypoints.begin(), work.keypoints.end());
+        features.descriptors.insert(features.descriptors.end(), work.descriptors.begin(), work.descriptors.end());
+        features.views.insert(features.views.end(), work.keypoints.size(), v);
       }
     }
     return features;
@@ -115,41 +178,219 @@ class Extractor {
  private:
   struct LevelWork {
     cv::Mat scores;
-    cv::Rect2f region;
-    std::vector<cv::Point2f> level_points;
+    std::vector<cv::Point2f> level_points;     ///< candidate positions, level pixels of the view
+    std::vector<cv::Point2f> original_points;  ///< the same, original pixels
     std::vector<float> responses;
+    std::vector<int> alive;  ///< candidates that survived the support, mask and duplicate checks
+    std::vector<int> kept;   ///< candidates chosen by the budget
+    std::vector<cv::Point2f> kept_points;
     typename Descriptor::LevelData descriptor_data;
+    std::vector<cv::KeyPoint> keypoints;
+    std::vector<BinaryDescriptor<kBits>> descriptors;
   };
 
-  /// Candidates of level l inside the descriptor band, filtered by the mask, in `work`.
-  void collect_candidates(int l, const cv::Mat& mask, LevelWork& work) {
-    work.level_points.clear();
-    work.responses.clear();
-    const cv::Mat& image = pyramid_.level(l);
-    const int border = std::max(descriptor_.border(), options_.detector.support_radius());
-    const cv::Rect roi(border, border, image.cols - 2 * border, image.rows - 2 * border);
-    work.region = cv::Rect2f(static_cast<float>(roi.x), static_cast<float>(roi.y), static_cast<float>(roi.width),
-                             static_cast<float>(roi.height));
-    if (roi.width <= 0 || roi.height <= 0) return;
-    const Candidates candidates = detect_candidates(image, roi, options_.detector, work.scores);
-    for (std::size_t i = 0; i < candidates.corners.size(); ++i) {
-      const Corner& c = candidates.corners[i];
-      const cv::Point2f p(static_cast<float>(c.x), static_cast<float>(c.y));
-      if (!mask.empty()) {
-        const cv::Point2f p0 = pyramid_.to_level0(p, l);
-        const int mx = std::clamp(cvRound(p0.x), 0, mask.cols - 1);
-        const int my = std::clamp(cvRound(p0.y), 0, mask.rows - 1);
-        if (mask.at<std::uint8_t>(my, mx) == 0) continue;
+  struct ViewWork {
+    AffineView view;
+    cv::Mat rotated;
+    cv::Mat image;
+    Pyramid pyramid;
+    std::vector<LevelWork> levels;
+  };
+
+  LevelWork& level_of(int v, int l) {
+    return view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
+  }
+
+  /// (Re)builds the view set when the image size changes; buffers are kept otherwise.
+  void prepare_views(cv::Size size) {
+    if (size == views_size_ && !view_work_.empty()) return;
+    const std::vector<AffineView> views = make_views(options_.views, size);
+    view_work_.clear();
+    view_work_.resize(views.size(), ViewWork{AffineView{}, {}, {}, Pyramid(options_.pyramid), {}});
+    for (std::size_t v = 0; v < views.size(); ++v) {
+      view_work_[v].view = views[v];
+      view_work_[v].levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+    }
+    views_size_ = size;
+  }
+
+  /// Runs fn(v) for every view, on options_.threads threads (the calling thread included).
+  template <class Fn>
+  void for_each_view(Fn fn) {
+    const int n = static_cast<int>(view_work_.size());
+    const int workers = std::min(options_.threads, n);
+    if (workers <= 1) {
+      for (int v = 0; v < n; ++v) fn(v);
+      return;
+    }
+    std::atomic<int> next{0};
+    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
+    auto work = [&](int w) {
+      try {
+        for (int v = next++; v < n; v = next++) fn(v);
+      } catch (...) {
+        errors[static_cast<std::size_t>(w)] = std::current_exception();
+        next = n;
       }
-      work.level_points.push_back(p);
-      work.responses.push_back(candidates.responses[i]);
+    };
+    std::vector<std::thread> pool;
+    for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
+    work(0);
+    for (std::thread& t : pool) t.join();
+    for (const std::exception_ptr& e : errors) {
+      if (e) std::rethrow_exception(e);
+    }
+  }
+
+  /// Budget of each view, proportional to its area W·H/t, summing to options_.features (largest
+  /// remainders, ties to the earlier view).
+  std::vector<int> view_budgets() const {
+    const std::size_t n = view_work_.size();
+    double total_weight = 0.0;
+    for (const ViewWork& w : view_work_) total_weight += 1.0 / w.view.tilt;
+    std::vector<int> budgets(n, 0);
+    std::vector<std::pair<double, std::size_t>> remainders;
+    int assigned = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+      const double exact = options_.features * (1.0 / view_work_[v].view.tilt) / total_weight;
+      budgets[v] = static_cast<int>(std::floor(exact));
+      assigned += budgets[v];
+      remainders.emplace_back(exact - budgets[v], v);
+    }
+    std::stable_sort(remainders.begin(), remainders.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (std::size_t i = 0; assigned < options_.features; ++i, ++assigned) ++budgets[remainders[i % n].second];
+    return budgets;
+  }
+
+  /// Step 1–2 for one view: render, pyramid, candidates with support and mask checks.
+  void detect_view(const cv::Mat& image, const cv::Mat& mask, ViewWork& work) {
+    render_view(image, work.view, options_.views.antialias, work.rotated, work.image);
+    work.pyramid.build(work.image);
+    const int border = std::max(descriptor_.border(), options_.detector.support_radius());
+    const cv::Matx23d& back = work.view.to_original;
+    // Extent in original pixels of a unit disc of view pixels, along x and along y.
+    const double extent_x = std::hypot(back(0, 0), back(0, 1));
+    const double extent_y = std::hypot(back(1, 0), back(1, 1));
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      LevelWork& level = work.levels[static_cast<std::size_t>(l)];
+      level.level_points.clear();
+      level.original_points.clear();
+      level.responses.clear();
+      level.alive.clear();
+      const cv::Mat& level_image = work.pyramid.level(l);
+      const cv::Rect roi(border, border, level_image.cols - 2 * border, level_image.rows - 2 * border);
+      if (roi.width <= 0 || roi.height <= 0) continue;
+      const Candidates candidates = detect_candidates(level_image, roi, options_.detector, level.scores);
+      // Support radius in view pixels (level 0 of the view), then its extent in the original.
+      const double radius = border * static_cast<double>(work.image.cols) / level_image.cols;
+      const double margin_x = radius * extent_x;
+      const double margin_y = radius * extent_y;
+      for (std::size_t i = 0; i < candidates.corners.size(); ++i) {
+        const Corner& c = candidates.corners[i];
+        const cv::Point2f p(static_cast<float>(c.x), static_cast<float>(c.y));
+        const cv::Point2d q = apply_affine(back, work.pyramid.to_level0(p, l));
+        if (!work.view.is_identity() && (q.x - margin_x < 0.0 || q.y - margin_y < 0.0 ||
+                                         q.x + margin_x > image.cols - 1.0 || q.y + margin_y > image.rows - 1.0)) {
+          continue;
+        }
+        const int mx = cvRound(q.x);
+        const int my = cvRound(q.y);
+        if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) continue;
+        if (!mask.empty() && mask.at<std::uint8_t>(my, mx) == 0) continue;
+        level.alive.push_back(static_cast<int>(level.level_points.size()));
+        level.level_points.push_back(p);
+        level.original_points.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+        level.responses.push_back(candidates.responses[i]);
+      }
+    }
+  }
+
+  /// Step 3: per level, visits candidates from the strongest down (ties: lower view, lower index)
+  /// and drops one when a kept candidate of another view lies within the merge radius.
+  void merge_duplicates() {
+    const int n_views = static_cast<int>(view_work_.size());
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      struct Ref {
+        float response;
+        int view;
+        int index;
+      };
+      std::vector<Ref> order;
+      for (int v = 0; v < n_views; ++v) {
+        const LevelWork& work = level_of(v, l);
+        for (int i : work.alive) order.push_back({work.responses[static_cast<std::size_t>(i)], v, i});
+      }
+      std::sort(order.begin(), order.end(), [](const Ref& a, const Ref& b) {
+        return a.response > b.response || (a.response == b.response && (a.view < b.view || (a.view == b.view && a.index < b.index)));
+      });
+      const double radius = options_.merge_radius * options_.pyramid.scale(l);
+      const double cell = radius;
+      std::unordered_map<long long, std::vector<Ref>> grid;
+      auto key = [](long long cx, long long cy) { return cx * 1000003LL + cy; };
+      for (int v = 0; v < n_views; ++v) level_of(v, l).alive.clear();
+      for (const Ref& r : order) {
+        const cv::Point2f& p = level_of(r.view, l).original_points[static_cast<std::size_t>(r.index)];
+        const long long cx = static_cast<long long>(std::floor(p.x / cell));
+        const long long cy = static_cast<long long>(std::floor(p.y / cell));
+        bool duplicate = false;
+        for (long long dy = -1; dy <= 1 && !duplicate; ++dy) {
+          for (long long dx = -1; dx <= 1 && !duplicate; ++dx) {
+            const auto it = grid.find(key(cx + dx, cy + dy));
+            if (it == grid.end()) continue;
+            for (const Ref& k : it->second) {
+              if (k.view == r.view) continue;
+              const cv::Point2f& o = level_of(k.view, l).original_points[static_cast<std::size_t>(k.index)];
+              if (std::hypot(o.x - p.x, o.y - p.y) < radius) {
+                duplicate = true;
+                break;
+              }
+            }
+          }
+        }
+        if (duplicate) continue;
+        grid[key(cx, cy)].push_back(r);
+        level_of(r.view, l).alive.push_back(r.index);
+      }
+      for (int v = 0; v < n_views; ++v) {
+        std::vector<int>& alive = level_of(v, l).alive;
+        std::sort(alive.begin(), alive.end());
+      }
+    }
+  }
+
+  /// Step 5 for one view: orientation and descriptor in the view, keypoints mapped back.
+  void describe_view(ViewWork& work) {
+    const cv::Matx23d& back = work.view.to_original;
+    const float sqrt_tilt = static_cast<float>(std::sqrt(work.view.tilt));
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      LevelWork& level = work.levels[static_cast<std::size_t>(l)];
+      level.keypoints.clear();
+      level.descriptors.clear();
+      if (level.kept.empty()) continue;
+      level.kept_points.clear();
+      for (int i : level.kept) level.kept_points.push_back(level.level_points[static_cast<std::size_t>(i)]);
+      descriptor_.prepare(work.pyramid.level(l), level.kept_points, level.descriptor_data);
+      const float scale = static_cast<float>(options_.pyramid.scale(l)) * sqrt_tilt;
+      for (int i : level.kept) {
+        const cv::Point2f p = level.level_points[static_cast<std::size_t>(i)];
+        const float angle = descriptor_.orientation(level.descriptor_data, p);
+        level.descriptors.push_back(descriptor_.describe(level.descriptor_data, p, angle));
+        // The direction (cos θ, sin θ) in the view, mapped to the original image.
+        const double dx = back(0, 0) * std::cos(angle) + back(0, 1) * std::sin(angle);
+        const double dy = back(1, 0) * std::cos(angle) + back(1, 1) * std::sin(angle);
+        const float original_angle = work.view.is_identity() ? angle : static_cast<float>(std::atan2(dy, dx));
+        level.keypoints.emplace_back(level.original_points[static_cast<std::size_t>(i)], Descriptor::kPatchSize * scale,
+                                     radians_to_degrees_0_360(original_angle),
+                                     level.responses[static_cast<std::size_t>(i)], l);
+      }
     }
   }
 
   ExtractorOptions options_;
   Descriptor descriptor_;
-  Pyramid pyramid_;
-  std::vector<LevelWork> level_work_;
+  cv::Size views_size_;
+  std::vector<ViewWork> view_work_;
 };
 
 }  // namespace affine_orb

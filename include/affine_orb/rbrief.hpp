@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -63,6 +64,8 @@ class Rbrief {
   struct LevelData {
     cv::Mat image;
     cv::Mat smoothed;
+    cv::Mat patch;           ///< scratch for the sparse prepare()
+    cv::Mat patch_smoothed;  ///< scratch for the sparse prepare()
   };
 
   explicit Rbrief(const Options& options = {}) : options_(options), disc_((options.check(), options.orientation_radius)) {
@@ -86,6 +89,32 @@ class Rbrief {
     data.image = level;
     cv::GaussianBlur(level, data.smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel), options_.blur_sigma,
                      options_.blur_sigma, cv::BORDER_REFLECT_101);
+  }
+
+  /// Smooths only the squares of side 2·border()+1 around `points` when they cover less than half
+  /// of the level, else the whole level. Each square is smoothed from a continuous copy of the
+  /// level region that extends the kernel radius beyond it (clipped at the level border, where
+  /// the reflection then is the level's own), so its pixels equal those of the full smoothing.
+  /// Pixels outside the squares are left undefined.
+  void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& points, LevelData& data) const {
+    detail::require_gray8(level, "Rbrief::prepare");
+    const int side = 2 * border_ + 1;
+    if (2.0 * static_cast<double>(points.size()) * side * side >= static_cast<double>(level.total())) {
+      prepare(level, data);
+      return;
+    }
+    data.image = level;
+    data.smoothed.create(level.size(), CV_8UC1);
+    const int k = options_.blur_kernel / 2;
+    const cv::Rect bounds(0, 0, level.cols, level.rows);
+    for (const cv::Point2f& p : points) {
+      const cv::Rect square = cv::Rect(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side) & bounds;
+      const cv::Rect source = cv::Rect(square.x - k, square.y - k, square.width + 2 * k, square.height + 2 * k) & bounds;
+      level(source).copyTo(data.patch);
+      cv::GaussianBlur(data.patch, data.patch_smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel),
+                       options_.blur_sigma, options_.blur_sigma, cv::BORDER_REFLECT_101);
+      data.patch_smoothed(cv::Rect(square.tl() - source.tl(), square.size())).copyTo(data.smoothed(square));
+    }
   }
 
   /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it.

@@ -108,9 +108,10 @@ inline AffineView make_view(double tilt, double rotation_degrees, cv::Size image
     max_x = std::max(max_x, x);
     max_y = std::max(max_y, y);
   }
-  // A tolerance so that rounding noise in the rotation does not add a column.
-  view.canvas_size = cv::Size(static_cast<int>(std::floor(max_x - min_x + 1e-6)) + 1,
-                              static_cast<int>(std::floor(max_y - min_y + 1e-6)) + 1);
+  // Every rotated pixel centre lies in [0, size − 1]; the tolerance keeps rounding noise in the
+  // rotation from adding a column.
+  view.canvas_size = cv::Size(static_cast<int>(std::ceil(max_x - min_x - 1e-6)) + 1,
+                              static_cast<int>(std::ceil(max_y - min_y - 1e-6)) + 1);
   view.to_canvas = cv::Matx23d(c, -s, -min_x, s, c, -min_y);
   view.size = cv::Size(std::max(1, static_cast<int>(std::lround(view.canvas_size.width / tilt))),
                        view.canvas_size.height);

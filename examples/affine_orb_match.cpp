@@ -1,0 +1,241 @@
+// affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]
+//                  [--features N] [--threads K] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]
+//
+// Extracts Affine-ORB features from two images, matches them (SPEC §4), selects the homography or
+// the fundamental matrix (SPEC §5) and, with a ground-truth homography (x2 ~ H x1: the Oxford
+// plain-text format or OpenCV's XML/YAML), counts the correct matches (SPEC §7: ‖H x1 − x2‖ < 3 px).
+// With no image arguments it uses Debian opencv-doc's graf1.png, graf3.png and H1to3p.xml.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "affine_orb/affine_matching.hpp"
+#include "affine_orb/affine_orb.hpp"
+#include "cli.hpp"
+
+namespace {
+
+const char* const kUsage =
+    "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
+    "                        [--features N] [--threads K] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]\n"
+    "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian opencv-doc)\n"
+    "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
+    "  --max-tilt T       largest simulated tilt, 1 = no affine views (default 2.828: 18 views)\n"
+    "  --out PNG          the matches side by side (green correct, red wrong; without ground truth:\n"
+    "                     green = inlier of the chosen model)\n"
+    "  --rectified PNG    image 1 next to image 2 warped into image 1's frame, when a homography is chosen\n"
+    "  --save-matches F   one line \"x1 y1 x2 y2\" per match, original pixel coordinates\n";
+
+const char* const kDefaultDir = "/usr/share/doc/opencv-doc/examples/data/";
+
+/// Reads a 3x3 homography: OpenCV FileStorage (XML/YAML, first top-level matrix) or 9 numbers.
+cv::Matx33d read_homography(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read homography " + path);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string content = text.str();
+  if (content.find("<?xml") != std::string::npos || content.find("%YAML") != std::string::npos) {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    cv::Mat h;
+    if (fs.isOpened()) fs.getFirstTopLevelNode() >> h;
+    if (h.rows != 3 || h.cols != 3) throw std::runtime_error("no 3x3 matrix in " + path);
+    h.convertTo(h, CV_64F);
+    return cv::Matx33d(h);
+  }
+  std::istringstream numbers(content);
+  cv::Matx33d h;
+  for (int i = 0; i < 9; ++i) {
+    if (!(numbers >> h.val[i])) throw std::runtime_error("expected 9 numbers in " + path);
+  }
+  return h;
+}
+
+cv::Mat read_gray(const std::string& path) {
+  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (image.empty()) throw std::runtime_error("cannot read image " + path);
+  return image;
+}
+
+struct Outcome {
+  std::size_t keypoints1 = 0, keypoints2 = 0, views = 0, matches = 0, correct = 0, distinct = 0, inliers = 0;
+  bool ground_truth = false;
+  double ms_extract1 = 0, ms_extract2 = 0, ms_match = 0, ms_model = 0;
+  affine_orb::ModelSelectionResult selection;
+};
+
+const char* model_name(affine_orb::GeometricModel m) {
+  switch (m) {
+    case affine_orb::GeometricModel::kHomography:
+      return "homography";
+    case affine_orb::GeometricModel::kFundamental:
+      return "fundamental";
+    default:
+      return "none";
+  }
+}
+
+template <class Descriptor>
+Outcome run(const cv::Mat& image1, const cv::Mat& image2, const affine_orb::ExtractorOptions& options,
+            const cv::Matx33d* truth, const std::string& out, const std::string& rectified,
+            const std::string& save_matches) {
+  using affine_orb::examples::ms_since;
+  affine_orb::Extractor<Descriptor> extractor(options);
+  Outcome o;
+  auto start = std::chrono::steady_clock::now();
+  const auto f1 = extractor.extract(image1);
+  o.ms_extract1 = ms_since(start);
+  start = std::chrono::steady_clock::now();
+  const auto f2 = extractor.extract(image2);
+  o.ms_extract2 = ms_since(start);
+  o.views = extractor.views().size();
+  o.keypoints1 = f1.size();
+  o.keypoints2 = f2.size();
+
+  start = std::chrono::steady_clock::now();
+  const std::vector<affine_orb::Match> matches = affine_orb::match_features(f1, f2);
+  o.ms_match = ms_since(start);
+  o.matches = matches.size();
+
+  std::vector<cv::Point2f> p1, p2;
+  for (const auto& m : matches) {
+    p1.push_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt);
+    p2.push_back(f2.keypoints[static_cast<std::size_t>(m.train)].pt);
+  }
+  start = std::chrono::steady_clock::now();
+  if (p1.size() >= 8) o.selection = affine_orb::select_model(p1, p2);
+  o.ms_model = ms_since(start);
+  const std::vector<std::uint8_t>& inlier_mask = o.selection.model == affine_orb::GeometricModel::kFundamental
+                                                     ? o.selection.fundamental_inliers
+                                                     : o.selection.homography_inliers;
+  for (std::uint8_t v : inlier_mask) o.inliers += v;
+
+  std::vector<char> correct(matches.size(), 0);
+  if (truth) {
+    o.ground_truth = true;
+    std::set<std::pair<int, int>> cells;
+    for (std::size_t k = 0; k < matches.size(); ++k) {
+      const cv::Vec3d q = *truth * cv::Vec3d(p1[k].x, p1[k].y, 1.0);
+      correct[k] = std::hypot(q[0] / q[2] - p2[k].x, q[1] / q[2] - p2[k].y) < 3.0;
+      if (correct[k]) cells.insert({static_cast<int>(std::floor(p1[k].x / 2)), static_cast<int>(std::floor(p1[k].y / 2))});
+    }
+    o.correct = static_cast<std::size_t>(std::count(correct.begin(), correct.end(), 1));
+    o.distinct = cells.size();
+  }
+
+  if (!save_matches.empty()) {
+    std::ofstream file(save_matches);
+    if (!file) throw std::runtime_error("cannot write " + save_matches);
+    for (std::size_t k = 0; k < matches.size(); ++k) file << p1[k].x << ' ' << p1[k].y << ' ' << p2[k].x << ' ' << p2[k].y << '\n';
+  }
+  if (!out.empty()) {
+    const int height = std::max(image1.rows, image2.rows);
+    cv::Mat canvas(height, image1.cols + image2.cols, CV_8UC3, cv::Scalar::all(0));
+    cv::cvtColor(image1, canvas(cv::Rect(0, 0, image1.cols, image1.rows)), cv::COLOR_GRAY2BGR);
+    cv::cvtColor(image2, canvas(cv::Rect(image1.cols, 0, image2.cols, image2.rows)), cv::COLOR_GRAY2BGR);
+    for (std::size_t k = 0; k < matches.size(); ++k) {
+      const bool good = truth ? correct[k] != 0 : (k < inlier_mask.size() && inlier_mask[k] != 0);
+      const cv::Scalar colour = good ? cv::Scalar(0, 200, 0) : cv::Scalar(0, 0, 230);
+      const cv::Point2f q = p2[k] + cv::Point2f(static_cast<float>(image1.cols), 0.0f);
+      cv::line(canvas, p1[k], q, colour, 1, cv::LINE_AA);
+      cv::circle(canvas, p1[k], 3, colour, 1, cv::LINE_AA);
+      cv::circle(canvas, q, 3, colour, 1, cv::LINE_AA);
+    }
+    if (!cv::imwrite(out, canvas)) throw std::runtime_error("cannot write " + out);
+  }
+  if (!rectified.empty()) {
+    const affine_orb::CorrectedImage corrected = affine_orb::correct_image(image2, image1.size(), o.selection);
+    if (corrected.success) {
+      cv::Mat side;
+      cv::hconcat(image1, corrected.image, side);
+      if (!cv::imwrite(rectified, side)) throw std::runtime_error("cannot write " + rectified);
+    } else {
+      std::fprintf(stderr, "affine_orb_match: no homography chosen, %s not written\n", rectified.c_str());
+    }
+  }
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    affine_orb::examples::Args args(argc, argv);
+    if (args.flag("--help") || args.flag("-h")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    affine_orb::ExtractorOptions options;
+    options.features = args.integer("--features", 2000);
+    options.views.max_tilt = args.real("--max-tilt", options.views.max_tilt);
+    options.threads = args.integer("--threads", 2);
+    const std::string descriptor = args.value("--descriptor", "rbrief");
+    std::string homography = args.value("--homography", "");
+    const std::string out = args.value("--out", "");
+    const std::string rectified = args.value("--rectified", "");
+    const std::string save_matches = args.value("--save-matches", "");
+    const bool json = args.flag("--json");
+    std::vector<std::string> images = args.positional();
+    if (images.empty()) {
+      images = {std::string(kDefaultDir) + "graf1.png", std::string(kDefaultDir) + "graf3.png"};
+      if (homography.empty()) homography = std::string(kDefaultDir) + "H1to3p.xml";
+    }
+    if (images.size() != 2) throw std::invalid_argument("expected two images (or none for the default pair)");
+    const cv::Mat image1 = read_gray(images[0]);
+    const cv::Mat image2 = read_gray(images[1]);
+    cv::Matx33d truth;
+    if (!homography.empty()) truth = read_homography(homography);
+    const cv::Matx33d* truth_ptr = homography.empty() ? nullptr : &truth;
+
+    Outcome o;
+    if (descriptor == "rbrief") {
+      o = run<affine_orb::Rbrief>(image1, image2, options, truth_ptr, out, rectified, save_matches);
+    } else if (descriptor == "brisk") {
+      o = run<affine_orb::Brisk>(image1, image2, options, truth_ptr, out, rectified, save_matches);
+    } else {
+      throw std::invalid_argument("--descriptor must be rbrief or brisk, got " + descriptor);
+    }
+    const double precision = o.matches ? static_cast<double>(o.correct) / static_cast<double>(o.matches) : 0.0;
+    if (json) {
+      std::printf(
+          "{\"image1\": \"%s\", \"image2\": \"%s\", \"descriptor\": \"%s\", \"max_tilt\": %.4f, \"threads\": %d, "
+          "\"keypoints1\": %zu, \"keypoints2\": %zu, \"views\": %zu, \"matches\": %zu, ",
+          images[0].c_str(), images[1].c_str(), descriptor.c_str(), options.views.max_tilt, options.threads, o.keypoints1,
+          o.keypoints2, o.views, o.matches);
+      if (o.ground_truth) {
+        std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct, precision);
+      } else {
+        std::printf("\"correct\": null, \"distinct_correct\": null, \"precision\": null, ");
+      }
+      std::printf("\"model\": \"%s\", \"homography_ratio\": %.4f, \"inliers\": %zu, \"ms_extract1\": %.2f, "
+                  "\"ms_extract2\": %.2f, \"ms_match\": %.2f, \"ms_model\": %.2f}\n",
+                  model_name(o.selection.model), o.selection.homography_ratio, o.inliers, o.ms_extract1, o.ms_extract2,
+                  o.ms_match, o.ms_model);
+    } else {
+      std::printf("%s <-> %s (%s, %zu views, %d thread(s))\n", images[0].c_str(), images[1].c_str(), descriptor.c_str(),
+                  o.views, options.threads);
+      std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
+      if (o.ground_truth) std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
+      std::printf("\nmodel %s (R_H = %.2f), %zu inliers\n", model_name(o.selection.model), o.selection.homography_ratio,
+                  o.inliers);
+      std::printf("time: extract %.1f + %.1f ms, match %.1f ms, model %.1f ms\n", o.ms_extract1, o.ms_extract2, o.ms_match,
+                  o.ms_model);
+      if (!out.empty()) std::printf("matches drawn to %s\n", out.c_str());
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "affine_orb_match: %s\n%s", e.what(), kUsage);
+    return 2;
+  }
+}

@@ -3,7 +3,6 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-#include <limits>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -123,61 +122,6 @@ TEST_CASE("extraction is deterministic across runs and instances") {
     CHECK(first.descriptors[i] == again.descriptors[i]);
     CHECK(first.descriptors[i] == other.descriptors[i]);
   }
-}
-
-TEST_CASE("bad input gives std::invalid_argument, featureless input an empty result") {
-  affine_orb::Extractor<affine_orb::Rbrief> extractor;  // with the default affine views
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
-  CHECK_THROWS_AS(extractor.extract(cv::Mat()), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extract(cv::Mat(100, 100, CV_8UC3, cv::Scalar(1, 2, 3))), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extract(cv::Mat(100, 100, CV_16UC1, cv::Scalar(7))), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extract(cv::Mat(100, 100, CV_32FC1, cv::Scalar(7))), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extract(image, cv::Mat(10, 10, CV_8UC1, cv::Scalar(1))), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extract(image, cv::Mat(image.size(), CV_32FC1, cv::Scalar(1))), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extract(image, cv::Mat(image.size(), CV_8UC3, cv::Scalar(1))), std::invalid_argument);
-  try {
-    extractor.extract(cv::Mat(100, 100, CV_8UC3));
-  } catch (const std::invalid_argument& e) {
-    CHECK(std::string(e.what()).find("CV_8UC3") != std::string::npos);
-  }
-
-  // Valid images with nothing to find: smaller than the descriptor patch, flat, 1x1, a thin strip.
-  CHECK(extractor.extract(cv::Mat(30, 30, CV_8UC1, cv::Scalar(0)).setTo(255, cv::Mat::eye(30, 30, CV_8UC1))).empty());
-  CHECK(extractor.extract(image(cv::Rect(0, 0, 36, 36))).empty());
-  CHECK(extractor.extract(cv::Mat(1, 1, CV_8UC1, cv::Scalar(3))).empty());
-  CHECK(extractor.extract(cv::Mat(480, 640, CV_8UC1, cv::Scalar(0))).empty());
-  CHECK(extractor.extract(cv::Mat(480, 640, CV_8UC1, cv::Scalar(255))).empty());
-  CHECK(extractor.extract(cv::Mat(10, 10000, CV_8UC1, cv::Scalar(9))).empty());
-
-  // Options.
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  auto rejects = [](auto mutate) {
-    affine_orb::ExtractorOptions options;
-    mutate(options);
-    CHECK_THROWS_AS(affine_orb::Extractor<affine_orb::Rbrief>{options}, std::invalid_argument);
-  };
-  rejects([](auto& o) { o.features = 0; });
-  rejects([](auto& o) { o.features = -10; });
-  rejects([&](auto& o) { o.pyramid.scale_factor = nan; });
-  rejects([](auto& o) { o.pyramid.scale_factor = 1.0; });
-  rejects([](auto& o) { o.pyramid.scale_factor = -1.2; });
-  rejects([](auto& o) { o.pyramid.levels = 0; });
-  rejects([](auto& o) { o.pyramid.levels = -3; });
-  rejects([](auto& o) { o.detector.initial_threshold = 0; });
-  rejects([](auto& o) { o.detector.initial_threshold = 300; });
-  rejects([](auto& o) { o.detector.min_threshold = 0; });
-  rejects([](auto& o) { o.detector.min_threshold = 30; });  // above the initial threshold
-  rejects([](auto& o) { o.detector.cell_size = 0; });
-  rejects([](auto& o) { o.detector.harris_k = std::numeric_limits<float>::quiet_NaN(); });
-  rejects([](auto& o) { o.detector.score = static_cast<affine_orb::ScoreType>(7); });
-  rejects([](auto& o) { o.views.max_tilt = 0.5; });
-  rejects([&](auto& o) { o.views.max_tilt = nan; });
-  rejects([](auto& o) { o.views.tilt_ratio = 1.0; });
-  rejects([](auto& o) { o.views.rotation_base_degrees = 0.0; });
-  rejects([](auto& o) { o.views.antialias = -1.0; });
-  rejects([](auto& o) { o.threads = 0; });
-  rejects([](auto& o) { o.merge_radius = 0.0; });
-  rejects([](auto& o) { o.duplicates = static_cast<affine_orb::DuplicatePolicy>(5); });
 }
 
 TEST_CASE("Harris ranking gives the budget too") {

@@ -1,0 +1,633 @@
+// Generic RANSAC (ransac.hpp) and the minimal/least-squares geometric estimators (homography.hpp,
+// fundamental.hpp), against independent references: a toy line model whose truth is known, exact
+// correspondences generated from known cameras, and naive re-implementations of the scores.
+
+#include <doctest/doctest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <opencv2/core.hpp>
+
+#include "affine_orb/detail/ransac_sampler.hpp"
+#include "affine_orb/fundamental.hpp"
+#include "affine_orb/homography.hpp"
+#include "affine_orb/ransac.hpp"
+
+namespace {
+
+using affine_orb::ModelSet;
+using affine_orb::PointScore;
+using affine_orb::RansacOptions;
+
+// ---------------------------------------------------------------------------------------------
+// A toy estimator: 2-D lines a x + b y + c = 0 (unit normal) through two points, truncated
+// quadratic score. Its truth is known exactly, so it tests the RANSAC loop on its own.
+
+struct Line {
+  double a = 0.0, b = 0.0, c = 0.0;
+};
+
+struct LineEstimator {
+  using Model = Line;
+  static constexpr int kSampleSize = 2;
+  static constexpr int kMaxModels = 2;
+
+  std::vector<Eigen::Vector2d> points;
+  double threshold = 1.0;  // squared distance
+  bool degenerate = false;  // when true, generate() never yields a model
+  bool twin = false;        // when true, generate() also yields a useless second model
+
+  std::size_t size() const { return points.size(); }
+
+  ModelSet<Model, kMaxModels> generate(const std::array<int, kSampleSize>& sample) const {
+    ModelSet<Model, kMaxModels> set;
+    if (degenerate) return set;
+    const Eigen::Vector2d p = points[static_cast<std::size_t>(sample[0])];
+    const Eigen::Vector2d q = points[static_cast<std::size_t>(sample[1])];
+    const Eigen::Vector2d d = q - p;
+    if (d.norm() == 0.0) return set;
+    const Eigen::Vector2d n = Eigen::Vector2d(-d.y(), d.x()).normalized();
+    if (twin) set.push(Line{1.0, 0.0, 1e6});
+    set.push(Line{n.x(), n.y(), -n.dot(p)});
+    return set;
+  }
+
+  PointScore score(const Model& m, std::size_t i) const {
+    const double d = m.a * points[i].x() + m.b * points[i].y() + m.c;
+    const double d2 = d * d;
+    PointScore s;
+    s.inlier = d2 < threshold;
+    s.value = s.inlier ? threshold - d2 : 0.0;
+    return s;
+  }
+
+  double max_point_score() const { return threshold; }
+};
+
+// The same with a total-least-squares refit on the inliers.
+struct RefinedLineEstimator : LineEstimator {
+  std::optional<Line> refine(const Line&, const std::vector<std::uint8_t>& inliers) const {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    int count = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (inliers[i] != 0) {
+        mean += points[i];
+        ++count;
+      }
+    }
+    if (count < 2) return std::nullopt;
+    mean /= count;
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (inliers[i] != 0) scatter += (points[i] - mean) * (points[i] - mean).transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(scatter);
+    const Eigen::Vector2d n = solver.eigenvectors().col(0);  // normal: direction of least spread
+    return Line{n.x(), n.y(), -n.dot(mean)};
+  }
+};
+
+static_assert(!affine_orb::detail::HasRefine<LineEstimator>::value, "the toy estimator has no refine()");
+static_assert(affine_orb::detail::HasRefine<RefinedLineEstimator>::value, "");
+static_assert(affine_orb::detail::HasRefine<affine_orb::HomographyEstimator>::value, "");
+static_assert(affine_orb::detail::HasRefine<affine_orb::FundamentalEstimator>::value, "");
+
+// Points on y = 0.5 x + 10 (x in [0, 100]) with Gaussian noise, and uniform outliers in
+// [0, 100] x [0, 100]; `truth[i]` is 1 for points on the line.
+LineEstimator make_line_data(int count, double outlier_ratio, std::uint64_t seed, std::vector<int>& truth) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> coordinate(0.0, 100.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.2);
+  LineEstimator e;
+  truth.clear();
+  for (int i = 0; i < count; ++i) {
+    if (unit(rng) < outlier_ratio) {
+      e.points.emplace_back(coordinate(rng), coordinate(rng));
+      truth.push_back(0);
+    } else {
+      const double x = coordinate(rng);
+      e.points.emplace_back(x + noise(rng), 0.5 * x + 10.0 + noise(rng));
+      truth.push_back(1);
+    }
+  }
+  return e;
+}
+
+// Distance between the recovered line and y = 0.5 x + 10 at x = 0 and x = 100.
+double line_error(const Line& l) {
+  double worst = 0.0;
+  for (const double x : {0.0, 100.0}) {
+    const double y_true = 0.5 * x + 10.0;
+    worst = std::max(worst, std::abs(l.a * x + l.b * y_true + l.c));
+  }
+  return worst;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Two calibrated cameras: x = K (R X + t), camera 1 at the origin.
+
+Eigen::Matrix3d intrinsics() {
+  Eigen::Matrix3d k;
+  k << 520.0, 0.0, 319.5, 0.0, 520.0, 239.5, 0.0, 0.0, 1.0;
+  return k;
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return s;
+}
+
+struct TwoViews {
+  Eigen::Matrix3d k = intrinsics();
+  Eigen::Matrix3d r = Eigen::AngleAxisd(0.12, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()).toRotationMatrix();
+  Eigen::Vector3d t = Eigen::Vector3d(-0.6, 0.1, 0.15);
+  // Plane nᵀ X = d in camera-1 coordinates.
+  Eigen::Vector3d n = Eigen::Vector3d(0.1, -0.2, 1.0).normalized();
+  double d = 5.0;
+
+  Eigen::Matrix3d homography() const { return k * (r + t * n.transpose() / d) * k.inverse(); }
+  Eigen::Matrix3d fundamental() const { return k.inverse().transpose() * skew(t) * r * k.inverse(); }
+  Eigen::Vector2d project2(const Eigen::Vector3d& x) const { return (k * (r * x + t)).hnormalized(); }
+};
+
+// A 3-D point seen at pixel `p` of camera 1 at depth `depth`.
+Eigen::Vector3d back_project(const Eigen::Matrix3d& k, const Eigen::Vector2d& p, double depth) {
+  return depth * (k.inverse() * p.homogeneous());
+}
+
+Eigen::Matrix3d unit(const Eigen::Matrix3d& m) { return (m(2, 2) < 0.0 ? -1.0 : 1.0) * m / m.norm(); }
+
+std::vector<cv::Point2f> to_cv(const std::vector<Eigen::Vector2d>& points) {
+  std::vector<cv::Point2f> out;
+  for (const Eigen::Vector2d& p : points) out.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+  return out;
+}
+
+// Naive symmetric transfer score of ORB-SLAM's CheckHomography (paper eq. 20), written from the
+// definition with OpenCV's matrix types, as an independent check of HomographyEstimator::score.
+double naive_homography_score(const cv::Matx33d& h, cv::Point2d x1, cv::Point2d x2, double sigma, bool& inlier) {
+  const cv::Matx33d h_inv = h.inv();
+  const cv::Vec3d f = h * cv::Vec3d(x1.x, x1.y, 1.0);
+  const cv::Vec3d b = h_inv * cv::Vec3d(x2.x, x2.y, 1.0);
+  const double e2 = std::pow(f[0] / f[2] - x2.x, 2) + std::pow(f[1] / f[2] - x2.y, 2);
+  const double e1 = std::pow(b[0] / b[2] - x1.x, 2) + std::pow(b[1] / b[2] - x1.y, 2);
+  double score = 0.0;
+  inlier = true;
+  for (const double e : {e2, e1}) {
+    const double chi2 = e / (sigma * sigma);
+    if (chi2 < 5.991) {
+      score += 5.991 - chi2;
+    } else {
+      inlier = false;
+    }
+  }
+  return score;
+}
+
+// Naive epipolar score of ORB-SLAM's CheckFundamental (paper eq. 21).
+double naive_fundamental_score(const cv::Matx33d& f, cv::Point2d x1, cv::Point2d x2, double sigma, bool& inlier) {
+  const cv::Vec3d l2 = f * cv::Vec3d(x1.x, x1.y, 1.0);
+  const cv::Vec3d l1 = f.t() * cv::Vec3d(x2.x, x2.y, 1.0);
+  const double d2 = std::pow(l2[0] * x2.x + l2[1] * x2.y + l2[2], 2) / (l2[0] * l2[0] + l2[1] * l2[1]);
+  const double d1 = std::pow(l1[0] * x1.x + l1[1] * x1.y + l1[2], 2) / (l1[0] * l1[0] + l1[1] * l1[1]);
+  double score = 0.0;
+  inlier = true;
+  for (const double d : {d2, d1}) {
+    const double chi2 = d / (sigma * sigma);
+    if (chi2 < 3.841) {
+      score += 5.991 - chi2;
+    } else {
+      inlier = false;
+    }
+  }
+  return score;
+}
+
+cv::Matx33d to_matx(const Eigen::Matrix3d& m) {
+  cv::Matx33d out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out(r, c) = m(r, c);
+  }
+  return out;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("index sampler: distinct indices in range, seeded, roughly uniform") {
+  affine_orb::detail::IndexSampler a(10, 7), b(10, 7), c(10, 8);
+  std::array<int, 10> counts{};
+  bool differs = false;
+  for (int round = 0; round < 2000; ++round) {
+    int x[8], y[8], z[8];
+    a.draw(x, 8);
+    b.draw(y, 8);
+    c.draw(z, 8);
+    std::set<int> distinct(x, x + 8);
+    REQUIRE(distinct.size() == 8);
+    for (int i = 0; i < 8; ++i) {
+      REQUIRE(x[i] >= 0);
+      REQUIRE(x[i] < 10);
+      CHECK(x[i] == y[i]);
+      differs = differs || x[i] != z[i];
+      ++counts[static_cast<std::size_t>(x[i])];
+    }
+  }
+  CHECK(differs);
+  // 16000 draws over 10 values, 1600 expected each; the binomial standard deviation is ~13 (the
+  // draws without replacement are even tighter), so +-100 can only fail for a biased sampler.
+  for (const int count : counts) CHECK(std::abs(count - 1600) < 100);
+
+  affine_orb::detail::IndexSampler all(8, 1);
+  int x[8];
+  all.draw(x, 8);
+  CHECK(std::set<int>(x, x + 8).size() == 8);
+}
+
+TEST_CASE("ransac: recovers a line through 50 % outliers; result equals a naive re-scoring") {
+  std::vector<int> truth;
+  const RefinedLineEstimator e{make_line_data(400, 0.5, 3, truth)};
+  const auto r = affine_orb::ransac(e);
+  REQUIRE(r.success);
+  // Without refine() (plain RANSAC): the best line through two sampled points.
+  const auto unrefined = affine_orb::ransac(static_cast<const LineEstimator&>(e));
+  REQUIRE(unrefined.success);
+  CHECK(line_error(unrefined.model) < 2.0);  // a line through two noisy points
+  CHECK(r.score >= 0.95 * unrefined.score);
+  CHECK(line_error(r.model) < 0.3);
+  REQUIRE(r.inliers.size() == e.size());
+  double score = 0.0;
+  int count = 0;
+  int recovered = 0, true_inliers = 0;
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    const PointScore s = e.score(r.model, i);
+    score += s.value;
+    count += s.inlier ? 1 : 0;
+    CHECK(static_cast<bool>(r.inliers[i]) == s.inlier);
+    true_inliers += truth[i];
+    recovered += truth[i] != 0 && r.inliers[i] != 0 ? 1 : 0;
+  }
+  CHECK(r.score == doctest::Approx(score).epsilon(1e-12));
+  CHECK(r.inlier_count == count);
+  CHECK(recovered >= 0.95 * true_inliers);
+  CHECK(r.iterations >= RansacOptions{}.min_iterations);
+  CHECK(r.iterations <= RansacOptions{}.max_iterations);
+}
+
+TEST_CASE("ransac: the same seed gives the same result, another seed a correct one") {
+  std::vector<int> truth;
+  const RefinedLineEstimator e{make_line_data(300, 0.4, 5, truth)};
+  RansacOptions options;
+  options.seed = 11;
+  const auto a = affine_orb::ransac(e, options);
+  const auto b = affine_orb::ransac(e, options);
+  options.seed = 12345;
+  const auto c = affine_orb::ransac(e, options);
+  REQUIRE(a.success);
+  REQUIRE(c.success);
+  CHECK(a.model.a == b.model.a);
+  CHECK(a.model.b == b.model.b);
+  CHECK(a.model.c == b.model.c);
+  CHECK(a.inliers == b.inliers);
+  CHECK(a.score == b.score);
+  CHECK(a.iterations == b.iterations);
+  CHECK(line_error(c.model) < 0.3);
+}
+
+TEST_CASE("ransac: several models per sample, adaptive termination and minimum iterations") {
+  std::vector<int> truth;
+  RefinedLineEstimator e{make_line_data(200, 0.0, 9, truth)};
+  e.twin = true;
+  RansacOptions options;
+  options.min_iterations = 1;
+  const auto r = affine_orb::ransac(e, options);
+  REQUIRE(r.success);
+  CHECK(r.model.c != 1e6);  // never the useless twin
+  CHECK(line_error(r.model) < 0.3);
+  // No outliers: an early sample gives a model with an inlier ratio w near 1 (w >= 0.8 needs
+  // log 0.01 / log(1 − 0.8²) < 5 samples, H&Z eq. 4.18), so the search ends almost at once.
+  CHECK(r.iterations <= 10);
+  options.min_iterations = 37;
+  CHECK(affine_orb::ransac(e, options).iterations == 37);
+  CHECK(affine_orb::detail::adaptive_iterations(0.5, 4, 0.99, 1000) == 72);  // log 0.01 / log(15/16)
+  CHECK(affine_orb::detail::adaptive_iterations(1.0, 8, 0.99, 1000) == 0);
+  CHECK(affine_orb::detail::adaptive_iterations(0.0, 8, 0.99, 1000) == 1000);
+  CHECK(affine_orb::detail::adaptive_iterations(0.1, 8, 0.99, 1000) == 1000);
+}
+
+TEST_CASE("ransac: no model, too few points and bad options") {
+  std::vector<int> truth;
+  LineEstimator e = make_line_data(50, 0.2, 1, truth);
+  e.degenerate = true;
+  RansacOptions options;
+  options.max_iterations = 30;
+  const auto none = affine_orb::ransac(e, options);
+  CHECK_FALSE(none.success);
+  CHECK(none.iterations == 30);
+  CHECK(none.inlier_count == 0);
+  CHECK(none.inliers == std::vector<std::uint8_t>(50, 0));
+
+  LineEstimator one;
+  one.points = {Eigen::Vector2d(1.0, 2.0)};
+  const auto tiny = affine_orb::ransac(one);
+  CHECK_FALSE(tiny.success);
+  CHECK(tiny.iterations == 0);
+  CHECK(tiny.inliers.size() == 1);
+  CHECK_FALSE(affine_orb::ransac(LineEstimator{}).success);
+
+  e.degenerate = false;
+  CHECK_THROWS_AS(affine_orb::ransac(e, RansacOptions{}, 1), std::invalid_argument);
+  const auto bad = [&](auto change) {
+    RansacOptions o;
+    change(o);
+    CHECK_THROWS_AS(o.check(), std::invalid_argument);
+    CHECK_THROWS_AS(affine_orb::ransac(e, o), std::invalid_argument);
+  };
+  bad([](RansacOptions& o) { o.max_iterations = 0; });
+  bad([](RansacOptions& o) { o.max_iterations = -5; });
+  bad([](RansacOptions& o) { o.min_iterations = -1; });
+  bad([](RansacOptions& o) { o.min_iterations = o.max_iterations + 1; });
+  bad([](RansacOptions& o) { o.confidence = 0.0; });
+  bad([](RansacOptions& o) { o.confidence = 1.0; });
+  bad([](RansacOptions& o) { o.confidence = 1.5; });
+  bad([](RansacOptions& o) { o.confidence = std::numeric_limits<double>::quiet_NaN(); });
+  bad([](RansacOptions& o) { o.refinement_passes = -1; });
+  CHECK_NOTHROW(RansacOptions{}.check());
+}
+
+TEST_CASE("homography_4_point reproduces a known homography from four exact correspondences") {
+  const TwoViews v;
+  const Eigen::Matrix3d truth = v.homography();
+  const std::array<Eigen::Vector2d, 4> x1 = {Eigen::Vector2d(50.0, 40.0), Eigen::Vector2d(600.0, 70.0),
+                                             Eigen::Vector2d(580.0, 450.0), Eigen::Vector2d(90.0, 400.0)};
+  std::array<Eigen::Vector2d, 4> x2;
+  for (std::size_t i = 0; i < 4; ++i) x2[i] = (truth * x1[i].homogeneous()).hnormalized();
+  const std::optional<Eigen::Matrix3d> h = affine_orb::homography_4_point(x1, x2);
+  REQUIRE(h);
+  CHECK((unit(*h) - unit(truth)).norm() < 1e-9);
+  CHECK(h->norm() == doctest::Approx(1.0));
+  for (const Eigen::Vector2d& p : {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(320.0, 240.0)}) {
+    CHECK(((*h * p.homogeneous()).hnormalized() - (truth * p.homogeneous()).hnormalized()).norm() < 1e-7);
+  }
+
+  // Degenerate samples give no model.
+  std::array<Eigen::Vector2d, 4> repeated = x1;
+  repeated[3] = repeated[0];
+  std::array<Eigen::Vector2d, 4> repeated2 = x2;
+  repeated2[3] = repeated2[0];
+  CHECK_FALSE(affine_orb::homography_4_point(repeated, repeated2));
+  std::array<Eigen::Vector2d, 4> collinear = x1;
+  collinear[2] = 0.5 * (x1[0] + x1[1]);  // three collinear points in image 1
+  CHECK_FALSE(affine_orb::homography_4_point(collinear, x2));
+  std::array<Eigen::Vector2d, 4> twisted = x2;
+  std::swap(twisted[1], twisted[2]);  // a self-intersecting quadrilateral: no physical homography
+  CHECK_FALSE(affine_orb::homography_4_point(x1, twisted));
+  std::array<Eigen::Vector2d, 4> nan = x1;
+  nan[1].x() = std::numeric_limits<double>::quiet_NaN();
+  CHECK_FALSE(affine_orb::homography_4_point(nan, x2));
+  std::array<Eigen::Vector2d, 4> same;
+  same.fill(Eigen::Vector2d(3.0, 4.0));
+  CHECK_FALSE(affine_orb::homography_4_point(same, same));
+}
+
+TEST_CASE("fundamental_8_point on exact correspondences: epipolar constraint, rank 2, true F") {
+  const TwoViews v;
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> px(0.0, 639.0), py(0.0, 479.0), depth(3.0, 12.0);
+  std::vector<Eigen::Vector2d> x1, x2;
+  while (x1.size() < 30) {
+    const Eigen::Vector2d p(px(rng), py(rng));
+    const Eigen::Vector3d point = back_project(v.k, p, depth(rng));
+    x1.push_back(p);
+    x2.push_back(v.project2(point));
+  }
+  for (const std::size_t count : {std::size_t{8}, std::size_t{30}}) {
+    const std::vector<Eigen::Vector2d> a(x1.begin(), x1.begin() + static_cast<std::ptrdiff_t>(count));
+    const std::vector<Eigen::Vector2d> b(x2.begin(), x2.begin() + static_cast<std::ptrdiff_t>(count));
+    const std::optional<Eigen::Matrix3d> f = affine_orb::fundamental_8_point(a, b);
+    REQUIRE(f);
+    for (std::size_t i = 0; i < x1.size(); ++i) {
+      const std::array<double, 2> d = affine_orb::epipolar_squared_distances(*f, x1[i], x2[i]);
+      CHECK(std::sqrt(d[0]) < 1e-5);
+      CHECK(std::sqrt(d[1]) < 1e-5);
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(*f);
+    CHECK(svd.singularValues()(2) < 1e-12 * svd.singularValues()(0));
+    if (count == 30) CHECK((unit(*f) - unit(v.fundamental())).norm() < 1e-6);
+  }
+
+  // Degenerate configurations give no model.
+  CHECK_FALSE(affine_orb::fundamental_8_point(std::vector<Eigen::Vector2d>(x1.begin(), x1.begin() + 7),
+                                              std::vector<Eigen::Vector2d>(x2.begin(), x2.begin() + 7)));
+  CHECK_FALSE(affine_orb::fundamental_8_point(x1, std::vector<Eigen::Vector2d>(x2.begin(), x2.end() - 1)));
+  std::vector<Eigen::Vector2d> line1, line2, plane1, plane2;
+  const Eigen::Matrix3d h = v.homography();
+  for (int i = 0; i < 12; ++i) {
+    const Eigen::Vector2d p(40.0 + 45.0 * i, 30.0 + 33.0 * i);
+    line1.push_back(p);
+    line2.push_back((h * p.homogeneous()).hnormalized());
+    const Eigen::Vector2d q(px(rng), py(rng));
+    plane1.push_back(q);
+    plane2.push_back((h * q.homogeneous()).hnormalized());  // all points on one plane
+  }
+  CHECK_FALSE(affine_orb::fundamental_8_point(line1, line2));
+  CHECK_FALSE(affine_orb::fundamental_8_point(plane1, plane2));
+  std::vector<Eigen::Vector2d> same(10, Eigen::Vector2d(5.0, 5.0));
+  CHECK_FALSE(affine_orb::fundamental_8_point(same, same));
+  std::vector<Eigen::Vector2d> nan = x1;
+  nan[4].y() = std::numeric_limits<double>::infinity();
+  CHECK_FALSE(affine_orb::fundamental_8_point(nan, x2));
+}
+
+TEST_CASE("geometric estimators: scores equal the naive eq. 20/21 definitions; degenerate samples give no model") {
+  const TwoViews v;
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> px(0.0, 639.0), py(0.0, 479.0), depth(3.0, 12.0);
+  std::normal_distribution<double> noise(0.0, 1.5);
+  std::vector<Eigen::Vector2d> x1, x2;
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector2d p(px(rng), py(rng));
+    x1.push_back(p);
+    x2.push_back(v.project2(back_project(v.k, p, depth(rng))) + Eigen::Vector2d(noise(rng), noise(rng)));
+  }
+  const std::vector<cv::Point2f> p1 = to_cv(x1), p2 = to_cv(x2);
+  const double sigma = 1.3;
+  const affine_orb::HomographyEstimator he(p1, p2, {sigma, 5.991, 5.991});
+  const affine_orb::FundamentalEstimator fe(p1, p2, {sigma, 3.841, 5.991});
+  const affine_orb::HomographyModel hm = *affine_orb::detail::make_homography_model(v.homography());
+  const Eigen::Matrix3d fm = v.fundamental();
+  int h_inliers = 0, f_inliers = 0;
+  for (std::size_t i = 0; i < x1.size(); ++i) {
+    const cv::Point2d a(p1[i].x, p1[i].y), b(p2[i].x, p2[i].y);
+    bool inlier = false;
+    const double hs = naive_homography_score(to_matx(hm.h), a, b, sigma, inlier);
+    CHECK(he.score(hm, i).value == doctest::Approx(hs).epsilon(1e-9));
+    CHECK(he.score(hm, i).inlier == inlier);
+    h_inliers += inlier ? 1 : 0;
+    const double fs = naive_fundamental_score(to_matx(fm), a, b, sigma, inlier);
+    CHECK(fe.score(fm, i).value == doctest::Approx(fs).epsilon(1e-9));
+    CHECK(fe.score(fm, i).inlier == inlier);
+    f_inliers += inlier ? 1 : 0;
+  }
+  // Both branches of the truncation are exercised: the 3-D scene breaks the homography for many
+  // points, and the noise pushes some beyond the epipolar threshold.
+  CHECK(h_inliers > 0);
+  CHECK(h_inliers < 200);
+  CHECK(f_inliers > 100);
+  CHECK(f_inliers < 200);
+  CHECK(he.max_point_score() == 2 * 5.991);
+  CHECK(fe.max_point_score() == 2 * 5.991);
+
+  // Minimal samples with repeated or collinear points give no model.
+  std::vector<cv::Point2f> q1 = p1, q2 = p2;
+  q1[1] = q1[0];
+  q2[1] = q2[0];
+  for (int i = 0; i < 4; ++i) {
+    q1[static_cast<std::size_t>(10 + i)] = cv::Point2f(100.0f + 50.0f * i, 200.0f);
+    q2[static_cast<std::size_t>(10 + i)] = cv::Point2f(90.0f + 45.0f * i, 210.0f + 3.0f * i);
+  }
+  const affine_orb::HomographyEstimator hq(q1, q2);
+  const affine_orb::FundamentalEstimator fq(q1, q2);
+  CHECK(hq.generate({0, 1, 2, 3}).count == 0);
+  CHECK(hq.generate({10, 11, 12, 13}).count == 0);
+  CHECK(fq.generate({0, 1, 2, 3, 4, 5, 6, 7}).count == 0);
+  CHECK(fq.generate({2, 3, 4, 5, 6, 7, 8, 9}).count == 1);
+  int generated = 0;
+  for (int i = 0; i < 200; ++i) {
+    const std::array<int, 4> s = {i % 200, (i + 37) % 200, (i + 91) % 200, (i + 150) % 200};
+    const auto set = he.generate(s);
+    generated += set.count;
+    for (int m = 0; m < set.count; ++m) {
+      CHECK(set.models[static_cast<std::size_t>(m)].h.allFinite());
+      CHECK(set.models[static_cast<std::size_t>(m)].inverse.allFinite());
+    }
+  }
+  CHECK(generated > 100);  // random 4-sets of a 3-D scene: mostly non-degenerate
+
+  // Bad input to the constructors.
+  std::vector<cv::Point2f> shorter = p2;
+  shorter.pop_back();
+  CHECK_THROWS_AS(affine_orb::HomographyEstimator(p1, shorter), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::FundamentalEstimator(p1, shorter), std::invalid_argument);
+  std::vector<cv::Point2f> nan = p1;
+  nan[7].x = std::numeric_limits<float>::quiet_NaN();
+  CHECK_THROWS_AS(affine_orb::HomographyEstimator(nan, p2), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::FundamentalEstimator(p1, nan), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::HomographyEstimator(p1, p2, {-1.0, 5.991, 5.991}), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::HomographyEstimator(p1, p2, {1.0, 0.0, 5.991}), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::FundamentalEstimator(p1, p2, {1.0, 3.841, 1.0}), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::FundamentalEstimator(p1, p2, {std::nan(""), 3.841, 5.991}), std::invalid_argument);
+  // All points identical: constructible, but no model.
+  const std::vector<cv::Point2f> same(20, cv::Point2f(4.0f, 4.0f));
+  CHECK(affine_orb::HomographyEstimator(same, same).generate({0, 1, 2, 3}).count == 0);
+  CHECK_FALSE(affine_orb::ransac(affine_orb::FundamentalEstimator(same, same)).success);
+}
+
+TEST_CASE("geometric estimators inside ransac: plane with outliers (H) and 3-D scene (F)") {
+  const TwoViews v;
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> px(0.0, 639.0), py(0.0, 479.0), depth(3.0, 12.0), unit01(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  std::vector<Eigen::Vector2d> plane1, plane2, scene1, scene2, clean1, clean2;
+  std::vector<int> plane_truth, scene_truth;
+  const Eigen::Matrix3d h = v.homography();
+  while (plane1.size() < 400) {
+    const Eigen::Vector2d p(px(rng), py(rng));
+    if (unit01(rng) < 0.3) {
+      plane1.push_back(p);
+      plane2.emplace_back(px(rng), py(rng));
+      plane_truth.push_back(0);
+      scene1.push_back(p);
+      scene2.emplace_back(px(rng), py(rng));
+      scene_truth.push_back(0);
+      continue;
+    }
+    plane1.push_back(p + Eigen::Vector2d(noise(rng), noise(rng)));
+    plane2.push_back((h * p.homogeneous()).hnormalized() + Eigen::Vector2d(noise(rng), noise(rng)));
+    plane_truth.push_back(1);
+    const Eigen::Vector2d q = v.project2(back_project(v.k, p, depth(rng)));
+    clean1.push_back(p);
+    clean2.push_back(q);
+    scene1.push_back(p + Eigen::Vector2d(noise(rng), noise(rng)));
+    scene2.push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+    scene_truth.push_back(1);
+  }
+  const auto hr = affine_orb::ransac(affine_orb::HomographyEstimator(to_cv(plane1), to_cv(plane2)));
+  REQUIRE(hr.success);
+  double corner_error = 0.0;
+  for (const Eigen::Vector2d& c : {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 0), Eigen::Vector2d(0, 479),
+                                   Eigen::Vector2d(639, 479)}) {
+    corner_error = std::max(corner_error, ((hr.model.h * c.homogeneous()).hnormalized() -
+                                           (h * c.homogeneous()).hnormalized()).norm());
+  }
+  CHECK(corner_error < 1.0);
+  int recovered = 0, total = 0;
+  for (std::size_t i = 0; i < plane1.size(); ++i) {
+    total += plane_truth[i];
+    recovered += plane_truth[i] != 0 && hr.inliers[i] != 0 ? 1 : 0;
+    if (plane_truth[i] == 0) CHECK(hr.inliers[i] == 0);
+  }
+  CHECK(recovered >= 0.95 * total);
+
+  const auto fr = affine_orb::ransac(affine_orb::FundamentalEstimator(to_cv(scene1), to_cv(scene2)));
+  REQUIRE(fr.success);
+  double mean_distance = 0.0;
+  for (std::size_t i = 0; i < clean1.size(); ++i) {
+    const std::array<double, 2> d = affine_orb::epipolar_squared_distances(fr.model, clean1[i], clean2[i]);
+    mean_distance += 0.5 * (std::sqrt(d[0]) + std::sqrt(d[1]));
+  }
+  mean_distance /= static_cast<double>(clean1.size());
+  CHECK(mean_distance < 0.75);  // 0.5 px noise per image
+  int outliers_accepted = 0;
+  for (std::size_t i = 0; i < scene1.size(); ++i) outliers_accepted += scene_truth[i] == 0 && fr.inliers[i] != 0;
+  // A random outlier passes the epipolar test when it falls within ~2 px of its epipolar line: a
+  // few percent of them.
+  CHECK(outliers_accepted < 0.1 * 400 * 0.3);
+}
+
+TEST_CASE("geometric estimators at their minimal sizes: 3, 4 and 5 correspondences for H, 7 and 8 for F") {
+  const TwoViews v;
+  const Eigen::Matrix3d h = v.homography();
+  std::vector<Eigen::Vector2d> x1 = {{40.0, 30.0},   {600.0, 50.0}, {620.0, 450.0}, {30.0, 420.0},
+                                     {320.0, 240.0}, {150.0, 300.0}, {480.0, 120.0}, {250.0, 60.0}};
+  std::vector<Eigen::Vector2d> on_plane, in_depth;
+  for (std::size_t i = 0; i < x1.size(); ++i) {
+    on_plane.push_back((h * x1[i].homogeneous()).hnormalized());
+    in_depth.push_back(v.project2(back_project(v.k, x1[i], 3.0 + static_cast<double>(i))));
+  }
+  for (const std::size_t count : {std::size_t{3}, std::size_t{4}, std::size_t{5}}) {
+    CAPTURE(count);
+    const std::vector<Eigen::Vector2d> a(x1.begin(), x1.begin() + static_cast<std::ptrdiff_t>(count));
+    const std::vector<Eigen::Vector2d> b(on_plane.begin(), on_plane.begin() + static_cast<std::ptrdiff_t>(count));
+    const auto r = affine_orb::ransac(affine_orb::HomographyEstimator(to_cv(a), to_cv(b)));
+    CHECK(r.success == (count >= 4));
+    CHECK(r.inliers.size() == count);
+    if (r.success) {
+      CHECK(r.inlier_count == static_cast<int>(count));
+      CHECK((unit(r.model.h) - unit(h)).norm() < 1e-4);  // float input coordinates
+    }
+  }
+  for (const std::size_t count : {std::size_t{7}, std::size_t{8}}) {
+    CAPTURE(count);
+    const std::vector<Eigen::Vector2d> a(x1.begin(), x1.begin() + static_cast<std::ptrdiff_t>(count));
+    const std::vector<Eigen::Vector2d> b(in_depth.begin(), in_depth.begin() + static_cast<std::ptrdiff_t>(count));
+    const auto r = affine_orb::ransac(affine_orb::FundamentalEstimator(to_cv(a), to_cv(b)));
+    CHECK(r.success == (count == 8));
+    if (r.success) CHECK(r.inlier_count == 8);
+  }
+}

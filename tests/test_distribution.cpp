@@ -1,6 +1,9 @@
-// Feature budget and spatial spreading (SPEC §2).
+// Feature budget and spatial spreading (SPEC §2), and the pieces of the extractor behind them:
+// detection in the valid region of a view, the view renderer and sparse rBRIEF smoothing, each
+// against a plain reference.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -8,7 +11,11 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
+#include "affine_orb/affine_views.hpp"
+#include "affine_orb/detail/view_regions.hpp"
+#include "affine_orb/detector.hpp"
 #include "affine_orb/distribution.hpp"
 #include "affine_orb/extractor.hpp"
 #include "affine_orb/rbrief.hpp"
@@ -191,4 +198,315 @@ TEST_CASE("cells without corners at the initial threshold fall back to the minim
   CHECK(right_half(with_retry) > 20);
   // The strong half is unaffected by the retry.
   CHECK(without_retry.corners.size() + right_half(with_retry) <= with_retry.corners.size());
+}
+
+namespace {
+
+bool in_region(const affine_orb::RowSpans& region, int x, int y) {
+  const auto [b, e] = region.run(y);
+  return x >= b && x < e;
+}
+
+// Candidates by definition: the suppressed corners of whole-image score maps at both thresholds;
+// a grid cell keeps its strong corners in the region, or its weak ones if it has none.
+std::vector<affine_orb::Corner> reference_candidates(const cv::Mat& image, const affine_orb::RowSpans& region,
+                                                     cv::Point origin, const affine_orb::DetectorOptions& options) {
+  const cv::Rect all(0, 0, image.cols, image.rows);
+  auto corners_at = [&](int threshold) {
+    cv::Mat scores;
+    affine_orb::fast_score_map(image, all, threshold, scores);
+    std::vector<affine_orb::Corner> out;
+    for (const auto& c : affine_orb::non_max_suppression(scores, all, threshold)) {
+      if (in_region(region, c.x, c.y)) out.push_back(c);
+    }
+    return out;
+  };
+  auto cell_of = [&](const affine_orb::Corner& c) {
+    auto index = [&](int v, int o) {
+      return static_cast<int>(std::floor(static_cast<double>(v - o) / options.cell_size));
+    };
+    return std::make_pair(index(c.x, origin.x), index(c.y, origin.y));
+  };
+  std::vector<affine_orb::Corner> out = corners_at(options.initial_threshold);
+  std::set<std::pair<int, int>> strong;
+  for (const auto& c : out) strong.insert(cell_of(c));
+  for (const auto& c : corners_at(options.min_threshold)) {
+    if (!strong.count(cell_of(c))) out.push_back(c);
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); });
+  return out;
+}
+
+// A rotated quadrilateral region, at least `inset` pixels inside the image.
+affine_orb::RowSpans quad_region(cv::Size size, double angle_degrees, int inset) {
+  affine_orb::RowSpans region;
+  region.reset(0, size.height);
+  const double a = angle_degrees * CV_PI / 180.0;
+  const cv::Point2d centre(size.width / 2.0, size.height / 2.0);
+  const cv::Point2d u(std::cos(a), std::sin(a));
+  const cv::Point2d v(-std::sin(a), std::cos(a));
+  const double half_u = 0.45 * size.width;
+  const double half_v = 0.3 * size.height;
+  for (int y = inset; y < size.height - inset; ++y) {
+    int first = -1;
+    int last = -1;
+    for (int x = inset; x < size.width - inset; ++x) {
+      const cv::Point2d d(x - centre.x, y - centre.y);
+      if (std::abs(d.dot(u)) <= half_u && std::abs(d.dot(v)) <= half_v) {
+        if (first < 0) first = x;
+        last = x;
+      }
+    }
+    if (first >= 0) {
+      region.begin[static_cast<std::size_t>(y)] = first;
+      region.end[static_cast<std::size_t>(y)] = last + 1;
+    }
+  }
+  return region;
+}
+
+}  // namespace
+
+TEST_CASE("candidates in a region equal whole-image corners filtered by region and grid cell") {
+  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(100, 80, 400, 300)).clone();
+  // Low contrast in the right half, so that many cells have no corner at the initial threshold.
+  cv::Mat image = graf.clone();
+  image(cv::Rect(200, 0, 200, 300)) = graf(cv::Rect(200, 0, 200, 300)) * 0.15 + 100;
+  affine_orb::DetectorWorkspace work;
+  affine_orb::Candidates got;
+  for (double angle : {0.0, 27.0, 61.0}) {
+    for (const cv::Point origin : {cv::Point(18, 18), cv::Point(5, 40)}) {
+      CAPTURE(angle);
+      CAPTURE(origin);
+      const affine_orb::RowSpans region = quad_region(image.size(), angle, 18);
+      affine_orb::DetectorOptions options;
+      const auto expected = reference_candidates(image, region, origin, options);
+      affine_orb::detect_candidates(image, region, origin, options, work, got);
+      REQUIRE(got.corners.size() == expected.size());
+      REQUIRE(got.responses.size() == expected.size());
+      int mismatches = 0;
+      for (std::size_t i = 0; i < expected.size(); ++i) {
+        mismatches += got.corners[i].x != expected[i].x || got.corners[i].y != expected[i].y ||
+                      got.corners[i].score != expected[i].score ||
+                      got.responses[i] != static_cast<float>(expected[i].score);
+      }
+      CHECK(mismatches == 0);
+      const auto weak = std::count_if(expected.begin(), expected.end(),
+                                      [&](const auto& c) { return c.score < options.initial_threshold; });
+      CHECK(weak > 20);  // the fallback is exercised
+      // Harris ranking: same corners, responses from harris_response().
+      options.score = affine_orb::ScoreType::kHarris;
+      affine_orb::detect_candidates(image, region, origin, options, work, got);
+      REQUIRE(got.corners.size() == expected.size());
+      for (std::size_t i = 0; i < expected.size(); i += 17) {
+        CHECK(got.responses[i] == affine_orb::harris_response(image, expected[i].x, expected[i].y));
+      }
+    }
+  }
+  // A rectangle region is the rectangle overload.
+  cv::Mat scores;
+  const cv::Rect roi(18, 18, 300, 200);
+  const auto rect = affine_orb::detect_candidates(image, roi, affine_orb::DetectorOptions{}, scores);
+  const auto expected = reference_candidates(image, affine_orb::RowSpans::rectangle(roi), roi.tl(), {});
+  REQUIRE(rect.corners.size() == expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) CHECK(rect.corners[i].x == expected[i].x);
+}
+
+TEST_CASE("the support region of a view level is exactly the set of pixels whose support maps inside") {
+  const cv::Size size(320, 240);
+  const int border = 18;
+  affine_orb::PyramidOptions pyramid;
+  for (const auto& view : affine_orb::make_views(affine_orb::AffineViewOptions{}, size)) {
+    for (int level : {0, 2, 5}) {
+      CAPTURE(view.tilt);
+      CAPTURE(view.rotation_degrees);
+      CAPTURE(level);
+      const cv::Size level_size = affine_orb::pyramid_level_size(view.size, pyramid, level);
+      const affine_orb::RowSpans region = affine_orb::detail::support_region(view, size, level_size, border);
+      const cv::Matx23d& m = view.to_original;
+      const double radius = border * static_cast<double>(view.size.width) / level_size.width;
+      const double ex = radius * std::hypot(m(0, 0), m(0, 1));
+      const double ey = radius * std::hypot(m(1, 0), m(1, 1));
+      int mismatches = 0;
+      long inside = 0;
+      for (int y = 0; y < level_size.height; ++y) {
+        for (int x = 0; x < level_size.width; ++x) {
+          const cv::Point2f p0 = affine_orb::Pyramid::to_level0(
+              cv::Point2f(static_cast<float>(x), static_cast<float>(y)), view.size, level_size);
+          const cv::Point2d q = affine_orb::apply_affine(m, p0);
+          const bool expected = x >= border && y >= border && x < level_size.width - border &&
+                                y < level_size.height - border &&
+                                (view.is_identity() || (q.x - ex >= 0.0 && q.y - ey >= 0.0 &&
+                                                        q.x + ex <= size.width - 1.0 && q.y + ey <= size.height - 1.0));
+          inside += expected;
+          mismatches += expected != in_region(region, x, y);
+        }
+      }
+      CHECK(mismatches == 0);
+      if (level == 0) CHECK(inside > 0);
+    }
+  }
+}
+
+namespace {
+
+// A view pixel by its definition in double precision: the canvas sampled bilinearly at the exact
+// original position (clamped to the image), blurred along x by the normalised Gaussian (radius
+// max(1, ⌈3σ⌉), canvas border replicated), then resampled bilinearly to the view width.
+double exact_view_pixel(const cv::Mat& image, const affine_orb::AffineView& view, double antialias, int x, int y) {
+  const cv::Matx23d m = view.to_original_canvas();
+  auto canvas = [&](int c) {
+    c = std::clamp(c, 0, view.canvas_size.width - 1);
+    const double sx = std::clamp(m(0, 0) * c + m(0, 1) * y + m(0, 2), 0.0, image.cols - 1.0);
+    const double sy = std::clamp(m(1, 0) * c + m(1, 1) * y + m(1, 2), 0.0, image.rows - 1.0);
+    const int x0 = std::min(static_cast<int>(sx), image.cols - 2);
+    const int y0 = std::min(static_cast<int>(sy), image.rows - 2);
+    const double fx = sx - x0;
+    const double fy = sy - y0;
+    auto at = [&](int u, int v) { return static_cast<double>(image.at<uchar>(v, u)); };
+    return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+           fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+  };
+  const double sigma = antialias * std::sqrt(view.tilt * view.tilt - 1.0);
+  const int radius = sigma > 0.0 ? std::max(1, static_cast<int>(std::ceil(3.0 * sigma))) : 0;
+  auto blurred = [&](int c) {
+    double sum = 0.0;
+    double weight = 0.0;
+    for (int k = -radius; k <= radius; ++k) {
+      const double g = sigma > 0.0 ? std::exp(-0.5 * k * k / (sigma * sigma)) : 1.0;
+      sum += g * canvas(c + k);
+      weight += g;
+    }
+    return sum / weight;
+  };
+  const double sx = (x + 0.5) * view.canvas_size.width / view.size.width - 0.5;
+  int x0 = static_cast<int>(std::floor(sx));
+  double f = sx - x0;
+  if (x0 < 0) {
+    x0 = 0;
+    f = 0.0;
+  } else if (x0 >= view.canvas_size.width - 1) {
+    x0 = view.canvas_size.width - 1;
+    f = 0.0;
+  }
+  return (1 - f) * blurred(x0) + f * blurred(x0 + 1);
+}
+
+}  // namespace
+
+TEST_CASE("the view renderer is within a grey level of the exact definition and 3 of OpenCV's pipeline") {
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  cv::Mat small;
+  cv::resize(image, small, cv::Size(400, 320), 0, 0, cv::INTER_AREA);
+  affine_orb::AffineViewOptions options;
+  options.max_tilt = 4.0;  // 10 views: tilts 1, √2, 2, 2√2, 4
+  for (const auto& view : affine_orb::make_views(options, small.size())) {
+    CAPTURE(view.tilt);
+    CAPTURE(view.rotation_degrees);
+    cv::Mat scratch, ours, reference;
+    affine_orb::render_view(small, view, 0.8, scratch, ours);
+    affine_orb::detail::render_view_reference(small, view, 0.8, scratch, reference);
+    REQUIRE(ours.size() == view.size);
+    REQUIRE(reference.size() == view.size);
+    cv::Mat difference;
+    cv::absdiff(ours, reference, difference);
+    double worst = 0.0;
+    cv::minMaxLoc(difference, nullptr, &worst);
+    // OpenCV's warpAffine interpolates at 1/32 pixel, so it differs more than our 1/128.
+    CHECK(worst <= 3.0);
+    CHECK(cv::mean(difference)[0] < 0.4);
+    std::mt19937 rng(static_cast<unsigned>(view.rotation_degrees * 10 + view.tilt));
+    int far = 0;
+    for (int k = 0; k < 1500; ++k) {
+      const int x = static_cast<int>(rng() % static_cast<unsigned>(view.size.width));
+      const int y = static_cast<int>(rng() % static_cast<unsigned>(view.size.height));
+      far += std::abs(ours.at<uchar>(y, x) - exact_view_pixel(small, view, 0.8, x, y)) > 1.0;
+    }
+    CHECK(far == 0);
+
+    // Rendering a region computes its pixels exactly as the whole view; the rest of each row
+    // repeats the row's nearest computed pixel.
+    const affine_orb::RowSpans region = affine_orb::detail::render_region(view, small.size(), 4.0);
+    const affine_orb::detail::ViewRenderer renderer(view, 0.8);
+    cv::Mat partial;
+    renderer.render(small, &region, scratch, partial);
+    int mismatches = 0;
+    for (int y = 0; y < view.size.height; ++y) {
+      const auto [b, e] = region.run(y);
+      const int x0 = b < e ? b : 0;
+      const int x1 = b < e ? e : view.size.width;
+      for (int x = 0; x < view.size.width; ++x) {
+        const int source = std::clamp(x, x0, x1 - 1);
+        mismatches += partial.at<uchar>(y, x) != ours.at<uchar>(y, source);
+      }
+    }
+    CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' bytes") {
+  const cv::Mat image = affine_orb::test::oxford_image("boat", 1)(cv::Rect(40, 30, 300, 200));  // a ROI
+  for (double phi : {0.0, 17.0, 50.9, 101.8, 178.2}) {
+    const affine_orb::AffineView view = affine_orb::make_view(2.0 * std::sqrt(2.0), phi, image.size());
+    const affine_orb::detail::CanvasSampler sampler(view.to_original_canvas(), image.size());
+    const affine_orb::detail::ViewResampler resampler(view.canvas_size.width, view.size.width, 0.8 * std::sqrt(7.0));
+    std::vector<std::uint8_t> a(static_cast<std::size_t>(view.canvas_size.width) + 64);
+    std::vector<std::uint8_t> b(a.size());
+    std::vector<std::uint8_t> out_a(static_cast<std::size_t>(view.size.width));
+    std::vector<std::uint8_t> out_b(out_a.size());
+    int mismatches = 0;
+    for (int y = 0; y < view.canvas_size.height; y += 7) {
+      // Columns beyond the canvas on both sides too: the sampler clamps to the image.
+      const int c0 = -20 + y % 5;
+      const int c1 = view.canvas_size.width + 20 - y % 3;
+      affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, c0, c1, a.data());
+      std::fill(b.begin(), b.end(), 0);
+#if defined(__SSE2__)
+      affine_orb::detail::sample_canvas_row_sse2(image, sampler, y, c0, c1, b.data());
+#else
+      affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, c0, c1, b.data());
+#endif
+      for (int i = 0; i < c1 - c0; ++i) mismatches += a[static_cast<std::size_t>(i)] != b[static_cast<std::size_t>(i)];
+      // The resampler reads canvas columns first[0] .. first[W − 1] + stride − 1 of this row.
+      const int first = resampler.first.front();
+      const int last = resampler.first.back() + resampler.stride - 1;
+      std::vector<std::uint8_t> row(static_cast<std::size_t>(last - first + 1));
+      affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, first, last + 1, row.data());
+      affine_orb::detail::resample_row_scalar(resampler, row.data(), first, 0, view.size.width, out_a.data());
+#if defined(__SSE2__)
+      affine_orb::detail::resample_row_sse2(resampler, row.data(), first, 0, view.size.width, out_b.data());
+#else
+      affine_orb::detail::resample_row_scalar(resampler, row.data(), first, 0, view.size.width, out_b.data());
+#endif
+      mismatches += out_a != out_b;
+    }
+    CAPTURE(phi);
+    CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("sparse rBRIEF smoothing equals the full smoothing on every described square") {
+  const cv::Mat image = affine_orb::test::oxford_image("bark", 1)(cv::Rect(10, 20, 500, 400));
+  const affine_orb::Rbrief rbrief;
+  const int border = rbrief.border();
+  affine_orb::Rbrief::LevelData full;
+  rbrief.prepare(image, full);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> px(static_cast<float>(border), static_cast<float>(image.cols - 1 - border));
+  std::uniform_real_distribution<float> py(static_cast<float>(border), static_cast<float>(image.rows - 1 - border));
+  std::vector<cv::Point2f> points;
+  for (int i = 0; i < 60; ++i) points.emplace_back(px(rng), py(rng));
+  // At the border distance exactly, so that the smoothing reflects at the level border.
+  points.emplace_back(static_cast<float>(border), static_cast<float>(border));
+  points.emplace_back(static_cast<float>(image.cols - 1 - border), static_cast<float>(image.rows - 1 - border));
+  points.emplace_back(static_cast<float>(border) + 0.4f, static_cast<float>(image.rows - 1 - border));
+  affine_orb::Rbrief::LevelData sparse;
+  rbrief.prepare(image, points, sparse);
+  int mismatches = 0;
+  for (const cv::Point2f& p : points) {
+    const cv::Rect square(cvRound(p.x) - border, cvRound(p.y) - border, 2 * border + 1, 2 * border + 1);
+    mismatches += cv::countNonZero(full.smoothed(square) != sparse.smoothed(square));
+    CHECK(rbrief.describe(sparse, p, 0.7f) == rbrief.describe(full, p, 0.7f));
+  }
+  CHECK(mismatches == 0);
 }

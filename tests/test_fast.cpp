@@ -191,3 +191,90 @@ TEST_CASE("FAST rejects bad input") {
   CHECK(affine_orb::detect_fast(cv::Mat(5, 5, CV_8UC1, cv::Scalar(9)), 20).empty());
   CHECK(affine_orb::detect_fast(ok, 20).empty());
 }
+
+namespace {
+
+// Random runs per row, some empty, some touching the image border (where the circle is outside).
+affine_orb::RowSpans random_spans(cv::Size size, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  affine_orb::RowSpans spans;
+  spans.reset(0, size.height);
+  for (int y = 0; y < size.height; ++y) {
+    if (rng() % 7 == 0) continue;
+    int a = static_cast<int>(rng() % static_cast<unsigned>(size.width + 1));
+    int b = static_cast<int>(rng() % static_cast<unsigned>(size.width + 1));
+    if (a > b) std::swap(a, b);
+    spans.begin[static_cast<std::size_t>(y)] = a;
+    spans.end[static_cast<std::size_t>(y)] = b;
+  }
+  return spans;
+}
+
+bool in_spans(const affine_orb::RowSpans& spans, int x, int y) {
+  const auto [b, e] = spans.run(y);
+  return x >= b && x < e;
+}
+
+}  // namespace
+
+TEST_CASE("scoring row spans writes the scalar scores on the spans and nothing else") {
+  const cv::Mat noise = random_image(83, 61, 21, 256);
+  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(250, 200, 90, 70));
+  for (const cv::Mat* image : {&noise, &graf}) {
+    const auto offset = affine_orb::detail::circle_offsets(static_cast<std::ptrdiff_t>(image->step[0]));
+    for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+      for (int threshold : {7, 20}) {
+        const affine_orb::RowSpans spans = random_spans(image->size(), seed);
+        cv::Mat scores(image->size(), CV_8UC1, cv::Scalar(77));
+        affine_orb::fast_score_spans(*image, spans, threshold, scores);
+        std::vector<std::uint8_t> row(static_cast<std::size_t>(image->cols));
+        int mismatches = 0;
+        int corners = 0;
+        for (int y = 0; y < image->rows; ++y) {
+          const bool circle_rows = y >= 3 && y < image->rows - 3;
+          if (circle_rows) {
+            affine_orb::detail::score_row_scalar(image->ptr<std::uint8_t>(y), offset, 3, image->cols - 3, threshold,
+                                                 row.data());
+          }
+          for (int x = 0; x < image->cols; ++x) {
+            int expected = 77;
+            if (in_spans(spans, x, y)) {
+              expected = circle_rows && x >= 3 && x < image->cols - 3 ? row[static_cast<std::size_t>(x)] : 0;
+            }
+            corners += expected != 77 && expected > 0;
+            mismatches += scores.at<uchar>(y, x) != expected;
+          }
+        }
+        CAPTURE(seed);
+        CAPTURE(threshold);
+        CHECK(mismatches == 0);
+        CHECK(corners > 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("suppression on row spans keeps the rectangle's maxima that lie on the spans") {
+  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(120, 340, 140, 90)).clone();
+  for (int threshold : {7, 20}) {
+    cv::Mat scores;
+    affine_orb::fast_score_map(graf, cv::Rect(0, 0, graf.cols, graf.rows), threshold, scores);
+    const auto all = affine_orb::non_max_suppression(scores, cv::Rect(0, 0, graf.cols, graf.rows), threshold);
+    for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+      const affine_orb::RowSpans spans = random_spans(graf.size(), seed + 50);
+      std::vector<affine_orb::Corner> expected;
+      for (const auto& c : all) {
+        if (in_spans(spans, c.x, c.y)) expected.push_back(c);
+      }
+      std::vector<affine_orb::Corner> got{{-1, -1, 0}};  // appended to, not replaced
+      affine_orb::non_max_suppression(scores, spans, threshold, got);
+      REQUIRE(got.size() == expected.size() + 1);
+      for (std::size_t i = 0; i < expected.size(); ++i) {
+        CHECK(got[i + 1].x == expected[i].x);
+        CHECK(got[i + 1].y == expected[i].y);
+        CHECK(got[i + 1].score == expected[i].score);
+      }
+      CHECK_FALSE(expected.empty());
+    }
+  }
+}

@@ -67,49 +67,71 @@ struct Candidates {
   std::vector<float> responses;
 };
 
-/// Detects candidates inside `roi` of a CV_8UC1 image. `scores` is a caller-owned buffer reused
-/// across calls (the FAST score map). The caller keeps `roi` at least options.support_radius()
-/// pixels inside the image. Every grid cell (cell_size x cell_size, anchored at roi's corner) keeps
-/// its non-maximum-suppressed corners at initial_threshold, or at min_threshold if it has none.
-inline Candidates detect_candidates(const cv::Mat& image, cv::Rect roi, const DetectorOptions& options,
-                                    cv::Mat& scores) {
-  Candidates out;
-  roi &= cv::Rect(0, 0, image.cols, image.rows);
-  if (roi.empty()) return out;
-  // Pass 1: scores at the initial threshold, one pixel beyond the roi so that suppression at its
-  // edge sees the true neighbours.
-  const cv::Rect margin(-1, -1, 2, 2);
-  fast_score_map(image, roi + margin.tl() + margin.size(), options.initial_threshold, scores);
-  std::vector<Corner> corners = non_max_suppression(scores, roi, options.initial_threshold);
+/// Buffers of detect_candidates() reused across calls (the FAST score map and the grid).
+struct DetectorWorkspace {
+  cv::Mat scores;
+  std::vector<char> strong;
+  std::vector<Corner> corners;
+  RowSpans cell;
+  RowSpans margin;
+};
+
+/// Detects candidates among the pixels of `region` of a CV_8UC1 image, into `out` (its buffers
+/// reused). The caller keeps the region at least options.support_radius() pixels inside the image.
+/// The grid cells (cell_size x cell_size) are anchored at `grid_origin`. Every cell keeps the
+/// non-maximum-suppressed corners (non_max_suppression(), 3x3 neighbourhoods of the whole image)
+/// of its pixels in the region at initial_threshold, or, when it has none there, those at
+/// min_threshold. Output in raster order.
+inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::Point grid_origin,
+                              const DetectorOptions& options, DetectorWorkspace& work, Candidates& out) {
+  out.corners.clear();
+  out.responses.clear();
+  const RowSpans& all = region;
+  const cv::Rect bounds = all.bounds() & cv::Rect(0, 0, image.cols, image.rows);
+  if (bounds.empty()) return;
+  work.scores.create(image.size(), CV_8UC1);
+  std::vector<Corner>& corners = out.corners;
+  // Pass 1: scores at the initial threshold over the region grown by one pixel, so that
+  // suppression at its edge sees the true neighbours.
+  all.dilate_into(work.margin);
+  fast_score_spans(image, work.margin, options.initial_threshold, work.scores);
+  non_max_suppression(work.scores, all, options.initial_threshold, corners);
 
   // Pass 2: cells without a corner are scored again at the minimum threshold (with the same
   // one-pixel margin). A weak score never suppresses a strong corner, so this gives exactly the
   // corners of a single map scored at min_threshold, filtered cell by cell.
   if (options.min_threshold < options.initial_threshold) {
-    const int cols = (roi.width + options.cell_size - 1) / options.cell_size;
-    const int rows = (roi.height + options.cell_size - 1) / options.cell_size;
-    std::vector<char> strong(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows), 0);
+    const int size = options.cell_size;
+    auto cell_index = [&](int v, int origin) { return (v - origin) >= 0 ? (v - origin) / size : -((origin - v + size - 1) / size); };
+    const int col0 = cell_index(bounds.x, grid_origin.x);
+    const int row0 = cell_index(bounds.y, grid_origin.y);
+    const int cols = cell_index(bounds.x + bounds.width - 1, grid_origin.x) - col0 + 1;
+    const int rows = cell_index(bounds.y + bounds.height - 1, grid_origin.y) - row0 + 1;
+    work.strong.assign(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows), 0);
     for (const Corner& c : corners) {
-      strong[static_cast<std::size_t>((c.y - roi.y) / options.cell_size) * static_cast<std::size_t>(cols) +
-             static_cast<std::size_t>((c.x - roi.x) / options.cell_size)] = 1;
+      const int col = cell_index(c.x, grid_origin.x) - col0;
+      const int row = cell_index(c.y, grid_origin.y) - row0;
+      work.strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)] = 1;
     }
+    const std::size_t strong_count = corners.size();
     for (int row = 0; row < rows; ++row) {
       for (int col = 0; col < cols; ++col) {
-        if (strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)]) {
+        if (work.strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)]) {
           continue;
         }
-        const cv::Rect cell =
-            cv::Rect(roi.x + col * options.cell_size, roi.y + row * options.cell_size, options.cell_size,
-                     options.cell_size) &
-            roi;
-        fast_score_rect(image, cell + margin.tl() + margin.size(), options.min_threshold, scores);
-        const std::vector<Corner> weak = non_max_suppression(scores, cell, options.min_threshold);
-        corners.insert(corners.end(), weak.begin(), weak.end());
+        const cv::Rect cell(grid_origin.x + (col0 + col) * size, grid_origin.y + (row0 + row) * size, size, size);
+        all.intersect_into(cell, work.cell);
+        if (work.cell.area() == 0) continue;
+        work.cell.dilate_into(work.margin);
+        fast_score_spans(image, work.margin, options.min_threshold, work.scores);
+        non_max_suppression(work.scores, work.cell, options.min_threshold, corners);
       }
     }
+    if (corners.size() > strong_count) {
+      std::sort(corners.begin(), corners.end(),
+                [](const Corner& a, const Corner& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); });
+    }
   }
-  std::sort(corners.begin(), corners.end(),
-            [](const Corner& a, const Corner& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); });
 
   out.responses.reserve(corners.size());
   for (const Corner& c : corners) {
@@ -117,7 +139,21 @@ inline Candidates detect_candidates(const cv::Mat& image, cv::Rect roi, const De
                                 ? harris_response(image, c.x, c.y, options.harris_block_size, options.harris_k)
                                 : static_cast<float>(c.score));
   }
-  out.corners = std::move(corners);
+}
+
+/// Detects candidates inside `roi` of a CV_8UC1 image: detect_candidates() on the region `roi`
+/// with the grid anchored at its corner. `scores` is a caller-owned buffer reused across calls
+/// (the FAST score map). The caller keeps `roi` at least options.support_radius() pixels inside
+/// the image.
+inline Candidates detect_candidates(const cv::Mat& image, cv::Rect roi, const DetectorOptions& options,
+                                    cv::Mat& scores) {
+  Candidates out;
+  roi &= cv::Rect(0, 0, image.cols, image.rows);
+  if (roi.empty()) return out;
+  DetectorWorkspace work;
+  std::swap(work.scores, scores);
+  detect_candidates(image, RowSpans::rectangle(roi), roi.tl(), options, work, out);
+  std::swap(work.scores, scores);
   return out;
 }
 

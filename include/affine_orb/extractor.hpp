@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <string>
 #include <thread>
@@ -20,6 +21,8 @@
 #include "affine_orb/affine_views.hpp"
 #include "affine_orb/descriptor.hpp"
 #include "affine_orb/detail/check.hpp"
+#include "affine_orb/detail/row_spans.hpp"
+#include "affine_orb/detail/view_regions.hpp"
 #include "affine_orb/detector.hpp"
 #include "affine_orb/distribution.hpp"
 #include "affine_orb/features.hpp"
@@ -177,7 +180,9 @@ class Extractor {
 
  private:
   struct LevelWork {
-    cv::Mat scores;
+    RowSpans valid;  ///< level pixels whose support maps inside the original image (image-size dependent)
+    DetectorWorkspace detector;
+    Candidates candidates;
     std::vector<cv::Point2f> level_points;     ///< candidate positions, level pixels of the view
     std::vector<cv::Point2f> original_points;  ///< the same, original pixels
     std::vector<float> responses;
@@ -191,7 +196,9 @@ class Extractor {
 
   struct ViewWork {
     AffineView view;
-    cv::Mat rotated;
+    detail::ViewRenderer renderer;
+    RowSpans render_region;  ///< the view pixels rendered (the rest repeats the row's edge pixels)
+    cv::Mat scratch;
     cv::Mat image;
     Pyramid pyramid;
     std::vector<LevelWork> levels;
@@ -201,18 +208,34 @@ class Extractor {
     return view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
   }
 
-  /// (Re)builds the view set when the image size changes; buffers are kept otherwise.
+  /// (Re)builds the view set, the renderers and the valid regions when the image size changes;
+  /// buffers are kept otherwise.
   void prepare_views(cv::Size size) {
     if (size == views_size_ && !view_work_.empty()) return;
     const std::vector<AffineView> views = make_views(options_.views, size);
     view_work_.clear();
-    view_work_.resize(views.size(), ViewWork{AffineView{}, {}, {}, Pyramid(options_.pyramid), {}});
+    view_work_.resize(views.size(), ViewWork{AffineView{}, {}, {}, {}, {}, Pyramid(options_.pyramid), {}});
     for (std::size_t v = 0; v < views.size(); ++v) {
-      view_work_[v].view = views[v];
-      view_work_[v].levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      ViewWork& work = view_work_[v];
+      work.view = views[v];
+      work.renderer = detail::ViewRenderer(views[v], options_.views.antialias);
+      work.render_region = detail::render_region(views[v], size, kRenderMargin);
+      work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      for (int l = 0; l < options_.pyramid.levels; ++l) {
+        work.levels[static_cast<std::size_t>(l)].valid = detail::support_region(
+            work.view, size, pyramid_level_size(work.view.size, options_.pyramid, l), support_border());
+      }
     }
     views_size_ = size;
   }
+
+  /// Margin in view pixels around the original image within which a view is rendered exactly:
+  /// more than the reach beyond a valid keypoint's support of the rBRIEF smoothing (3 level
+  /// pixels) and the bilinear pyramid (about one pixel per level) on the first levels.
+  static constexpr double kRenderMargin = 8.0;
+
+  /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
+  int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }
 
   /// Runs fn(v) for every view, on options_.threads threads (the calling thread included).
   template <class Fn>
@@ -263,37 +286,27 @@ class Extractor {
     return budgets;
   }
 
-  /// Step 1–2 for one view: render, pyramid, candidates with support and mask checks.
+  /// Step 1–2 for one view: render, pyramid, candidates in the valid regions, mask check.
   void detect_view(const cv::Mat& image, const cv::Mat& mask, ViewWork& work) {
-    render_view(image, work.view, options_.views.antialias, work.rotated, work.image);
-    work.pyramid.build(work.image);
-    const int border = std::max(descriptor_.border(), options_.detector.support_radius());
+    work.renderer.render(image, &work.render_region, work.scratch, work.image);
+    work.pyramid.build_swap(work.image);
+    const int border = support_border();
     const cv::Matx23d& back = work.view.to_original;
-    // Extent in original pixels of a unit disc of view pixels, along x and along y.
-    const double extent_x = std::hypot(back(0, 0), back(0, 1));
-    const double extent_y = std::hypot(back(1, 0), back(1, 1));
     for (int l = 0; l < options_.pyramid.levels; ++l) {
       LevelWork& level = work.levels[static_cast<std::size_t>(l)];
       level.level_points.clear();
       level.original_points.clear();
       level.responses.clear();
       level.alive.clear();
+      if (level.valid.rows() == 0) continue;
       const cv::Mat& level_image = work.pyramid.level(l);
-      const cv::Rect roi(border, border, level_image.cols - 2 * border, level_image.rows - 2 * border);
-      if (roi.width <= 0 || roi.height <= 0) continue;
-      const Candidates candidates = detect_candidates(level_image, roi, options_.detector, level.scores);
-      // Support radius in view pixels (level 0 of the view), then its extent in the original.
-      const double radius = border * static_cast<double>(work.image.cols) / level_image.cols;
-      const double margin_x = radius * extent_x;
-      const double margin_y = radius * extent_y;
+      detect_candidates(level_image, level.valid, cv::Point(border, border), options_.detector, level.detector,
+                        level.candidates);
+      const Candidates& candidates = level.candidates;
       for (std::size_t i = 0; i < candidates.corners.size(); ++i) {
         const Corner& c = candidates.corners[i];
         const cv::Point2f p(static_cast<float>(c.x), static_cast<float>(c.y));
         const cv::Point2d q = apply_affine(back, work.pyramid.to_level0(p, l));
-        if (!work.view.is_identity() && (q.x - margin_x < 0.0 || q.y - margin_y < 0.0 ||
-                                         q.x + margin_x > image.cols - 1.0 || q.y + margin_y > image.rows - 1.0)) {
-          continue;
-        }
         const int mx = cvRound(q.x);
         const int my = cvRound(q.y);
         if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) continue;

@@ -22,6 +22,7 @@
 #endif
 
 #include "affine_orb/detail/check.hpp"
+#include "affine_orb/detail/row_spans.hpp"
 
 namespace affine_orb {
 
@@ -45,6 +46,10 @@ inline constexpr std::array<std::array<int, 2>, 16> kFastCircle = {{{0, -3},
                                                                     {-3, -1},
                                                                     {-2, -2},
                                                                     {-1, -3}}};
+
+/// A region given as one run of columns per row (detail/row_spans.hpp), for detection restricted
+/// to the part of a simulated view that maps inside the original image.
+using RowSpans = detail::RowSpans;
 
 namespace detail {
 
@@ -107,22 +112,42 @@ inline void score_row_scalar(const std::uint8_t* row, const std::array<std::ptrd
 #define AFFINE_ORB_UNROLL
 #endif
 
-/// arc_strength() of 16 pixels at once from their circle pixels c[k] and centres v, for the bright
-/// (c − v) or dark (v − c) polarity, in saturated 8-bit arithmetic.
-inline __m128i arc_strength_sse2(const __m128i (&c)[16], __m128i v, bool bright) {
-  __m128i d[16];
+/// arc_strength() of the 16 pixels at p[0, 16) at once, for the bright (c − v) or dark (v − c)
+/// polarity, in saturated 8-bit arithmetic. The 16 windows of 9 contiguous differences are split
+/// at the window length (van Herk / Gil-Werman): with e_i = d_(i mod 16), the window starting at
+/// k <= 8 is min(suffix of e_0..e_8 from k, prefix of e_9..e_17 up to k + 8), and the one starting
+/// at 9 <= k <= 15 is min(suffix of e_9..e_17 from k, prefix of e_18..e_23 up to k + 8). At most
+/// 12 vectors are live, so nothing spills on SSE2's 16 registers.
+template <bool kBright>
+inline __m128i arc_strength_sse2(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset, __m128i v) {
+  auto e = [&](int i) {
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + offset[static_cast<std::size_t>(i & 15)]));
+    return kBright ? _mm_subs_epu8(c, v) : _mm_subs_epu8(v, c);
+  };
+  __m128i suffix[9];
+  // Windows 0..8: suffixes of block e_0..e_8, running prefix of block e_9..e_17.
+  suffix[8] = e(8);
   AFFINE_ORB_UNROLL
-  for (int k = 0; k < 16; ++k) d[k] = bright ? _mm_subs_epu8(c[k], v) : _mm_subs_epu8(v, c[k]);
-  __m128i m2[16];
+  for (int k = 7; k >= 0; --k) suffix[k] = _mm_min_epu8(e(k), suffix[k + 1]);
+  __m128i strength = suffix[0];
+  __m128i prefix = e(9);
+  strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[1], prefix));
   AFFINE_ORB_UNROLL
-  for (int k = 0; k < 16; ++k) m2[k] = _mm_min_epu8(d[k], d[(k + 1) & 15]);
-  __m128i m4[16];
+  for (int k = 2; k <= 8; ++k) {
+    prefix = _mm_min_epu8(prefix, e(k + 8));
+    strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[k], prefix));
+  }
+  // Windows 9..15: suffixes of block e_9..e_17 (suffix[j] holds e_(9+j)..e_17), prefix of e_18...
+  suffix[8] = e(17);
   AFFINE_ORB_UNROLL
-  for (int k = 0; k < 16; ++k) m4[k] = _mm_min_epu8(m2[k], m2[(k + 2) & 15]);
-  __m128i strength = _mm_setzero_si128();
+  for (int j = 7; j >= 0; --j) suffix[j] = _mm_min_epu8(e(9 + j), suffix[j + 1]);
+  strength = _mm_max_epu8(strength, suffix[0]);
+  prefix = e(18);
+  strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[1], prefix));
   AFFINE_ORB_UNROLL
-  for (int k = 0; k < 16; ++k) {
-    strength = _mm_max_epu8(strength, _mm_min_epu8(_mm_min_epu8(m4[k], m4[(k + 4) & 15]), d[(k + 8) & 15]));
+  for (int j = 2; j <= 6; ++j) {
+    prefix = _mm_min_epu8(prefix, e(j + 17));
+    strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[j], prefix));
   }
   return strength;
 }
@@ -160,10 +185,8 @@ inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdif
       if (x + 16 >= x1) break;
       continue;
     }
-    __m128i c[16];
-    AFFINE_ORB_UNROLL
-    for (int k = 0; k < 16; ++k) c[k] = load(offset[k]);
-    const __m128i strength = _mm_max_epu8(arc_strength_sse2(c, v, true), arc_strength_sse2(c, v, false));
+    const __m128i strength =
+        _mm_max_epu8(arc_strength_sse2<true>(p, offset, v), arc_strength_sse2<false>(p, offset, v));
     const __m128i not_corner = _mm_cmpeq_epi8(_mm_subs_epu8(strength, t), zero);  // strength <= t
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm_andnot_si128(not_corner, _mm_subs_epu8(strength, one)));
     if (x + 16 >= x1) break;
@@ -222,12 +245,79 @@ inline void fast_score_map(const cv::Mat& image, cv::Rect roi, int threshold, cv
   fast_score_rect(image, roi, threshold, scores);
 }
 
+/// fast_score_rect() for the pixels of `region`: their scores (0 below `threshold`) are written into
+/// `scores` (CV_8UC1 of the image size), other pixels are left as they are. Pixels of the region
+/// whose circle is not inside the image get 0.
+inline void fast_score_spans(const cv::Mat& image, const RowSpans& region, int threshold, cv::Mat& scores) {
+  detail::require_gray8(image, "fast_score_spans");
+  detail::require(threshold >= 1 && threshold <= 255,
+                  "fast_score_spans: threshold must be in [1, 255], got " + std::to_string(threshold));
+  detail::require(scores.type() == CV_8UC1 && scores.size() == image.size(),
+                  "fast_score_spans: the score map must be CV_8UC1 of the image size");
+  const std::array<std::ptrdiff_t, 16> offset = detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
+  const int top = std::max(region.y0, 0);
+  const int bottom = std::min(region.y0 + region.rows(), image.rows);
+  for (int y = top; y < bottom; ++y) {
+    const auto [b, e] = region.run(y);
+    const int x0 = std::max(b, 0);
+    const int x1 = std::min(e, image.cols);
+    if (x0 >= x1) continue;
+    std::uint8_t* out = scores.ptr<std::uint8_t>(y);
+    if (y < kFastRadius || y >= image.rows - kFastRadius) {
+      std::memset(out + x0, 0, static_cast<std::size_t>(x1 - x0));
+      continue;
+    }
+    const int s0 = std::max(x0, kFastRadius);
+    const int s1 = std::min(x1, image.cols - kFastRadius);
+    if (s0 >= s1) {
+      std::memset(out + x0, 0, static_cast<std::size_t>(x1 - x0));
+      continue;
+    }
+    std::memset(out + x0, 0, static_cast<std::size_t>(s0 - x0));
+    std::memset(out + s1, 0, static_cast<std::size_t>(x1 - s1));
+#if defined(__SSE2__)
+    detail::score_row_sse2(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
+#else
+    detail::score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
+#endif
+  }
+}
+
 /// A detected corner: integer pixel position in the image it was detected in, and its FAST score.
 struct Corner {
   int x = 0;
   int y = 0;
   int score = 0;
 };
+
+namespace detail {
+
+/// The local maxima of row y, columns [x0, x1), of a score map, appended to `corners`; see
+/// non_max_suppression(). The caller keeps the columns and rows one pixel inside the map.
+inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
+  const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
+  const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
+  const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
+  for (int x = x0; x < x1; ++x) {
+    // Score maps are mostly zero: skip 8 empty pixels at a time.
+    if (x + 8 <= x1) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, row + x, sizeof(word));
+      if (word == 0) {
+        x += 7;
+        continue;
+      }
+    }
+    const int s = row[x];
+    if (s < threshold) continue;
+    if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s >= row[x + 1] &&
+        s >= below[x - 1] && s >= below[x] && s >= below[x + 1]) {
+      corners.push_back({x, y, s});
+    }
+  }
+}
+
+}  // namespace detail
 
 /// Non-maximum suppression on a score map: the pixels of `roi` whose score is at least `threshold`
 /// and a local maximum of their 3x3 neighbourhood, in raster order. Ties are broken in raster
@@ -240,30 +330,24 @@ inline std::vector<Corner> non_max_suppression(const cv::Mat& scores, cv::Rect r
   roi &= cv::Rect(1, 1, scores.cols - 2, scores.rows - 2);
   if (roi.empty()) return corners;
   threshold = std::max(threshold, 1);
-  for (int y = roi.y; y < roi.y + roi.height; ++y) {
-    const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
-    const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
-    const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
-    const int x_end = roi.x + roi.width;
-    for (int x = roi.x; x < x_end; ++x) {
-      // Score maps are mostly zero: skip 8 empty pixels at a time.
-      if (x + 8 <= x_end) {
-        std::uint64_t word = 0;
-        std::memcpy(&word, row + x, sizeof(word));
-        if (word == 0) {
-          x += 7;
-          continue;
-        }
-      }
-      const int s = row[x];
-      if (s < threshold) continue;
-      if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s >= row[x + 1] &&
-          s >= below[x - 1] && s >= below[x] && s >= below[x + 1]) {
-        corners.push_back({x, y, s});
-      }
-    }
-  }
+  for (int y = roi.y; y < roi.y + roi.height; ++y) detail::non_max_row(scores, y, roi.x, roi.x + roi.width, threshold, corners);
   return corners;
+}
+
+/// non_max_suppression() on the pixels of `region` (those at least one pixel inside the map),
+/// appending the corners to `corners` in raster order.
+inline void non_max_suppression(const cv::Mat& scores, const RowSpans& region, int threshold,
+                                std::vector<Corner>& corners) {
+  detail::require(!scores.empty() && scores.type() == CV_8UC1, "non_max_suppression: scores must be CV_8UC1");
+  threshold = std::max(threshold, 1);
+  const int top = std::max(region.y0, 1);
+  const int bottom = std::min(region.y0 + region.rows(), scores.rows - 1);
+  for (int y = top; y < bottom; ++y) {
+    const auto [b, e] = region.run(y);
+    const int x0 = std::max(b, 1);
+    const int x1 = std::min(e, scores.cols - 1);
+    if (x0 < x1) detail::non_max_row(scores, y, x0, x1, threshold, corners);
+  }
 }
 
 /// FAST-9 corners of a CV_8UC1 image at `threshold` (in [1, 255]), optionally non-maximum

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -53,11 +54,16 @@ class Pyramid {
     detail::require_gray8(image, "Pyramid::build");
     levels_.resize(static_cast<std::size_t>(options_.levels));
     image.copyTo(levels_[0]);
-    for (int l = 1; l < options_.levels; ++l) {
-      const cv::Size size = pyramid_level_size(image.size(), options_, l);
-      cv::resize(levels_[static_cast<std::size_t>(l - 1)], levels_[static_cast<std::size_t>(l)], size, 0, 0,
-                 cv::INTER_LINEAR);
-    }
+    build_levels();
+  }
+
+  /// build() without the copy: `image` becomes level 0 and receives the previous level-0 matrix
+  /// in exchange, so that a caller rendering into the same matrix every frame reuses both buffers.
+  void build_swap(cv::Mat& image) {
+    detail::require_gray8(image, "Pyramid::build_swap");
+    levels_.resize(static_cast<std::size_t>(options_.levels));
+    std::swap(levels_[0], image);
+    build_levels();
   }
 
   const PyramidOptions& options() const { return options_; }
@@ -68,15 +74,24 @@ class Pyramid {
 
   /// Maps a point in level-l pixel coordinates to level-0 pixel coordinates (exact for the
   /// resizing convention above, whatever the rounding of the level sizes).
-  cv::Point2f to_level0(cv::Point2f p, int l) const {
-    const cv::Mat& base = levels_.front();
-    const cv::Mat& level_image = level(l);
-    const float rx = static_cast<float>(base.cols) / static_cast<float>(level_image.cols);
-    const float ry = static_cast<float>(base.rows) / static_cast<float>(level_image.rows);
+  cv::Point2f to_level0(cv::Point2f p, int l) const { return to_level0(p, levels_.front().size(), level(l).size()); }
+
+  /// The same for a level of size `level` of a level 0 of size `base`, without a pyramid.
+  static cv::Point2f to_level0(cv::Point2f p, cv::Size base, cv::Size level) {
+    const float rx = static_cast<float>(base.width) / static_cast<float>(level.width);
+    const float ry = static_cast<float>(base.height) / static_cast<float>(level.height);
     return {(p.x + 0.5f) * rx - 0.5f, (p.y + 0.5f) * ry - 0.5f};
   }
 
  private:
+  void build_levels() {
+    for (int l = 1; l < options_.levels; ++l) {
+      const cv::Size size = pyramid_level_size(levels_[0].size(), options_, l);
+      cv::resize(levels_[static_cast<std::size_t>(l - 1)], levels_[static_cast<std::size_t>(l)], size, 0, 0,
+                 cv::INTER_LINEAR);
+    }
+  }
+
   PyramidOptions options_;
   std::vector<cv::Mat> levels_;
 };

@@ -64,8 +64,8 @@ class Rbrief {
   struct LevelData {
     cv::Mat image;
     cv::Mat smoothed;
-    cv::Mat patch;           ///< scratch for the sparse prepare()
-    cv::Mat patch_smoothed;  ///< scratch for the sparse prepare()
+    cv::Mat mosaic;           ///< scratch for the sparse prepare(): the tiles side by side
+    cv::Mat mosaic_smoothed;  ///< scratch for the sparse prepare()
   };
 
   explicit Rbrief(const Options& options = {}) : options_(options), disc_((options.check(), options.orientation_radius)) {
@@ -84,18 +84,23 @@ class Rbrief {
   /// Minimal distance in level pixels between a keypoint and the level border (18 by default).
   int border() const { return border_; }
 
+  /// Smooths the whole level. The border is reflected about the level's own edge even when the
+  /// level is a ROI of a larger image (BORDER_ISOLATED), as the definition says.
   void prepare(const cv::Mat& level, LevelData& data) const {
     detail::require_gray8(level, "Rbrief::prepare");
     data.image = level;
     cv::GaussianBlur(level, data.smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel), options_.blur_sigma,
-                     options_.blur_sigma, cv::BORDER_REFLECT_101);
+                     options_.blur_sigma, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
   }
 
-  /// Smooths only the squares of side 2·border()+1 around `points` when they cover less than half
-  /// of the level, else the whole level. Each square is smoothed from a continuous copy of the
-  /// level region that extends the kernel radius beyond it (clipped at the level border, where
-  /// the reflection then is the level's own), so its pixels equal those of the full smoothing.
-  /// Pixels outside the squares are left undefined.
+  /// Smooths only the squares of side 2·border()+1 around `points` (level pixels, rounded) when
+  /// they cover less than half of the level, else the whole level. Every square, extended by the
+  /// kernel radius k, is copied into a tile of a mosaic (the parts outside the level filled by
+  /// reflection about the level border, as the full smoothing does); the mosaic is smoothed with one
+  /// cv::GaussianBlur call and the squares are copied back. A tile's square lies k pixels inside the
+  /// tile, so the blur reads only that tile for it, and its pixels equal those of the full smoothing
+  /// (which gives each pixel from its 7x7 neighbourhood alone, wherever it lies). Pixels outside the
+  /// squares are left undefined.
   void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& points, LevelData& data) const {
     detail::require_gray8(level, "Rbrief::prepare");
     const int side = 2 * border_ + 1;
@@ -105,15 +110,44 @@ class Rbrief {
     }
     data.image = level;
     data.smoothed.create(level.size(), CV_8UC1);
+    if (points.empty()) return;
     const int k = options_.blur_kernel / 2;
+    const int tile = side + 2 * k;
+    const int count = static_cast<int>(points.size());
+    // Tiles in rows of at most kMosaicColumns, so that the blur runs over long rows.
+    const int columns = std::min(count, kMosaicColumns);
+    const int rows = (count + columns - 1) / columns;
+    data.mosaic.create(rows * tile, columns * tile, CV_8UC1);
     const cv::Rect bounds(0, 0, level.cols, level.rows);
-    for (const cv::Point2f& p : points) {
-      const cv::Rect square = cv::Rect(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side) & bounds;
-      const cv::Rect source = cv::Rect(square.x - k, square.y - k, square.width + 2 * k, square.height + 2 * k) & bounds;
-      level(source).copyTo(data.patch);
-      cv::GaussianBlur(data.patch, data.patch_smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel),
-                       options_.blur_sigma, options_.blur_sigma, cv::BORDER_REFLECT_101);
-      data.patch_smoothed(cv::Rect(square.tl() - source.tl(), square.size())).copyTo(data.smoothed(square));
+    for (int i = 0; i < rows * columns; ++i) {
+      cv::Mat target = data.mosaic(cv::Rect((i % columns) * tile, (i / columns) * tile, tile, tile));
+      if (i >= count) {
+        target.setTo(0);
+        continue;
+      }
+      const cv::Point2f& p = points[static_cast<std::size_t>(i)];
+      const cv::Rect wanted(cvRound(p.x) - border_ - k, cvRound(p.y) - border_ - k, tile, tile);
+      const cv::Rect inside = wanted & bounds;
+      if (inside == wanted) {
+        level(wanted).copyTo(target);
+      } else if (inside.empty()) {
+        target.setTo(0);
+      } else {
+        cv::copyMakeBorder(level(inside), target, inside.y - wanted.y, wanted.br().y - inside.br().y,
+                           inside.x - wanted.x, wanted.br().x - inside.br().x,
+                           cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+      }
+    }
+    cv::GaussianBlur(data.mosaic, data.mosaic_smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel),
+                     options_.blur_sigma, options_.blur_sigma, cv::BORDER_REFLECT_101);
+    for (int i = 0; i < count; ++i) {
+      const cv::Point2f& p = points[static_cast<std::size_t>(i)];
+      const cv::Rect square(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side);
+      const cv::Rect inside = square & bounds;
+      if (inside.empty()) continue;
+      const cv::Point origin((i % columns) * tile + k, (i / columns) * tile + k);
+      data.mosaic_smoothed(cv::Rect(origin + (inside.tl() - square.tl()), inside.size()))
+          .copyTo(data.smoothed(inside));
     }
   }
 
@@ -188,6 +222,9 @@ class Rbrief {
     }
 #endif
   }
+
+  /// Tiles per mosaic row in the sparse prepare(): rows of about 1000 pixels.
+  static constexpr int kMosaicColumns = 24;
 
   Options options_;
   CentroidDisc disc_;

@@ -41,7 +41,9 @@ double angle_difference_degrees(double a, double b) {
 TEST_CASE("view set sizes and rotation steps follow eqs. 15-16") {
   const std::pair<double, std::size_t> expected[] = {
       {1.0, 1}, {kSqrt2, 5}, {2.0, 10}, {2.0 * kSqrt2, 18}, {4.0 * kSqrt2, 43}};
-  for (const auto& [max_tilt, count] : expected) {
+  for (const auto& row : expected) {
+    const double max_tilt = row.first;
+    const std::size_t count = row.second;
     CAPTURE(max_tilt);
     affine_orb::AffineViewOptions options;
     options.max_tilt = max_tilt;

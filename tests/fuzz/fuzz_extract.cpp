@@ -1,0 +1,100 @@
+// libFuzzer target (issue 8): the input bytes choose an image size, the pixels and the options,
+// then extraction (rBRIEF or BRISK, plain or affine views, with or without a mask) and matching of
+// the image against a flipped copy run. Invalid options must end in std::invalid_argument, valid
+// ones in a result that keeps every documented invariant; anything else (a crash, a sanitizer
+// report, another exception, a broken invariant) is a finding.
+//   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/affine_matching.hpp"
+#include "affine_orb/brisk.hpp"
+#include "affine_orb/extractor.hpp"
+#include "affine_orb/rbrief.hpp"
+
+namespace {
+
+/// Reads bytes in order, then zeros.
+class Bytes {
+ public:
+  Bytes(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
+  std::uint8_t next() { return position_ < size_ ? data_[position_++] : 0; }
+  const std::uint8_t* rest() const { return data_ + position_; }
+  std::size_t remaining() const { return size_ - position_; }
+
+ private:
+  const std::uint8_t* data_;
+  std::size_t size_;
+  std::size_t position_ = 0;
+};
+
+void require(bool condition) {
+  if (!condition) std::abort();
+}
+
+template <class Descriptor>
+void run(const cv::Mat& image, const cv::Mat& mask, const affine_orb::ExtractorOptions& options) {
+  affine_orb::Extractor<Descriptor> extractor(options);
+  const auto a = extractor.extract(image, mask);
+  require(a.size() <= static_cast<std::size_t>(options.features));
+  require(a.descriptors.size() == a.size() && a.views.size() == a.size());
+  for (const cv::KeyPoint& k : a.keypoints) {
+    require(std::isfinite(k.pt.x) && std::isfinite(k.pt.y));
+    require(k.pt.x >= 0 && k.pt.y >= 0 && k.pt.x <= image.cols - 1 && k.pt.y <= image.rows - 1);
+    require(k.angle >= 0.0f && k.angle < 360.0f);
+    require(k.octave >= 0 && k.octave < options.pyramid.levels);
+    if (!mask.empty()) require(mask.at<std::uint8_t>(cvRound(k.pt.y), cvRound(k.pt.x)) != 0);
+  }
+  cv::Mat flipped;
+  cv::flip(image, flipped, 1);
+  const auto b = extractor.extract(flipped);
+  for (const affine_orb::Match& m : affine_orb::match_features(a, b)) {
+    require(m.query >= 0 && static_cast<std::size_t>(m.query) < a.size());
+    require(m.train >= 0 && static_cast<std::size_t>(m.train) < b.size());
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  Bytes bytes(data, size);
+  const int width = 1 + bytes.next() % 160;
+  const int height = 1 + bytes.next() % 120;
+  const std::uint8_t flags = bytes.next();
+  affine_orb::ExtractorOptions options;
+  options.features = static_cast<int>(bytes.next()) * 4 - 8;            // may be <= 0: invalid
+  options.views.max_tilt = 0.5 + (bytes.next() % 16) * 0.25;            // 0.5 (invalid) ... 4.25
+  options.pyramid.levels = bytes.next() % 10;                           // 0 is invalid
+  options.pyramid.scale_factor = 0.9 + (bytes.next() % 8) * 0.15;       // <= 1 is invalid
+  options.detector.initial_threshold = bytes.next() % 64;              // 0 is invalid
+  options.detector.min_threshold = bytes.next() % 64;                  // may exceed the initial one
+  options.detector.cell_size = bytes.next() % 80;                      // < 4 is invalid
+  options.detector.score = (flags & 2) ? affine_orb::ScoreType::kHarris : affine_orb::ScoreType::kFast;
+  options.duplicates = (flags & 4) ? affine_orb::DuplicatePolicy::kKeepAll : affine_orb::DuplicatePolicy::kMerge;
+  options.threads = 1 + ((flags >> 3) & 1);
+
+  cv::Mat image(height, width, CV_8UC1);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) image.at<std::uint8_t>(y, x) = bytes.next();
+  }
+  cv::Mat mask;
+  if (flags & 16) {
+    mask = cv::Mat(height, width, CV_8UC1, cv::Scalar(0));
+    mask(cv::Rect(0, 0, (width + 1) / 2, height)).setTo(255);
+  }
+  try {
+    if (flags & 1) {
+      run<affine_orb::Brisk>(image, mask, options);
+    } else {
+      run<affine_orb::Rbrief>(image, mask, options);
+    }
+  } catch (const std::invalid_argument&) {
+    // Rejected options: the documented outcome.
+  }
+  return 0;
+}

@@ -510,3 +510,55 @@ TEST_CASE("sparse rBRIEF smoothing equals the full smoothing on every described 
   }
   CHECK(mismatches == 0);
 }
+
+TEST_CASE("merging duplicates keeps exactly what a brute-force greedy merge keeps") {
+  // With an unbounded budget every candidate is returned, so kKeepAll lists all of them (by
+  // level, then view, then raster order in the view) and kMerge the ones the merge kept.
+  cv::Mat image;
+  cv::resize(affine_orb::test::oxford_image("graf", 1), image, cv::Size(320, 256), 0, 0, cv::INTER_AREA);
+  for (const auto score : {affine_orb::ScoreType::kFast, affine_orb::ScoreType::kHarris}) {
+    affine_orb::ExtractorOptions options;
+    options.features = 1000000;
+    options.pyramid.levels = 3;
+    options.detector.score = score;
+    options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
+    const auto all = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
+    options.duplicates = affine_orb::DuplicatePolicy::kMerge;
+    const auto merged = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
+
+    std::vector<std::size_t> expected;
+    for (int level = 0; level < options.pyramid.levels; ++level) {
+      std::vector<std::size_t> order;
+      for (std::size_t i = 0; i < all.size(); ++i) {
+        if (all.keypoints[i].octave == level) order.push_back(i);
+      }
+      // Strongest first; ties to the lower view, then to the earlier position in that view.
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return all.keypoints[a].response > all.keypoints[b].response ||
+               (all.keypoints[a].response == all.keypoints[b].response && all.views[a] < all.views[b]);
+      });
+      const double radius = options.merge_radius * std::pow(options.pyramid.scale_factor, level);
+      std::vector<std::size_t> kept;
+      for (std::size_t i : order) {
+        bool duplicate = false;
+        for (std::size_t k : kept) {
+          const cv::Point2f d = all.keypoints[k].pt - all.keypoints[i].pt;
+          duplicate = duplicate || (all.views[k] != all.views[i] && std::hypot(d.x, d.y) < radius);
+        }
+        if (!duplicate) kept.push_back(i);
+      }
+      std::sort(kept.begin(), kept.end());
+      expected.insert(expected.end(), kept.begin(), kept.end());
+    }
+    CAPTURE(static_cast<int>(score));
+    REQUIRE(merged.size() == expected.size());
+    CHECK(merged.size() < all.size());
+    int mismatches = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      const std::size_t j = expected[i];
+      mismatches += merged.keypoints[i].pt != all.keypoints[j].pt || merged.views[i] != all.views[j] ||
+                    merged.descriptors[i] != all.descriptors[j];
+    }
+    CHECK(mismatches == 0);
+  }
+}

@@ -84,6 +84,7 @@ struct DetectorWorkspace {
 /// min_threshold. Output in raster order.
 inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::Point grid_origin,
                               const DetectorOptions& options, DetectorWorkspace& work, Candidates& out) {
+  detail::require_gray8(image, "detect_candidates");
   out.corners.clear();
   out.responses.clear();
   const RowSpans& all = region;
@@ -94,8 +95,8 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
   // Pass 1: scores at the initial threshold over the region grown by one pixel, so that
   // suppression at its edge sees the true neighbours.
   all.dilate_into(work.margin);
-  fast_score_spans(image, work.margin, options.initial_threshold, work.scores);
-  non_max_suppression(work.scores, all, options.initial_threshold, corners);
+  detail::score_spans(image, work.margin, options.initial_threshold, work.scores);
+  detail::non_max_spans(work.scores, all, options.initial_threshold, corners);
 
   // Pass 2: cells without a corner are scored again at the minimum threshold (with the same
   // one-pixel margin). A weak score never suppresses a strong corner, so this gives exactly the
@@ -123,14 +124,15 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
         all.intersect_into(cell, work.cell);
         if (work.cell.area() == 0) continue;
         work.cell.dilate_into(work.margin);
-        fast_score_spans(image, work.margin, options.min_threshold, work.scores);
-        non_max_suppression(work.scores, work.cell, options.min_threshold, corners);
+        detail::score_spans(image, work.margin, options.min_threshold, work.scores);
+        detail::non_max_spans(work.scores, work.cell, options.min_threshold, corners);
       }
     }
-    if (corners.size() > strong_count) {
-      std::sort(corners.begin(), corners.end(),
-                [](const Corner& a, const Corner& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); });
-    }
+    // The strong corners are in raster order already: sort the weak ones and merge.
+    const auto raster = [](const Corner& a, const Corner& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); };
+    const auto middle = corners.begin() + static_cast<std::ptrdiff_t>(strong_count);
+    std::sort(middle, corners.end(), raster);
+    std::inplace_merge(corners.begin(), middle, corners.end(), raster);
   }
 
   out.responses.reserve(corners.size());

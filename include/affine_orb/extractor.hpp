@@ -6,6 +6,7 @@
 /// and mapped back to the original image.
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
@@ -13,7 +14,6 @@
 #include <exception>
 #include <string>
 #include <thread>
-#include <unordered_map>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -130,7 +130,7 @@ class Extractor {
     const int levels = options_.pyramid.levels;
 
     for_each_view([&](int v) { detect_view(image, mask, view_work_[static_cast<std::size_t>(v)]); });
-    if (options_.duplicates == DuplicatePolicy::kMerge && n_views > 1) merge_duplicates();
+    if (options_.duplicates == DuplicatePolicy::kMerge && n_views > 1) merge_duplicates(image.size());
 
     // Budget: views in proportion to their area 1/t, levels geometric within a view.
     std::vector<int> budgets;
@@ -187,6 +187,7 @@ class Extractor {
     std::vector<cv::Point2f> original_points;  ///< the same, original pixels
     std::vector<float> responses;
     std::vector<int> alive;  ///< candidates that survived the support, mask and duplicate checks
+    std::vector<char> keep_flags;  ///< merge_duplicates(): candidate kept
     std::vector<int> kept;   ///< candidates chosen by the budget
     std::vector<cv::Point2f> kept_points;
     typename Descriptor::LevelData descriptor_data;
@@ -320,41 +321,36 @@ class Extractor {
   }
 
   /// Step 3: per level, visits candidates from the strongest down (ties: lower view, lower index)
-  /// and drops one when a kept candidate of another view lies within the merge radius.
-  void merge_duplicates() {
+  /// and drops one when a kept candidate of another view lies within the merge radius. Integer
+  /// (FAST) responses are visited by a counting sort, others by a comparison sort; kept candidates
+  /// are found again through a grid of cells one radius wide over the original image.
+  void merge_duplicates(cv::Size size) {
     const int n_views = static_cast<int>(view_work_.size());
+    MergeWork& m = merge_;
     for (int l = 0; l < options_.pyramid.levels; ++l) {
-      struct Ref {
-        float response;
-        int view;
-        int index;
-      };
-      std::vector<Ref> order;
-      for (int v = 0; v < n_views; ++v) {
-        const LevelWork& work = level_of(v, l);
-        for (int i : work.alive) order.push_back({work.responses[static_cast<std::size_t>(i)], v, i});
-      }
-      std::sort(order.begin(), order.end(), [](const Ref& a, const Ref& b) {
-        return a.response > b.response || (a.response == b.response && (a.view < b.view || (a.view == b.view && a.index < b.index)));
-      });
+      order_candidates(l);
       const double radius = options_.merge_radius * options_.pyramid.scale(l);
       const double cell = radius;
-      std::unordered_map<long long, std::vector<Ref>> grid;
-      auto key = [](long long cx, long long cy) { return cx * 1000003LL + cy; };
-      for (int v = 0; v < n_views; ++v) level_of(v, l).alive.clear();
-      for (const Ref& r : order) {
+      // Cells of points in [−0.5, W − 0.5): floor(x / cell) + 1 lies in [0, columns − 1].
+      const int columns = static_cast<int>(std::floor(size.width / cell)) + 3;
+      const int rows = static_cast<int>(std::floor(size.height / cell)) + 3;
+      m.head.assign(static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows), -1);
+      m.kept.clear();
+      for (int v = 0; v < n_views; ++v) {
+        LevelWork& work = level_of(v, l);
+        work.keep_flags.assign(work.level_points.size(), 0);
+      }
+      for (const MergeRef& r : m.order) {
         const cv::Point2f& p = level_of(r.view, l).original_points[static_cast<std::size_t>(r.index)];
-        const long long cx = static_cast<long long>(std::floor(p.x / cell));
-        const long long cy = static_cast<long long>(std::floor(p.y / cell));
+        const int cx = static_cast<int>(std::floor(p.x / cell)) + 1;
+        const int cy = static_cast<int>(std::floor(p.y / cell)) + 1;
         bool duplicate = false;
-        for (long long dy = -1; dy <= 1 && !duplicate; ++dy) {
-          for (long long dx = -1; dx <= 1 && !duplicate; ++dx) {
-            const auto it = grid.find(key(cx + dx, cy + dy));
-            if (it == grid.end()) continue;
-            for (const Ref& k : it->second) {
-              if (k.view == r.view) continue;
-              const cv::Point2f& o = level_of(k.view, l).original_points[static_cast<std::size_t>(k.index)];
-              if (std::hypot(o.x - p.x, o.y - p.y) < radius) {
+        for (int y = cy - 1; y <= cy + 1 && !duplicate; ++y) {
+          for (int x = cx - 1; x <= cx + 1 && !duplicate; ++x) {
+            for (int k = m.head[static_cast<std::size_t>(y) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(x)];
+                 k >= 0; k = m.kept[static_cast<std::size_t>(k)].next) {
+              const MergeKept& o = m.kept[static_cast<std::size_t>(k)];
+              if (o.view != r.view && std::hypot(o.point.x - p.x, o.point.y - p.y) < radius) {
                 duplicate = true;
                 break;
               }
@@ -362,12 +358,67 @@ class Extractor {
           }
         }
         if (duplicate) continue;
-        grid[key(cx, cy)].push_back(r);
-        level_of(r.view, l).alive.push_back(r.index);
+        int& head = m.head[static_cast<std::size_t>(cy) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(cx)];
+        m.kept.push_back({p, r.view, head});
+        head = static_cast<int>(m.kept.size()) - 1;
+        level_of(r.view, l).keep_flags[static_cast<std::size_t>(r.index)] = 1;
       }
       for (int v = 0; v < n_views; ++v) {
-        std::vector<int>& alive = level_of(v, l).alive;
-        std::sort(alive.begin(), alive.end());
+        LevelWork& work = level_of(v, l);
+        work.alive.clear();
+        for (std::size_t i = 0; i < work.keep_flags.size(); ++i) {
+          if (work.keep_flags[i]) work.alive.push_back(static_cast<int>(i));
+        }
+      }
+    }
+  }
+
+  /// merge_.order: the candidates of level l, strongest first, ties to the lower view, then the
+  /// lower index.
+  void order_candidates(int l) {
+    const int n_views = static_cast<int>(view_work_.size());
+    MergeWork& m = merge_;
+    m.order.clear();
+    bool integral = true;
+    for (int v = 0; v < n_views && integral; ++v) {
+      for (float r : level_of(v, l).responses) {
+        if (!(r >= 0.0f && r <= 255.0f && r == std::floor(r))) {
+          integral = false;
+          break;
+        }
+      }
+    }
+    if (!integral) {
+      for (int v = 0; v < n_views; ++v) {
+        const LevelWork& work = level_of(v, l);
+        for (int i : work.alive) m.order.push_back({work.responses[static_cast<std::size_t>(i)], v, i});
+      }
+      std::sort(m.order.begin(), m.order.end(), [](const MergeRef& a, const MergeRef& b) {
+        return a.response > b.response ||
+               (a.response == b.response && (a.view < b.view || (a.view == b.view && a.index < b.index)));
+      });
+      return;
+    }
+    // Counting sort on the scores 0..255, descending; within a score, visiting views and indices
+    // in increasing order keeps the tie order.
+    std::array<int, 257> start{};
+    for (int v = 0; v < n_views; ++v) {
+      const LevelWork& work = level_of(v, l);
+      for (int i : work.alive) ++start[static_cast<std::size_t>(256 - static_cast<int>(work.responses[static_cast<std::size_t>(i)]))];
+    }
+    int total = 0;
+    for (int& count : start) {
+      const int c = count;
+      count = total;
+      total += c;
+    }
+    m.order.resize(static_cast<std::size_t>(total));
+    for (int v = 0; v < n_views; ++v) {
+      const LevelWork& work = level_of(v, l);
+      for (int i : work.alive) {
+        const float response = work.responses[static_cast<std::size_t>(i)];
+        int& slot = start[static_cast<std::size_t>(256 - static_cast<int>(response))];
+        m.order[static_cast<std::size_t>(slot++)] = {response, v, i};
       }
     }
   }
@@ -400,7 +451,25 @@ class Extractor {
     }
   }
 
+  struct MergeRef {
+    float response;
+    int view;
+    int index;
+  };
+  struct MergeKept {
+    cv::Point2f point;
+    int view;
+    int next;  ///< next kept candidate of the same cell, −1 at the end
+  };
+  /// Buffers of merge_duplicates() reused across frames.
+  struct MergeWork {
+    std::vector<MergeRef> order;
+    std::vector<int> head;  ///< per grid cell, the last kept candidate in it (−1: none)
+    std::vector<MergeKept> kept;
+  };
+
   ExtractorOptions options_;
+  MergeWork merge_;
   Descriptor descriptor_;
   cv::Size views_size_;
   std::vector<ViewWork> view_work_;

@@ -245,16 +245,11 @@ inline void fast_score_map(const cv::Mat& image, cv::Rect roi, int threshold, cv
   fast_score_rect(image, roi, threshold, scores);
 }
 
-/// fast_score_rect() for the pixels of `region`: their scores (0 below `threshold`) are written into
-/// `scores` (CV_8UC1 of the image size), other pixels are left as they are. Pixels of the region
-/// whose circle is not inside the image get 0.
-inline void fast_score_spans(const cv::Mat& image, const RowSpans& region, int threshold, cv::Mat& scores) {
-  detail::require_gray8(image, "fast_score_spans");
-  detail::require(threshold >= 1 && threshold <= 255,
-                  "fast_score_spans: threshold must be in [1, 255], got " + std::to_string(threshold));
-  detail::require(scores.type() == CV_8UC1 && scores.size() == image.size(),
-                  "fast_score_spans: the score map must be CV_8UC1 of the image size");
-  const std::array<std::ptrdiff_t, 16> offset = detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
+namespace detail {
+
+/// fast_score_spans() without the argument checks, for callers that made them once.
+inline void score_spans(const cv::Mat& image, const RowSpans& region, int threshold, cv::Mat& scores) {
+  const std::array<std::ptrdiff_t, 16> offset = circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
   const int top = std::max(region.y0, 0);
   const int bottom = std::min(region.y0 + region.rows(), image.rows);
   for (int y = top; y < bottom; ++y) {
@@ -276,11 +271,25 @@ inline void fast_score_spans(const cv::Mat& image, const RowSpans& region, int t
     std::memset(out + x0, 0, static_cast<std::size_t>(s0 - x0));
     std::memset(out + s1, 0, static_cast<std::size_t>(x1 - s1));
 #if defined(__SSE2__)
-    detail::score_row_sse2(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
+    score_row_sse2(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
 #else
-    detail::score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
+    score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
 #endif
   }
+}
+
+}  // namespace detail
+
+/// fast_score_rect() for the pixels of `region`: their scores (0 below `threshold`) are written into
+/// `scores` (CV_8UC1 of the image size), other pixels are left as they are. Pixels of the region
+/// whose circle is not inside the image get 0.
+inline void fast_score_spans(const cv::Mat& image, const RowSpans& region, int threshold, cv::Mat& scores) {
+  detail::require_gray8(image, "fast_score_spans");
+  detail::require(threshold >= 1 && threshold <= 255,
+                  "fast_score_spans: threshold must be in [1, 255], got " + std::to_string(threshold));
+  detail::require(scores.type() == CV_8UC1 && scores.size() == image.size(),
+                  "fast_score_spans: the score map must be CV_8UC1 of the image size");
+  detail::score_spans(image, region, threshold, scores);
 }
 
 /// A detected corner: integer pixel position in the image it was detected in, and its FAST score.
@@ -317,6 +326,19 @@ inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int thresh
   }
 }
 
+/// non_max_suppression() on row spans without the argument check.
+inline void non_max_spans(const cv::Mat& scores, const RowSpans& region, int threshold, std::vector<Corner>& corners) {
+  threshold = std::max(threshold, 1);
+  const int top = std::max(region.y0, 1);
+  const int bottom = std::min(region.y0 + region.rows(), scores.rows - 1);
+  for (int y = top; y < bottom; ++y) {
+    const auto [b, e] = region.run(y);
+    const int x0 = std::max(b, 1);
+    const int x1 = std::min(e, scores.cols - 1);
+    if (x0 < x1) non_max_row(scores, y, x0, x1, threshold, corners);
+  }
+}
+
 }  // namespace detail
 
 /// Non-maximum suppression on a score map: the pixels of `roi` whose score is at least `threshold`
@@ -339,15 +361,7 @@ inline std::vector<Corner> non_max_suppression(const cv::Mat& scores, cv::Rect r
 inline void non_max_suppression(const cv::Mat& scores, const RowSpans& region, int threshold,
                                 std::vector<Corner>& corners) {
   detail::require(!scores.empty() && scores.type() == CV_8UC1, "non_max_suppression: scores must be CV_8UC1");
-  threshold = std::max(threshold, 1);
-  const int top = std::max(region.y0, 1);
-  const int bottom = std::min(region.y0 + region.rows(), scores.rows - 1);
-  for (int y = top; y < bottom; ++y) {
-    const auto [b, e] = region.run(y);
-    const int x0 = std::max(b, 1);
-    const int x1 = std::min(e, scores.cols - 1);
-    if (x0 < x1) detail::non_max_row(scores, y, x0, x1, threshold, corners);
-  }
+  detail::non_max_spans(scores, region, threshold, corners);
 }
 
 /// FAST-9 corners of a CV_8UC1 image at `threshold` (in [1, 255]), optionally non-maximum

@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -81,14 +82,39 @@ inline void sample_canvas_row_scalar(const cv::Mat& image, const CanvasSampler& 
   }
 }
 
+/// The columns c in [c0, c1) with 0 <= base + c·step <= max, as [first, last) (possibly empty).
+inline std::pair<int, int> columns_within(std::int64_t base, std::int64_t step, std::int64_t max, int c0, int c1) {
+  if (step == 0) return base >= 0 && base <= max ? std::make_pair(c0, c1) : std::make_pair(c0, c0);
+  // Smallest c with base + c·step >= 0 (step > 0) or <= max (step < 0), and the largest with the other.
+  auto ceil_div = [](std::int64_t a, std::int64_t b) {
+    const std::int64_t q = a / b;
+    return q + ((a % b != 0) && ((a < 0) == (b < 0)) ? 1 : 0);
+  };
+  auto floor_div = [](std::int64_t a, std::int64_t b) {
+    const std::int64_t q = a / b;
+    return q - ((a % b != 0) && ((a < 0) != (b < 0)) ? 1 : 0);
+  };
+  std::int64_t lo = 0;
+  std::int64_t hi = 0;
+  if (step > 0) {
+    lo = ceil_div(-base, step);
+    hi = floor_div(max - base, step);
+  } else {
+    lo = ceil_div(max - base, step);
+    hi = floor_div(-base, step);
+  }
+  const std::int64_t first = std::max<std::int64_t>(lo, c0);
+  const std::int64_t last = std::min<std::int64_t>(hi + 1, c1);
+  if (first >= last) return {c0, c0};
+  return {static_cast<int>(first), static_cast<int>(last)};
+}
+
 #if defined(__SSE2__)
-/// sample_canvas_row_scalar() four pixels at a time, identical bytes.
-inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
-                                   std::uint8_t* out) {
-  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
-  const std::uint8_t* base = image.ptr<std::uint8_t>(0);
-  const std::int32_t x_row = s.x_row(y);
-  const std::int32_t y_row = s.y_row(y);
+/// sample_canvas_row_sse2() on columns [c0, c1), four at a time; kClamp = false where the
+/// positions are known to lie inside the clamping range.
+template <bool kClamp>
+inline void sample_canvas_columns_sse2(const std::uint8_t* base, std::ptrdiff_t step, const CanvasSampler& s,
+                                       std::int32_t x_row, std::int32_t y_row, int c0, int c1, std::uint8_t* out) {
   const __m128i x_step4 = _mm_set1_epi32(4 * s.x_step);
   const __m128i y_step4 = _mm_set1_epi32(4 * s.y_step);
   const __m128i x_max = _mm_set1_epi32(s.x_max);
@@ -96,8 +122,6 @@ inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s,
   const __m128i low16 = _mm_set1_epi32(0xFFFF);
   const __m128i half = _mm_set1_epi32(1 << (15 - kFractionBits));
   const __m128i one = _mm_set1_epi32(1 << kFractionBits);
-  const __m128i low8 = _mm_set1_epi32(0xFF);
-  const __m128i high8 = _mm_set1_epi32(0xFF00);
   const __m128i round = _mm_set1_epi32(1 << 13);
   const __m128i step16 = _mm_set1_epi32(static_cast<std::int32_t>(step));
   const __m128i zero = _mm_setzero_si128();
@@ -106,25 +130,19 @@ inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s,
     const __m128i above = _mm_cmpgt_epi32(v, hi);
     return _mm_or_si128(_mm_and_si128(above, hi), _mm_andnot_si128(above, v));
   };
-  // Four pairs (p, p + 1) read as 16-bit words, spread to the two 16-bit halves of each lane.
-  auto pairs = [&](std::uint16_t a, std::uint16_t b, std::uint16_t c, std::uint16_t d) {
-    const __m128i v = _mm_setr_epi32(a, b, c, d);
-    return _mm_or_si128(_mm_and_si128(v, low8), _mm_slli_epi32(_mm_and_si128(v, high8), 8));
-  };
   auto load16 = [](const std::uint8_t* p) {
     std::uint16_t v;
     std::memcpy(&v, p, sizeof(v));
-    return v;
+    return static_cast<int>(v);
   };
   __m128i xs = _mm_setr_epi32(x_row + c0 * s.x_step, x_row + (c0 + 1) * s.x_step, x_row + (c0 + 2) * s.x_step,
-                      x_row + (c0 + 3) * s.x_step);
+                              x_row + (c0 + 3) * s.x_step);
   __m128i ys = _mm_setr_epi32(y_row + c0 * s.y_step, y_row + (c0 + 1) * s.y_step, y_row + (c0 + 2) * s.y_step,
-                      y_row + (c0 + 3) * s.y_step);
-  int c = c0;
+                              y_row + (c0 + 3) * s.y_step);
   alignas(16) std::int32_t offset[4];
-  for (; c + 4 <= c1; c += 4) {
-    const __m128i x = clamp(xs, x_max);
-    const __m128i yv = clamp(ys, y_max);
+  for (int c = c0; c + 4 <= c1; c += 4) {
+    const __m128i x = kClamp ? clamp(xs, x_max) : xs;
+    const __m128i yv = kClamp ? clamp(ys, y_max) : ys;
     xs = _mm_add_epi32(xs, x_step4);
     ys = _mm_add_epi32(ys, y_step4);
     const __m128i fx = _mm_srli_epi32(_mm_add_epi32(_mm_and_si128(x, low16), half), 16 - kFractionBits);
@@ -136,20 +154,54 @@ inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s,
     const std::uint8_t* p1 = base + offset[1];
     const std::uint8_t* p2 = base + offset[2];
     const std::uint8_t* p3 = base + offset[3];
-    const __m128i top = pairs(load16(p0), load16(p1), load16(p2), load16(p3));
-    const __m128i bottom = pairs(load16(p0 + step), load16(p1 + step), load16(p2 + step), load16(p3 + step));
+    // Words 0-3: the pairs (p, p + 1) of the four pixels; words 4-7: the pairs one row below.
+    __m128i pairs = _mm_cvtsi32_si128(load16(p0));
+    pairs = _mm_insert_epi16(pairs, load16(p1), 1);
+    pairs = _mm_insert_epi16(pairs, load16(p2), 2);
+    pairs = _mm_insert_epi16(pairs, load16(p3), 3);
+    pairs = _mm_insert_epi16(pairs, load16(p0 + step), 4);
+    pairs = _mm_insert_epi16(pairs, load16(p1 + step), 5);
+    pairs = _mm_insert_epi16(pairs, load16(p2 + step), 6);
+    pairs = _mm_insert_epi16(pairs, load16(p3 + step), 7);
     const __m128i gx = _mm_sub_epi32(one, fx);
     const __m128i gy = _mm_sub_epi32(one, fy);
     // Products of values <= 128 fit the low 16-bit half of each lane.
     const __m128i w_top = _mm_or_si128(_mm_mullo_epi16(gx, gy), _mm_slli_epi32(_mm_mullo_epi16(fx, gy), 16));
     const __m128i w_bottom = _mm_or_si128(_mm_mullo_epi16(gx, fy), _mm_slli_epi32(_mm_mullo_epi16(fx, fy), 16));
-    const __m128i sum = _mm_add_epi32(_mm_add_epi32(_mm_madd_epi16(top, w_top), _mm_madd_epi16(bottom, w_bottom)), round);
+    const __m128i sum = _mm_add_epi32(_mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi8(pairs, zero), w_top),
+                                                    _mm_madd_epi16(_mm_unpackhi_epi8(pairs, zero), w_bottom)),
+                                      round);
     const __m128i v = _mm_srai_epi32(sum, 14);
-    const __m128i packed = _mm_packus_epi16(_mm_packs_epi32(v, v), zero);
-    const std::int32_t bytes = _mm_cvtsi128_si32(packed);
+    const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), zero));
     std::memcpy(out + (c - c0), &bytes, sizeof(bytes));
   }
-  if (c < c1) sample_canvas_row_scalar(image, s, y, c, c1, out + (c - c0));
+}
+
+/// sample_canvas_row_scalar() four pixels at a time, identical bytes: the columns whose positions
+/// need no clamping take a path without it.
+inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
+                                   std::uint8_t* out) {
+  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
+  const std::uint8_t* base = image.ptr<std::uint8_t>(0);
+  const std::int32_t x_row = s.x_row(y);
+  const std::int32_t y_row = s.y_row(y);
+  const auto [ax, bx] = columns_within(x_row, s.x_step, s.x_max, c0, c1);
+  const auto [ay, by] = columns_within(y_row, s.y_step, s.y_max, c0, c1);
+  int inner0 = std::max(ax, ay);
+  int inner1 = std::min(bx, by);
+  if (inner1 - inner0 < 8) inner0 = inner1 = c1;
+  // [c0, inner0) clamped, [inner0, inner1) not, [inner1, c1) clamped; remainders of 4 scalar.
+  int c = c0;
+  const int head = c0 + (inner0 - c0) / 4 * 4;
+  sample_canvas_columns_sse2<true>(base, step, s, x_row, y_row, c, head, out);
+  sample_canvas_row_scalar(image, s, y, head, inner0, out + (head - c0));
+  c = inner0;
+  const int body = c + (inner1 - c) / 4 * 4;
+  sample_canvas_columns_sse2<false>(base, step, s, x_row, y_row, c, body, out + (c - c0));
+  c = body;
+  const int tail = c + (c1 - c) / 4 * 4;
+  sample_canvas_columns_sse2<true>(base, step, s, x_row, y_row, c, tail, out + (c - c0));
+  sample_canvas_row_scalar(image, s, y, tail, c1, out + (tail - c0));
 }
 #endif
 

@@ -83,8 +83,9 @@ struct PinholeCamera {
 
 /// Thresholds of the cheirality test that chooses among the pose hypotheses.
 struct RelativePoseOptions {
-  /// Standard deviation of a keypoint position, pixels: ModelSelectionOptions::sigma's default
-  /// (ORB-SLAM2's level-0 σ of 1 px).
+  /// Standard deviation of a keypoint position in one image, pixels: 1 px, ORB-SLAM2's level-0 σ.
+  /// The reprojection error of a triangulated point in one image carries that image's noise only
+  /// (unlike the transfer error that ModelSelectionOptions::sigma scales, hence its 2 px).
   double sigma = 1.0;
   /// A triangulated correspondence counts when its squared reprojection error in each image is
   /// below reprojection_chi2 · σ²: 5.991, the 95 % quantile of χ² with 2 degrees of freedom (the

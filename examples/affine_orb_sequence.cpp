@@ -1,0 +1,479 @@
+// affine_orb_sequence DIR [--format auto|kitti|tum|folder] [--step K] [--max-tilt T] [--features N]
+//                     [--threads K] [--frames N] [--calib FILE] [--poses FILE] [--min-inliers N]
+//                     [--keyframe-ratio R] [--max-lost M] [--json] [--plot PNG]
+//
+// Frame loss and keyframes on a real image sequence (paper Sec. 4, eq. 22; SPEC §7), measured by
+// KeyframeTracker (keyframe_tracker.hpp): Affine-ORB features (rBRIEF) of every frame are matched
+// to the last keyframe and verified by H/F model selection. With ground-truth poses and intrinsics
+// (KITTI), the frame-to-frame rotation recovered from H or F is compared with the truth.
+//
+// --step K keeps every K-th frame: the same path at K times the camera speed, the paper's
+// experiment. --plot runs K = 1…5 for plain features (max tilt 1) and for affine features (the
+// given max tilt), prints the table and draws frame loss rate and keyframes against K.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "affine_orb/extractor.hpp"
+#include "affine_orb/keyframe_tracker.hpp"
+#include "affine_orb/rbrief.hpp"
+#include "affine_orb/relative_pose.hpp"
+#include "cli.hpp"
+#include "sequence_io.hpp"
+
+namespace {
+
+namespace ex = affine_orb::examples;
+using Features = affine_orb::Features<affine_orb::Rbrief::kBits>;
+using Tracker = affine_orb::KeyframeTracker<affine_orb::Rbrief::kBits>;
+
+const char* const kUsage =
+    "usage: affine_orb_sequence DIR [--format auto|kitti|tum|folder] [--step K] [--max-tilt T] [--features N]\n"
+    "                           [--threads K] [--frames N] [--calib FILE] [--poses FILE] [--min-inliers N]\n"
+    "                           [--keyframe-ratio R] [--max-lost M] [--json] [--plot PNG]\n"
+    "  DIR                KITTI odometry (image_0/, times.txt, poses.txt, calib.txt), TUM RGB-D (rgb.txt,\n"
+    "                     groundtruth.txt) or a folder of images in name order; --format auto guesses\n"
+    "  --step K           keep every K-th frame: K times the camera speed (default 1)\n"
+    "  --max-tilt T       largest simulated tilt, 1 = plain ORB-style features (default 2.828: 18 views)\n"
+    "  --features N       features per frame (default 1000)\n"
+    "  --threads K        extraction threads (default 2)\n"
+    "  --frames N         use only the first N frames of the sequence (before --step)\n"
+    "  --calib FILE       intrinsics (\"P0: ...\" KITTI line, fx= fy= cx= cy=, or \"fx fy cx cy\"); needed for\n"
+    "                     rotations on TUM and folders\n"
+    "  --poses FILE       KITTI ground truth when it is not DIR/poses.txt (e.g. poses/06.txt)\n"
+    "  --min-inliers N, --keyframe-ratio R, --max-lost M   KeyframeTrackerOptions (keyframe_tracker.hpp)\n"
+    "  --json             one JSON object instead of text\n"
+    "  --plot PNG         run K = 1..5 with plain (max tilt 1) and affine features, print the table and draw\n"
+    "                     frame loss rate and keyframes against K\n";
+
+/// Features of one frame and the time their extraction took.
+struct Extracted {
+  Features features;
+  double ms = 0.0;
+};
+
+/// One frame of a run.
+struct FrameRecord {
+  int sequence_index = 0;  // index in the full sequence
+  double timestamp = 0.0;
+  double ms_extract = 0.0;
+  double ms_track = 0.0;
+  int matches = 0;  // to the keyframe (tracked.matches is dropped to save memory)
+  affine_orb::TrackedFrame tracked;
+  std::optional<double> truth_angle;     // ground-truth rotation to the previous kept frame, degrees
+  std::optional<double> rotation_error;  // recovered vs ground truth, degrees
+};
+
+/// Totals of one run.
+struct Summary {
+  int step = 1;
+  double max_tilt = 1.0;
+  int frames = 0, lost = 0, keyframes = 0;
+  double loss_rate = 0.0;
+  double ms_extract_mean = 0.0, ms_extract_median = 0.0, ms_track_mean = 0.0;
+  int truth_pairs = 0, rotations = 0;
+  double rotation_error_median = 0.0, rotation_error_mean = 0.0, truth_angle_median = 0.0;
+};
+
+struct Run {
+  Summary summary;
+  std::vector<FrameRecord> frames;
+};
+
+const char* model_name(affine_orb::GeometricModel m) {
+  switch (m) {
+    case affine_orb::GeometricModel::kHomography:
+      return "H";
+    case affine_orb::GeometricModel::kFundamental:
+      return "F";
+    default:
+      return "-";
+  }
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buffer[8];
+      std::snprintf(buffer, sizeof(buffer), "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      out += buffer;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string json_number(std::optional<double> v, const char* format = "%.4f") {
+  if (!v || !std::isfinite(*v)) return "null";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, *v);
+  return buffer;
+}
+
+Extracted extract(affine_orb::Extractor<affine_orb::Rbrief>& extractor, const ex::SequenceFrame& frame) {
+  const cv::Mat image = ex::load_frame(frame);
+  const auto start = std::chrono::steady_clock::now();
+  Extracted e;
+  e.features = extractor.extract(image);
+  e.ms = ex::ms_since(start);
+  return e;
+}
+
+/// Tracks the frames `indices` of `sequence`; `features_of(i)` gives frame i's features.
+template <class FeaturesOf>
+Run track(const ex::Sequence& sequence, const std::vector<int>& indices, int step, double max_tilt,
+          const affine_orb::KeyframeTrackerOptions& options, const std::optional<affine_orb::PinholeCamera>& camera,
+          FeaturesOf features_of) {
+  Tracker tracker(options, camera);
+  Run run;
+  const ex::SequenceFrame* previous = nullptr;
+  std::vector<double> extract_ms, track_ms, errors, truth_angles;
+  for (const int i : indices) {
+    const ex::SequenceFrame& frame = sequence.frames[static_cast<std::size_t>(i)];
+    Extracted e = features_of(i);
+    FrameRecord r;
+    r.sequence_index = i;
+    r.timestamp = frame.timestamp;
+    r.ms_extract = e.ms;
+    const auto start = std::chrono::steady_clock::now();
+    r.tracked = tracker.track(std::move(e.features));
+    r.ms_track = ex::ms_since(start);
+    if (previous && previous->pose && frame.pose) {
+      const Eigen::Matrix3d truth = ex::relative_rotation(*previous->pose, *frame.pose);
+      r.truth_angle = affine_orb::rotation_angle_degrees(Eigen::Matrix3d::Identity(), truth);
+      truth_angles.push_back(*r.truth_angle);
+      if (camera) ++run.summary.truth_pairs;
+      if (r.tracked.relative_pose.success) {
+        r.rotation_error = affine_orb::rotation_angle_degrees(r.tracked.relative_pose.rotation, truth);
+        errors.push_back(*r.rotation_error);
+      }
+    }
+    if (r.tracked.relative_pose.success) ++run.summary.rotations;
+    extract_ms.push_back(r.ms_extract);
+    track_ms.push_back(r.ms_track);
+    // Keep the counts, drop the per-match vectors.
+    r.matches = static_cast<int>(r.tracked.matches.size());
+    r.tracked.matches = {};
+    r.tracked.inlier_mask = {};
+    run.frames.push_back(std::move(r));
+    previous = &frame;
+  }
+  Summary& s = run.summary;
+  s.step = step;
+  s.max_tilt = max_tilt;
+  s.frames = tracker.frames();
+  s.lost = tracker.lost_frames();
+  s.keyframes = tracker.keyframes();
+  s.loss_rate = tracker.frame_loss_rate();
+  const auto mean = [](const std::vector<double>& v) {
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    return v.empty() ? 0.0 : sum / static_cast<double>(v.size());
+  };
+  s.ms_extract_mean = mean(extract_ms);
+  s.ms_extract_median = ex::median(extract_ms);
+  s.ms_track_mean = mean(track_ms);
+  s.rotation_error_median = ex::median(errors);
+  s.rotation_error_mean = mean(errors);
+  s.truth_angle_median = ex::median(truth_angles);
+  return run;
+}
+
+std::vector<int> kept_indices(int count, int step) {
+  std::vector<int> out;
+  for (int i = 0; i < count; i += step) out.push_back(i);
+  return out;
+}
+
+std::string summary_json(const Summary& s, bool with_rotation) {
+  char buffer[1024];
+  std::snprintf(buffer, sizeof(buffer),
+                "{\"step\": %d, \"max_tilt\": %.4f, \"frames\": %d, \"lost\": %d, \"frame_loss_rate\": %.4f, "
+                "\"keyframes\": %d, \"ms_extract_mean\": %.2f, \"ms_extract_median\": %.2f, \"ms_track_mean\": %.2f, ",
+                s.step, s.max_tilt, s.frames, s.lost, s.loss_rate, s.keyframes, s.ms_extract_mean, s.ms_extract_median,
+                s.ms_track_mean);
+  std::string out = buffer;
+  if (with_rotation) {
+    const bool any = s.rotations > 0 && s.truth_pairs > 0;
+    out += "\"truth_pairs\": " + std::to_string(s.truth_pairs) + ", \"rotations_recovered\": " +
+           std::to_string(s.rotations) + ", \"rotation_error_median_deg\": " +
+           json_number(any ? std::optional<double>(s.rotation_error_median) : std::nullopt) +
+           ", \"rotation_error_mean_deg\": " +
+           json_number(any ? std::optional<double>(s.rotation_error_mean) : std::nullopt) +
+           ", \"truth_rotation_median_deg\": " + json_number(s.truth_angle_median) + "}";
+  } else {
+    out += "\"truth_pairs\": 0, \"rotations_recovered\": " + std::to_string(s.rotations) +
+           ", \"rotation_error_median_deg\": null, \"rotation_error_mean_deg\": null, "
+           "\"truth_rotation_median_deg\": null}";
+  }
+  return out;
+}
+
+std::string frame_json(const FrameRecord& r) {
+  const affine_orb::TrackedFrame& t = r.tracked;
+  char buffer[768];
+  std::snprintf(buffer, sizeof(buffer),
+                "{\"index\": %d, \"timestamp\": %.6f, \"features\": %d, \"reference_keyframe\": %d, \"matches\": %d, "
+                "\"inliers\": %d, \"model\": \"%s\", \"homography_ratio\": %.4f, \"inlier_ratio\": %.4f, "
+                "\"lost\": %s, \"keyframe\": %s, \"initialised\": %s, \"previous_matches\": %d, "
+                "\"previous_inliers\": %d, \"previous_model\": \"%s\", \"rotation_recovered\": %s, ",
+                r.sequence_index, r.timestamp, t.features, t.reference_keyframe, r.matches, t.inliers,
+                model_name(t.model), t.homography_ratio, t.inlier_ratio, t.lost ? "true" : "false",
+                t.keyframe ? "true" : "false", t.initialised ? "true" : "false", t.previous_matches,
+                t.previous_inliers, model_name(t.previous_model), t.relative_pose.success ? "true" : "false");
+  return std::string(buffer) + "\"truth_rotation_deg\": " + json_number(r.truth_angle) +
+         ", \"rotation_error_deg\": " + json_number(r.rotation_error) + ", \"ms_extract\": " +
+         json_number(r.ms_extract, "%.2f") + ", \"ms_track\": " + json_number(r.ms_track, "%.2f") + "}";
+}
+
+/// Draws one bar panel: for each K, the plain value and the affine value side by side.
+void draw_panel(cv::Mat& canvas, const cv::Rect& area, const std::string& title, const std::vector<double>& plain,
+                const std::vector<double>& affine, bool percent) {
+  const cv::Scalar black(0, 0, 0), grey(200, 200, 200), plain_colour(180, 120, 60), affine_colour(40, 140, 240);
+  const int left = area.x + 60, right = area.x + area.width - 15, top = area.y + 55, bottom = area.y + area.height - 45;
+  double top_value = 0.0;
+  for (double v : plain) top_value = std::max(top_value, v);
+  for (double v : affine) top_value = std::max(top_value, v);
+  // A round axis maximum: 1, 2 or 5 times a power of ten, at least 15 % above the largest bar.
+  const double wanted = std::max(top_value * 1.15, percent ? 5.0 : 1.0);
+  const double magnitude = std::pow(10.0, std::floor(std::log10(wanted)));
+  double axis_max = magnitude;
+  for (double f : {1.0, 2.0, 5.0, 10.0}) {
+    if (f * magnitude >= wanted) {
+      axis_max = f * magnitude;
+      break;
+    }
+  }
+  cv::putText(canvas, title, {area.x + 10, area.y + 22}, cv::FONT_HERSHEY_SIMPLEX, 0.6, black, 1, cv::LINE_AA);
+  const auto y_of = [&](double v) { return static_cast<int>(std::lround(bottom - (bottom - top) * v / axis_max)); };
+  for (int tick = 0; tick <= 5; ++tick) {
+    const double v = axis_max * tick / 5.0;
+    const int y = y_of(v);
+    cv::line(canvas, {left, y}, {right, y}, tick == 0 ? black : grey, 1);
+    char label[32];
+    std::snprintf(label, sizeof(label), percent ? "%.0f%%" : "%.0f", v);
+    if (percent && axis_max < 10.0) std::snprintf(label, sizeof(label), "%.1f%%", v);
+    cv::putText(canvas, label, {area.x + 5, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, black, 1, cv::LINE_AA);
+  }
+  const int groups = static_cast<int>(plain.size());
+  const double group_width = static_cast<double>(right - left) / groups;
+  for (int k = 0; k < groups; ++k) {
+    const int x0 = left + static_cast<int>(group_width * k + group_width * 0.15);
+    const int bar = static_cast<int>(group_width * 0.33);
+    const double values[2] = {plain[static_cast<std::size_t>(k)], affine[static_cast<std::size_t>(k)]};
+    for (int b = 0; b < 2; ++b) {
+      const int x = x0 + b * bar;
+      const int y = y_of(values[b]);
+      cv::rectangle(canvas, cv::Rect(x, y, bar - 2, std::max(1, bottom - y)), b == 0 ? plain_colour : affine_colour,
+                    cv::FILLED);
+      char label[32];
+      std::snprintf(label, sizeof(label), percent ? "%.1f" : "%.0f", values[b]);
+      cv::putText(canvas, label, {x, y - 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, black, 1, cv::LINE_AA);
+    }
+    cv::putText(canvas, "K=" + std::to_string(k + 1), {x0 + bar / 2, bottom + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                black, 1, cv::LINE_AA);
+  }
+  cv::putText(canvas, "frame step K (K times the camera speed)", {left + 40, bottom + 40}, cv::FONT_HERSHEY_SIMPLEX,
+              0.45, black, 1, cv::LINE_AA);
+}
+
+void draw_plot(const std::string& path, const std::string& name, const std::vector<Summary>& plain,
+               const std::vector<Summary>& affine) {
+  cv::Mat canvas(470, 1100, CV_8UC3, cv::Scalar::all(255));
+  std::vector<double> loss_plain, loss_affine, kf_plain, kf_affine;
+  for (const Summary& s : plain) {
+    loss_plain.push_back(100.0 * s.loss_rate);
+    kf_plain.push_back(s.keyframes);
+  }
+  for (const Summary& s : affine) {
+    loss_affine.push_back(100.0 * s.loss_rate);
+    kf_affine.push_back(s.keyframes);
+  }
+  draw_panel(canvas, cv::Rect(0, 30, 550, 440), "frame loss rate (lost / frames, eq. 22)", loss_plain, loss_affine, true);
+  draw_panel(canvas, cv::Rect(550, 30, 550, 440), "keyframes", kf_plain, kf_affine, false);
+  char legend[160];
+  std::snprintf(legend, sizeof(legend), "plain (max tilt 1)      affine (max tilt %.2f)", affine.front().max_tilt);
+  cv::putText(canvas, name, {10, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::rectangle(canvas, cv::Rect(640, 10, 14, 14), cv::Scalar(180, 120, 60), cv::FILLED);
+  cv::rectangle(canvas, cv::Rect(820, 10, 14, 14), cv::Scalar(40, 140, 240), cv::FILLED);
+  cv::putText(canvas, "plain (max tilt 1)", {660, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  std::snprintf(legend, sizeof(legend), "affine (max tilt %.2f)", affine.front().max_tilt);
+  cv::putText(canvas, legend, {840, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  if (!cv::imwrite(path, canvas)) throw std::runtime_error("cannot write " + path);
+}
+
+void print_summary_text(const Summary& s, bool rotation) {
+  std::printf("frames %d, lost %d (frame loss rate %.1f %%), keyframes %d\n", s.frames, s.lost, 100.0 * s.loss_rate,
+              s.keyframes);
+  std::printf("extraction %.1f ms/frame (median %.1f), tracking %.1f ms/frame\n", s.ms_extract_mean,
+              s.ms_extract_median, s.ms_track_mean);
+  if (!rotation) return;
+  if (s.rotations > 0 && s.truth_pairs > 0) {
+    std::printf("rotation error vs ground truth: median %.3f deg, mean %.3f deg, recovered for %d of %d frame pairs "
+                "(true rotation: median %.2f deg)\n",
+                s.rotation_error_median, s.rotation_error_mean, s.rotations, s.truth_pairs, s.truth_angle_median);
+  } else {
+    std::printf("rotation error vs ground truth: no rotation recovered for %d frame pairs\n", s.truth_pairs);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    ex::Args args(argc, argv);
+    if (args.flag("--help") || args.flag("-h")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    const std::string format = args.value("--format", "auto");
+    const std::string step_text = args.value("--step", "");
+    const int step = step_text.empty() ? 1 : std::stoi(step_text);
+    affine_orb::ExtractorOptions extractor_options;
+    extractor_options.views.max_tilt = args.real("--max-tilt", extractor_options.views.max_tilt);
+    extractor_options.features = args.integer("--features", 1000);
+    extractor_options.threads = args.integer("--threads", 2);
+    const int frame_limit = args.integer("--frames", 0);
+    const std::string calib = args.value("--calib", "");
+    const std::string poses = args.value("--poses", "");
+    affine_orb::KeyframeTrackerOptions options;
+    options.min_inliers = args.integer("--min-inliers", options.min_inliers);
+    options.keyframe_inlier_ratio = args.real("--keyframe-ratio", options.keyframe_inlier_ratio);
+    options.max_lost_frames = args.integer("--max-lost", options.max_lost_frames);
+    const bool json = args.flag("--json");
+    const std::string plot = args.value("--plot", "");
+    const std::vector<std::string> positional = args.positional();
+    if (positional.size() != 1) throw std::invalid_argument("expected one sequence directory");
+    if (step < 1) throw std::invalid_argument("--step must be >= 1");
+    if (frame_limit < 0) throw std::invalid_argument("--frames must be >= 0");
+    if (!plot.empty() && !step_text.empty()) throw std::invalid_argument("--plot runs K = 1..5 itself; drop --step");
+    if (!plot.empty() && !(extractor_options.views.max_tilt > 1.0)) {
+      throw std::invalid_argument("--plot compares max tilt 1 with --max-tilt: give a tilt > 1");
+    }
+    extractor_options.check();
+    options.check();
+
+    const std::string dir = positional[0];
+    ex::Sequence sequence;
+    if (!poses.empty()) {
+      if (format != "kitti" && format != "auto") throw std::invalid_argument("--poses is for the KITTI layout");
+      sequence = ex::read_kitti(dir, poses);
+    } else {
+      sequence = ex::read_sequence(dir, format);
+    }
+    if (frame_limit > 0 && static_cast<std::size_t>(frame_limit) < sequence.frames.size()) {
+      sequence.frames.resize(static_cast<std::size_t>(frame_limit));
+    }
+    const std::optional<affine_orb::PinholeCamera> camera =
+        calib.empty() ? sequence.camera : std::optional<affine_orb::PinholeCamera>(ex::read_calibration(calib));
+    const bool has_poses = std::any_of(sequence.frames.begin(), sequence.frames.end(),
+                                       [](const ex::SequenceFrame& f) { return f.pose.has_value(); });
+    const bool rotation = camera.has_value() && has_poses;
+    const int count = static_cast<int>(sequence.frames.size());
+
+    if (!plot.empty()) {
+      std::vector<Summary> plain, affine;
+      for (const double tilt : {1.0, extractor_options.views.max_tilt}) {
+        affine_orb::ExtractorOptions o = extractor_options;
+        o.views.max_tilt = tilt;
+        affine_orb::Extractor<affine_orb::Rbrief> extractor(o);
+        std::vector<Extracted> cache;
+        for (const ex::SequenceFrame& frame : sequence.frames) cache.push_back(extract(extractor, frame));
+        for (int k = 1; k <= 5; ++k) {
+          const Run run = track(sequence, kept_indices(count, k), k, tilt, options, camera,
+                                [&](int i) { return cache[static_cast<std::size_t>(i)]; });
+          (tilt == 1.0 ? plain : affine).push_back(run.summary);
+        }
+      }
+      draw_plot(plot, dir + " (" + std::to_string(count) + " frames, " +
+                          std::to_string(extractor_options.features) + " features)",
+                plain, affine);
+      if (json) {
+        std::printf("{\"sequence\": %s, \"format\": %s, \"frames\": %d, \"features\": %d, \"threads\": %d, "
+                    "\"plot\": %s, \"runs\": [",
+                    json_string(dir).c_str(), json_string(sequence.format).c_str(), count, extractor_options.features,
+                    extractor_options.threads, json_string(plot).c_str());
+        bool first = true;
+        for (const std::vector<Summary>* set : {&plain, &affine}) {
+          for (const Summary& s : *set) {
+            std::printf("%s%s", first ? "" : ", ", summary_json(s, rotation).c_str());
+            first = false;
+          }
+        }
+        std::printf("]}\n");
+      } else {
+        std::printf("%s: %s, %d frames, %d features, %d thread(s)\n", dir.c_str(), sequence.format.c_str(), count,
+                    extractor_options.features, extractor_options.threads);
+        std::printf("| features | K | frames | lost | loss rate | keyframes | rot. err. median / mean (deg) | "
+                    "rotations recovered | ms/frame (extract) |\n|---|---|---|---|---|---|---|---|---|\n");
+        for (const std::vector<Summary>* set : {&plain, &affine}) {
+          for (const Summary& s : *set) {
+            char tilt[48];
+            std::snprintf(tilt, sizeof(tilt), s.max_tilt == 1.0 ? "plain" : "affine (tilt %.2f)", s.max_tilt);
+            char error[64] = "n/a";
+            if (rotation && s.rotations > 0) {
+              std::snprintf(error, sizeof(error), "%.3f / %.3f", s.rotation_error_median, s.rotation_error_mean);
+            }
+            std::printf("| %s | %d | %d | %d | %.1f %% | %d | %s | %d / %d | %.1f |\n", tilt, s.step, s.frames, s.lost,
+                        100.0 * s.loss_rate, s.keyframes, error, s.rotations, s.truth_pairs, s.ms_extract_mean);
+          }
+        }
+        std::printf("plot: %s\n", plot.c_str());
+      }
+      return 0;
+    }
+
+    affine_orb::Extractor<affine_orb::Rbrief> extractor(extractor_options);
+    const Run run = track(sequence, kept_indices(count, step), step, extractor_options.views.max_tilt, options, camera,
+                          [&](int i) { return extract(extractor, sequence.frames[static_cast<std::size_t>(i)]); });
+    const std::size_t views = extractor.views().size();
+    if (json) {
+      std::printf("{\"sequence\": %s, \"format\": %s, \"features\": %d, \"threads\": %d, \"views\": %zu, "
+                  "\"summary\": %s, \"frames\": [",
+                  json_string(dir).c_str(), json_string(sequence.format).c_str(), extractor_options.features,
+                  extractor_options.threads, views, summary_json(run.summary, rotation).c_str());
+      for (std::size_t i = 0; i < run.frames.size(); ++i) {
+        std::printf("%s%s", i ? ", " : "", frame_json(run.frames[i]).c_str());
+      }
+      std::printf("]}\n");
+      return 0;
+    }
+    std::printf("%s: %s, %d frames, step %d -> %zu frames; max tilt %.2f (%zu views), %d features, %d thread(s)%s\n",
+                dir.c_str(), sequence.format.c_str(), count, step, run.frames.size(), extractor_options.views.max_tilt,
+                views, extractor_options.features, extractor_options.threads,
+                rotation ? "" : (camera ? "; no poses: no rotation check" : "; no intrinsics: no rotation check"));
+    std::printf("%6s %10s %5s %6s %5s %5s %5s %6s %-11s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match",
+                "inl", "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
+    for (const FrameRecord& r : run.frames) {
+      const affine_orb::TrackedFrame& t = r.tracked;
+      std::string state = t.lost ? "LOST" : "tracked";
+      if (t.keyframe) state += t.initialised ? "+KF(init)" : "+KF";
+      const std::string truth = r.truth_angle ? json_number(r.truth_angle, "%.3f") : "-";
+      const std::string error = r.rotation_error ? json_number(r.rotation_error, "%.3f") : "-";
+      std::printf("%6d %10.3f %5d %6d %5d %5s %5.2f %6.3f %-11s %8d %8s %8s %7.1f %7.1f\n", r.sequence_index,
+                  r.timestamp, t.features, r.matches, t.inliers, model_name(t.model), t.homography_ratio,
+                  t.inlier_ratio, state.c_str(), t.previous_inliers, truth.c_str(), error.c_str(), r.ms_extract,
+                  r.ms_track);
+    }
+    print_summary_text(run.summary, rotation);
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "affine_orb_sequence: %s\n%s", e.what(), kUsage);
+    return 2;
+  }
+}

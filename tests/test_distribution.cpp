@@ -14,6 +14,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "affine_orb/affine_views.hpp"
+#include "affine_orb/detail/gaussian_q8.hpp"
+#include "affine_orb/detail/resize.hpp"
 #include "affine_orb/detail/view_regions.hpp"
 #include "affine_orb/detector.hpp"
 #include "affine_orb/distribution.hpp"
@@ -118,7 +120,7 @@ TEST_CASE("the quadtree returns exactly the budget and spreads better than the s
       strongest.resize(static_cast<std::size_t>(target));
       const int spread = occupied_cells(points, kept, region, 16);
       const int greedy = occupied_cells(points, strongest, region, 16);
-      CHECK(greedy <= 4);   // the strongest-N all sit in the cluster
+      CHECK(greedy <= 4);    // the strongest-N all sit in the cluster
       CHECK(spread >= 150);  // of 256 cells; the uniform points occupy about 244
     }
   }
@@ -233,7 +235,8 @@ std::vector<affine_orb::Corner> reference_candidates(const cv::Mat& image, const
   for (const auto& c : corners_at(options.min_threshold)) {
     if (!strong.count(cell_of(c))) out.push_back(c);
   }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); });
+  std::sort(out.begin(), out.end(),
+            [](const auto& a, const auto& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); });
   return out;
 }
 
@@ -334,10 +337,10 @@ TEST_CASE("the support region of a view level is exactly the set of pixels whose
           const cv::Point2f p0 = affine_orb::Pyramid::to_level0(
               cv::Point2f(static_cast<float>(x), static_cast<float>(y)), view.size, level_size);
           const cv::Point2d q = affine_orb::apply_affine(m, p0);
-          const bool expected = x >= border && y >= border && x < level_size.width - border &&
-                                y < level_size.height - border &&
-                                (view.is_identity() || (q.x - ex >= 0.0 && q.y - ey >= 0.0 &&
-                                                        q.x + ex <= size.width - 1.0 && q.y + ey <= size.height - 1.0));
+          const bool expected =
+              x >= border && y >= border && x < level_size.width - border && y < level_size.height - border &&
+              (view.is_identity() ||
+               (q.x - ex >= 0.0 && q.y - ey >= 0.0 && q.x + ex <= size.width - 1.0 && q.y + ey <= size.height - 1.0));
           inside += expected;
           mismatches += expected != in_region(region, x, y);
         }
@@ -485,30 +488,59 @@ TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' byt
   }
 }
 
+TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole photos") {
+  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(0, 0, 333, 222));
+  for (const auto& [size, sigma] : {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}}) {
+    CAPTURE(size);
+    CAPTURE(sigma);
+    const std::vector<std::uint16_t> kernel = affine_orb::detail::gaussian_kernel_q8(size, sigma);
+    REQUIRE(static_cast<int>(kernel.size()) == size);
+    int sum = 0;
+    for (std::uint16_t k : kernel) sum += k;
+    CHECK(sum == 256);
+    for (const cv::Mat* image : {&graf, &boat}) {
+      const cv::Mat copy = image->clone();
+      cv::Mat expected;
+      cv::GaussianBlur(copy, expected, cv::Size(size, size), sigma, sigma, cv::BORDER_REFLECT_101);
+      cv::Mat ours(copy.size(), CV_8UC1, cv::Scalar(0));
+      affine_orb::detail::GaussianQ8Work work;
+      affine_orb::detail::smooth_square_q8(copy, cv::Rect(0, 0, copy.cols, copy.rows), kernel, work, ours);
+      CHECK(cv::countNonZero(ours != expected) == 0);
+    }
+  }
+  // σ = 2, 7 taps (ORB's smoothing): the kernel is the one OpenCV measures to.
+  CHECK(affine_orb::detail::gaussian_kernel_q8(7, 2.0) == std::vector<std::uint16_t>{18, 34, 48, 56, 48, 34, 18});
+}
+
 TEST_CASE("sparse rBRIEF smoothing equals the full smoothing on every described square") {
   const cv::Mat image = affine_orb::test::oxford_image("bark", 1)(cv::Rect(10, 20, 500, 400));
-  const affine_orb::Rbrief rbrief;
-  const int border = rbrief.border();
-  affine_orb::Rbrief::LevelData full;
-  rbrief.prepare(image, full);
-  std::mt19937 rng(4);
-  std::uniform_real_distribution<float> px(static_cast<float>(border), static_cast<float>(image.cols - 1 - border));
-  std::uniform_real_distribution<float> py(static_cast<float>(border), static_cast<float>(image.rows - 1 - border));
-  std::vector<cv::Point2f> points;
-  for (int i = 0; i < 60; ++i) points.emplace_back(px(rng), py(rng));
-  // At the border distance exactly, so that the smoothing reflects at the level border.
-  points.emplace_back(static_cast<float>(border), static_cast<float>(border));
-  points.emplace_back(static_cast<float>(image.cols - 1 - border), static_cast<float>(image.rows - 1 - border));
-  points.emplace_back(static_cast<float>(border) + 0.4f, static_cast<float>(image.rows - 1 - border));
-  affine_orb::Rbrief::LevelData sparse;
-  rbrief.prepare(image, points, sparse);
-  int mismatches = 0;
-  for (const cv::Point2f& p : points) {
-    const cv::Rect square(cvRound(p.x) - border, cvRound(p.y) - border, 2 * border + 1, 2 * border + 1);
-    mismatches += cv::countNonZero(full.smoothed(square) != sparse.smoothed(square));
-    CHECK(rbrief.describe(sparse, p, 0.7f) == rbrief.describe(full, p, 0.7f));
+  affine_orb::RbriefOptions small_kernel;
+  small_kernel.blur_kernel = 5;
+  small_kernel.blur_sigma = 1.3;
+  for (const affine_orb::Rbrief& rbrief : {affine_orb::Rbrief(), affine_orb::Rbrief(small_kernel)}) {
+    const int border = rbrief.border();
+    affine_orb::Rbrief::LevelData full;
+    rbrief.prepare(image, full);
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> px(static_cast<float>(border), static_cast<float>(image.cols - 1 - border));
+    std::uniform_real_distribution<float> py(static_cast<float>(border), static_cast<float>(image.rows - 1 - border));
+    std::vector<cv::Point2f> points;
+    for (int i = 0; i < 60; ++i) points.emplace_back(px(rng), py(rng));
+    // At the border distance exactly, so that the smoothing reflects at the level border.
+    points.emplace_back(static_cast<float>(border), static_cast<float>(border));
+    points.emplace_back(static_cast<float>(image.cols - 1 - border), static_cast<float>(image.rows - 1 - border));
+    points.emplace_back(static_cast<float>(border) + 0.4f, static_cast<float>(image.rows - 1 - border));
+    affine_orb::Rbrief::LevelData sparse;
+    rbrief.prepare(image, points, sparse);
+    int mismatches = 0;
+    for (const cv::Point2f& p : points) {
+      const cv::Rect square(cvRound(p.x) - border, cvRound(p.y) - border, 2 * border + 1, 2 * border + 1);
+      mismatches += cv::countNonZero(full.smoothed(square) != sparse.smoothed(square));
+      CHECK(rbrief.describe(sparse, p, 0.7f) == rbrief.describe(full, p, 0.7f));
+    }
+    CHECK(mismatches == 0);
   }
-  CHECK(mismatches == 0);
 }
 
 TEST_CASE("merging duplicates keeps exactly what a brute-force greedy merge keeps") {
@@ -560,5 +592,59 @@ TEST_CASE("merging duplicates keeps exactly what a brute-force greedy merge keep
                     merged.descriptors[i] != all.descriptors[j];
     }
     CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a grey level of cv::resize") {
+  const cv::Mat image = affine_orb::test::oxford_image("boat", 1)(cv::Rect(13, 7, 611, 433));  // a ROI
+  std::mt19937 rng(8);
+  for (const cv::Size size : {cv::Size(509, 361), cv::Size(424, 301), cv::Size(611, 433), cv::Size(700, 500),
+                              cv::Size(1, 1), cv::Size(3, 200), cv::Size(17, 2)}) {
+    CAPTURE(size);
+    cv::Mat reference;
+    affine_orb::detail::resize_bilinear_reference(image, reference, size);
+    affine_orb::detail::ResizeWork work;
+    cv::Mat ours;
+    affine_orb::detail::resize_bilinear(image, ours, size, nullptr, work);
+    CHECK(cv::countNonZero(ours != reference) == 0);
+    cv::Mat opencv;
+    cv::resize(image, opencv, size, 0, 0, cv::INTER_LINEAR);
+    cv::Mat difference;
+    cv::absdiff(ours, opencv, difference);
+    double worst = 0.0;
+    cv::minMaxLoc(difference, nullptr, &worst);
+    CHECK(worst <= 1.0);
+    // A region: its runs as the whole image, the rest of each row its nearest computed pixel.
+    affine_orb::RowSpans region;
+    region.reset(0, size.height);
+    for (int y = 0; y < size.height; ++y) {
+      if (rng() % 5 == 0) continue;  // empty run: the whole row
+      int a = static_cast<int>(rng() % static_cast<unsigned>(size.width));
+      int b = static_cast<int>(rng() % static_cast<unsigned>(size.width));
+      if (a > b) std::swap(a, b);
+      region.begin[static_cast<std::size_t>(y)] = a;
+      region.end[static_cast<std::size_t>(y)] = b + 1;
+    }
+    cv::Mat partial;
+    affine_orb::detail::resize_bilinear(image, partial, size, &region, work);
+    int mismatches = 0;
+    for (int y = 0; y < size.height; ++y) {
+      const auto [b, e] = region.run(y);
+      for (int x = 0; x < size.width; ++x) {
+        const int source = b < e ? std::clamp(x, b, e - 1) : x;
+        mismatches += partial.at<uchar>(y, x) != reference.at<uchar>(y, source);
+      }
+    }
+    CHECK(mismatches == 0);
+  }
+  // The pyramid chains the resizes.
+  affine_orb::Pyramid pyramid;
+  pyramid.build(image);
+  cv::Mat level = image.clone();
+  for (int l = 1; l < pyramid.levels(); ++l) {
+    cv::Mat next;
+    affine_orb::detail::resize_bilinear_reference(level, next, affine_orb::pyramid_level_size(image.size(), {}, l));
+    CHECK(cv::countNonZero(pyramid.level(l) != next) == 0);
+    level = next;
   }
 }

@@ -160,7 +160,8 @@ TEST_CASE("scoring a rectangle touches only that rectangle and equals the portab
                                                expected.data());
         }
         int mismatches = 0;
-        for (int x = 0; x < image.cols; ++x) mismatches += scores.at<uchar>(y, x) != expected[static_cast<std::size_t>(x)];
+        for (int x = 0; x < image.cols; ++x)
+          mismatches += scores.at<uchar>(y, x) != expected[static_cast<std::size_t>(x)];
         CAPTURE(width);
         CAPTURE(y);
         CHECK(mismatches == 0);

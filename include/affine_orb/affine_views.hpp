@@ -43,10 +43,9 @@ struct AffineViewOptions {
                     "AffineViewOptions::max_tilt must be in [1, 16], got " + std::to_string(max_tilt));
     detail::require(std::isfinite(tilt_ratio) && tilt_ratio > 1.0 && tilt_ratio <= 4.0,
                     "AffineViewOptions::tilt_ratio must be in (1, 4], got " + std::to_string(tilt_ratio));
-    detail::require(std::isfinite(rotation_base_degrees) && rotation_base_degrees >= 1.0 &&
-                        rotation_base_degrees <= 180.0,
-                    "AffineViewOptions::rotation_base_degrees must be in [1, 180], got " +
-                        std::to_string(rotation_base_degrees));
+    detail::require(
+        std::isfinite(rotation_base_degrees) && rotation_base_degrees >= 1.0 && rotation_base_degrees <= 180.0,
+        "AffineViewOptions::rotation_base_degrees must be in [1, 180], got " + std::to_string(rotation_base_degrees));
     detail::require(std::isfinite(antialias) && antialias >= 0.0 && antialias <= 4.0,
                     "AffineViewOptions::antialias must be in [0, 4], got " + std::to_string(antialias));
   }
@@ -123,8 +122,8 @@ inline AffineView make_view(double tilt, double rotation_degrees, cv::Size image
   view.canvas_size = cv::Size(static_cast<int>(std::ceil(max_x - min_x - 1e-6)) + 1,
                               static_cast<int>(std::ceil(max_y - min_y - 1e-6)) + 1);
   view.to_canvas = cv::Matx23d(c, -s, -min_x, s, c, -min_y);
-  view.size = cv::Size(std::max(1, static_cast<int>(std::lround(view.canvas_size.width / tilt))),
-                       view.canvas_size.height);
+  view.size =
+      cv::Size(std::max(1, static_cast<int>(std::lround(view.canvas_size.width / tilt))), view.canvas_size.height);
   const double r = static_cast<double>(view.size.width) / view.canvas_size.width;
   const cv::Matx23d& k = view.to_canvas;
   view.to_view = cv::Matx23d(r * k(0, 0), r * k(0, 1), r * (k(0, 2) + 0.5) - 0.5, k(1, 0), k(1, 1), k(1, 2));
@@ -252,8 +251,7 @@ class ViewRenderer {
 /// precision, and within 3 of render_view_reference() (OpenCV's warpAffine, GaussianBlur and
 /// resize; warpAffine interpolates at 1/32 px).
 /// `canvas` is a caller-owned scratch buffer.
-inline void render_view(const cv::Mat& image, const AffineView& view, double antialias, cv::Mat& canvas,
-                        cv::Mat& out) {
+inline void render_view(const cv::Mat& image, const AffineView& view, double antialias, cv::Mat& canvas, cv::Mat& out) {
   detail::ViewRenderer(view, antialias).render(image, nullptr, canvas, out);
 }
 

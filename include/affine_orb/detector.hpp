@@ -42,9 +42,9 @@ struct DetectorOptions {
   void check() const {
     detail::require(initial_threshold >= 1 && initial_threshold <= 254,
                     "DetectorOptions::initial_threshold must be in [1, 254], got " + std::to_string(initial_threshold));
-    detail::require(min_threshold >= 1 && min_threshold <= initial_threshold,
-                    "DetectorOptions::min_threshold must be in [1, initial_threshold], got " +
-                        std::to_string(min_threshold));
+    detail::require(
+        min_threshold >= 1 && min_threshold <= initial_threshold,
+        "DetectorOptions::min_threshold must be in [1, initial_threshold], got " + std::to_string(min_threshold));
     detail::require(cell_size >= 4 && cell_size <= 4096,
                     "DetectorOptions::cell_size must be in [4, 4096], got " + std::to_string(cell_size));
     detail::require(score == ScoreType::kFast || score == ScoreType::kHarris, "DetectorOptions::score is invalid");
@@ -103,7 +103,9 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
   // corners of a single map scored at min_threshold, filtered cell by cell.
   if (options.min_threshold < options.initial_threshold) {
     const int size = options.cell_size;
-    auto cell_index = [&](int v, int origin) { return (v - origin) >= 0 ? (v - origin) / size : -((origin - v + size - 1) / size); };
+    auto cell_index = [&](int v, int origin) {
+      return (v - origin) >= 0 ? (v - origin) / size : -((origin - v + size - 1) / size);
+    };
     const int col0 = cell_index(bounds.x, grid_origin.x);
     const int row0 = cell_index(bounds.y, grid_origin.y);
     const int cols = cell_index(bounds.x + bounds.width - 1, grid_origin.x) - col0 + 1;
@@ -117,7 +119,8 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
     const std::size_t strong_count = corners.size();
     for (int row = 0; row < rows; ++row) {
       for (int col = 0; col < cols; ++col) {
-        if (work.strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)]) {
+        if (work.strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
+                        static_cast<std::size_t>(col)]) {
           continue;
         }
         const cv::Rect cell(grid_origin.x + (col0 + col) * size, grid_origin.y + (row0 + row) * size, size, size);

@@ -186,9 +186,9 @@ class Extractor {
     std::vector<cv::Point2f> level_points;     ///< candidate positions, level pixels of the view
     std::vector<cv::Point2f> original_points;  ///< the same, original pixels
     std::vector<float> responses;
-    std::vector<int> alive;  ///< candidates that survived the support, mask and duplicate checks
+    std::vector<int> alive;        ///< candidates that survived the support, mask and duplicate checks
     std::vector<char> keep_flags;  ///< merge_duplicates(): candidate kept
-    std::vector<int> kept;   ///< candidates chosen by the budget
+    std::vector<int> kept;         ///< candidates chosen by the budget
     std::vector<cv::Point2f> kept_points;
     typename Descriptor::LevelData descriptor_data;
     std::vector<cv::KeyPoint> keypoints;
@@ -198,7 +198,9 @@ class Extractor {
   struct ViewWork {
     AffineView view;
     detail::ViewRenderer renderer;
-    RowSpans render_region;  ///< the view pixels rendered (the rest repeats the row's edge pixels)
+    /// Per level, the pixels computed (the rest repeats the row's edge pixels): level 0 is
+    /// rendered, the others resized, within kRenderMargin level pixels of the image.
+    std::vector<RowSpans> regions;
     cv::Mat scratch;
     cv::Mat image;
     Pyramid pyramid;
@@ -220,19 +222,22 @@ class Extractor {
       ViewWork& work = view_work_[v];
       work.view = views[v];
       work.renderer = detail::ViewRenderer(views[v], options_.views.antialias);
-      work.render_region = detail::render_region(views[v], size, kRenderMargin);
       work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      work.regions.resize(static_cast<std::size_t>(options_.pyramid.levels));
       for (int l = 0; l < options_.pyramid.levels; ++l) {
-        work.levels[static_cast<std::size_t>(l)].valid = detail::support_region(
-            work.view, size, pyramid_level_size(work.view.size, options_.pyramid, l), support_border());
+        const cv::Size level_size = pyramid_level_size(work.view.size, options_.pyramid, l);
+        work.levels[static_cast<std::size_t>(l)].valid =
+            detail::support_region(work.view, size, level_size, support_border());
+        work.regions[static_cast<std::size_t>(l)] = detail::region_near_image(
+            detail::level_to_original(work.view, level_size), level_size, size, kRenderMargin);
       }
     }
     views_size_ = size;
   }
 
-  /// Margin in view pixels around the original image within which a view is rendered exactly:
-  /// more than the reach beyond a valid keypoint's support of the rBRIEF smoothing (3 level
-  /// pixels) and the bilinear pyramid (about one pixel per level) on the first levels.
+  /// Margin in level pixels around the original image within which a view and its pyramid levels
+  /// are computed: more than the reach beyond a valid keypoint's support of the rBRIEF smoothing
+  /// (3 level pixels) and of the bilinear interpolation between levels.
   static constexpr double kRenderMargin = 8.0;
 
   /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
@@ -289,8 +294,8 @@ class Extractor {
 
   /// Step 1–2 for one view: render, pyramid, candidates in the valid regions, mask check.
   void detect_view(const cv::Mat& image, const cv::Mat& mask, ViewWork& work) {
-    work.renderer.render(image, &work.render_region, work.scratch, work.image);
-    work.pyramid.build_swap(work.image);
+    work.renderer.render(image, &work.regions.front(), work.scratch, work.image);
+    work.pyramid.build_swap(work.image, work.view.is_identity() ? nullptr : &work.regions);
     const int border = support_border();
     const cv::Matx23d& back = work.view.to_original;
     for (int l = 0; l < options_.pyramid.levels; ++l) {
@@ -347,7 +352,8 @@ class Extractor {
         bool duplicate = false;
         for (int y = cy - 1; y <= cy + 1 && !duplicate; ++y) {
           for (int x = cx - 1; x <= cx + 1 && !duplicate; ++x) {
-            for (int k = m.head[static_cast<std::size_t>(y) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(x)];
+            for (int k = m.head[static_cast<std::size_t>(y) * static_cast<std::size_t>(columns) +
+                                static_cast<std::size_t>(x)];
                  k >= 0; k = m.kept[static_cast<std::size_t>(k)].next) {
               const MergeKept& o = m.kept[static_cast<std::size_t>(k)];
               if (o.view != r.view && std::hypot(o.point.x - p.x, o.point.y - p.y) < radius) {
@@ -358,7 +364,8 @@ class Extractor {
           }
         }
         if (duplicate) continue;
-        int& head = m.head[static_cast<std::size_t>(cy) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(cx)];
+        int& head =
+            m.head[static_cast<std::size_t>(cy) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(cx)];
         m.kept.push_back({p, r.view, head});
         head = static_cast<int>(m.kept.size()) - 1;
         level_of(r.view, l).keep_flags[static_cast<std::size_t>(r.index)] = 1;
@@ -404,7 +411,8 @@ class Extractor {
     std::array<int, 257> start{};
     for (int v = 0; v < n_views; ++v) {
       const LevelWork& work = level_of(v, l);
-      for (int i : work.alive) ++start[static_cast<std::size_t>(256 - static_cast<int>(work.responses[static_cast<std::size_t>(i)]))];
+      for (int i : work.alive)
+        ++start[static_cast<std::size_t>(256 - static_cast<int>(work.responses[static_cast<std::size_t>(i)]))];
     }
     int total = 0;
     for (int& count : start) {

@@ -352,7 +352,8 @@ inline std::vector<Corner> non_max_suppression(const cv::Mat& scores, cv::Rect r
   roi &= cv::Rect(1, 1, scores.cols - 2, scores.rows - 2);
   if (roi.empty()) return corners;
   threshold = std::max(threshold, 1);
-  for (int y = roi.y; y < roi.y + roi.height; ++y) detail::non_max_row(scores, y, roi.x, roi.x + roi.width, threshold, corners);
+  for (int y = roi.y; y < roi.y + roi.height; ++y)
+    detail::non_max_row(scores, y, roi.x, roi.x + roi.width, threshold, corners);
   return corners;
 }
 

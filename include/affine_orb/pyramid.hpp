@@ -8,9 +8,10 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "affine_orb/detail/check.hpp"
+#include "affine_orb/detail/resize.hpp"
+#include "affine_orb/detail/row_spans.hpp"
 
 namespace affine_orb {
 
@@ -41,8 +42,9 @@ inline cv::Size pyramid_level_size(cv::Size size, const PyramidOptions& options,
 
 /// An image pyramid whose buffers are reused across build() calls of same-sized images.
 ///
-/// Level l is produced from level l−1 by cv::resize with bilinear interpolation (OpenCV's
-/// pixel-centre convention), so a level-l pixel (x_l, y_l) corresponds to the level-0 point
+/// Level l is produced from level l−1 by bilinear interpolation with the pixel-centre convention
+/// of cv::resize (fixed point, fractions of 1/128 pixel: detail/resize.hpp; within a grey level of
+/// cv::resize with INTER_LINEAR), so a level-l pixel (x_l, y_l) corresponds to the level-0 point
 /// ((x_l + 0.5)·W/W_l − 0.5, (y_l + 0.5)·H/H_l − 0.5): the ratios telescope across levels.
 class Pyramid {
  public:
@@ -59,11 +61,16 @@ class Pyramid {
 
   /// build() without the copy: `image` becomes level 0 and receives the previous level-0 matrix
   /// in exchange, so that a caller rendering into the same matrix every frame reuses both buffers.
-  void build_swap(cv::Mat& image) {
+  /// With `regions` (one per level, regions[0] unused), level l >= 1 is computed only on the runs
+  /// of regions[l], the rest of each row repeating its nearest computed pixel (see
+  /// detail::resize_bilinear()).
+  void build_swap(cv::Mat& image, const std::vector<detail::RowSpans>* regions = nullptr) {
     detail::require_gray8(image, "Pyramid::build_swap");
+    detail::require(regions == nullptr || static_cast<int>(regions->size()) == options_.levels,
+                    "Pyramid::build_swap: one region per level expected");
     levels_.resize(static_cast<std::size_t>(options_.levels));
     std::swap(levels_[0], image);
-    build_levels();
+    build_levels(regions);
   }
 
   const PyramidOptions& options() const { return options_; }
@@ -84,16 +91,18 @@ class Pyramid {
   }
 
  private:
-  void build_levels() {
+  void build_levels(const std::vector<detail::RowSpans>* regions = nullptr) {
+    resize_work_.resize(levels_.size());
     for (int l = 1; l < options_.levels; ++l) {
-      const cv::Size size = pyramid_level_size(levels_[0].size(), options_, l);
-      cv::resize(levels_[static_cast<std::size_t>(l - 1)], levels_[static_cast<std::size_t>(l)], size, 0, 0,
-                 cv::INTER_LINEAR);
+      const std::size_t i = static_cast<std::size_t>(l);
+      detail::resize_bilinear(levels_[i - 1], levels_[i], pyramid_level_size(levels_[0].size(), options_, l),
+                              regions != nullptr ? &(*regions)[i] : nullptr, resize_work_[i]);
     }
   }
 
   PyramidOptions options_;
   std::vector<cv::Mat> levels_;
+  std::vector<detail::ResizeWork> resize_work_;
 };
 
 }  // namespace affine_orb

@@ -27,6 +27,7 @@
 
 #include "affine_orb/descriptor.hpp"
 #include "affine_orb/detail/check.hpp"
+#include "affine_orb/detail/gaussian_q8.hpp"
 #include "affine_orb/detail/orb_pattern.hpp"
 #include "affine_orb/features.hpp"
 #include "affine_orb/orientation.hpp"
@@ -64,11 +65,11 @@ class Rbrief {
   struct LevelData {
     cv::Mat image;
     cv::Mat smoothed;
-    cv::Mat mosaic;           ///< scratch for the sparse prepare(): the tiles side by side
-    cv::Mat mosaic_smoothed;  ///< scratch for the sparse prepare()
+    detail::GaussianQ8Work squares;  ///< scratch for the sparse prepare()
   };
 
-  explicit Rbrief(const Options& options = {}) : options_(options), disc_((options.check(), options.orientation_radius)) {
+  explicit Rbrief(const Options& options = {})
+      : options_(options), disc_((options.check(), options.orientation_radius)) {
     int extent = 0;
     for (const auto& pair : detail::kOrbTestPairs) {
       const double ra = std::hypot(pair.xa, pair.ya);
@@ -77,6 +78,7 @@ class Rbrief {
     }
     // A rotated test point has |x'|, |y'| <= round(|(x, y)|), the rounded radius.
     border_ = std::max(extent, options_.orientation_radius);
+    kernel_q8_ = detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
   }
 
   const Options& options() const { return options_; }
@@ -94,60 +96,25 @@ class Rbrief {
   }
 
   /// Smooths only the squares of side 2·border()+1 around `points` (level pixels, rounded) when
-  /// they cover less than half of the level, else the whole level. Every square, extended by the
-  /// kernel radius k, is copied into a tile of a mosaic (the parts outside the level filled by
-  /// reflection about the level border, as the full smoothing does); the mosaic is smoothed with one
-  /// cv::GaussianBlur call and the squares are copied back. A tile's square lies k pixels inside the
-  /// tile, so the blur reads only that tile for it, and its pixels equal those of the full smoothing
-  /// (which gives each pixel from its 7x7 neighbourhood alone, wherever it lies). Pixels outside the
-  /// squares are left undefined.
+  /// they cover less than half of the level, else the whole level. The squares are smoothed one by
+  /// one with cv::GaussianBlur's own integer arithmetic (detail/gaussian_q8.hpp, reflecting about
+  /// the level edges), so their pixels equal those of the full smoothing; when that arithmetic could
+  /// not be confirmed at construction, the whole level is smoothed. Pixels outside the squares are
+  /// left undefined.
   void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& points, LevelData& data) const {
     detail::require_gray8(level, "Rbrief::prepare");
     const int side = 2 * border_ + 1;
-    if (2.0 * static_cast<double>(points.size()) * side * side >= static_cast<double>(level.total())) {
+    if (kernel_q8_.empty() ||
+        2.0 * static_cast<double>(points.size()) * side * side >= static_cast<double>(level.total())) {
       prepare(level, data);
       return;
     }
     data.image = level;
     data.smoothed.create(level.size(), CV_8UC1);
-    if (points.empty()) return;
-    const int k = options_.blur_kernel / 2;
-    const int tile = side + 2 * k;
-    const int count = static_cast<int>(points.size());
-    // Tiles in rows of at most kMosaicColumns, so that the blur runs over long rows.
-    const int columns = std::min(count, kMosaicColumns);
-    const int rows = (count + columns - 1) / columns;
-    data.mosaic.create(rows * tile, columns * tile, CV_8UC1);
     const cv::Rect bounds(0, 0, level.cols, level.rows);
-    for (int i = 0; i < rows * columns; ++i) {
-      cv::Mat target = data.mosaic(cv::Rect((i % columns) * tile, (i / columns) * tile, tile, tile));
-      if (i >= count) {
-        target.setTo(0);
-        continue;
-      }
-      const cv::Point2f& p = points[static_cast<std::size_t>(i)];
-      const cv::Rect wanted(cvRound(p.x) - border_ - k, cvRound(p.y) - border_ - k, tile, tile);
-      const cv::Rect inside = wanted & bounds;
-      if (inside == wanted) {
-        level(wanted).copyTo(target);
-      } else if (inside.empty()) {
-        target.setTo(0);
-      } else {
-        cv::copyMakeBorder(level(inside), target, inside.y - wanted.y, wanted.br().y - inside.br().y,
-                           inside.x - wanted.x, wanted.br().x - inside.br().x,
-                           cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
-      }
-    }
-    cv::GaussianBlur(data.mosaic, data.mosaic_smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel),
-                     options_.blur_sigma, options_.blur_sigma, cv::BORDER_REFLECT_101);
-    for (int i = 0; i < count; ++i) {
-      const cv::Point2f& p = points[static_cast<std::size_t>(i)];
-      const cv::Rect square(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side);
-      const cv::Rect inside = square & bounds;
-      if (inside.empty()) continue;
-      const cv::Point origin((i % columns) * tile + k, (i / columns) * tile + k);
-      data.mosaic_smoothed(cv::Rect(origin + (inside.tl() - square.tl()), inside.size()))
-          .copyTo(data.smoothed(inside));
+    for (const cv::Point2f& p : points) {
+      const cv::Rect square = cv::Rect(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side) & bounds;
+      if (!square.empty()) detail::smooth_square_q8(level, square, kernel_q8_, data.squares, data.smoothed);
     }
   }
 
@@ -223,12 +190,11 @@ class Rbrief {
 #endif
   }
 
-  /// Tiles per mosaic row in the sparse prepare(): rows of about 1000 pixels.
-  static constexpr int kMosaicColumns = 24;
-
   Options options_;
   CentroidDisc disc_;
   int border_ = 0;
+  /// cv::GaussianBlur's integer kernel for the options (empty: not reproduced, see prepare()).
+  std::vector<std::uint16_t> kernel_q8_;
 };
 
 }  // namespace affine_orb

@@ -15,20 +15,31 @@
 
 namespace affine_orb::detail {
 
-/// The part of a view that lies within `margin` view pixels of the original image: the view pixels
-/// v with to_original(v) in [−margin·e_x, W − 1 + margin·e_x] x [−margin·e_y, H − 1 + margin·e_y],
-/// e_x and e_y the extents in original pixels of a unit disc of view pixels along x and y (a
-/// superset of the points within `margin` of the image). One run per view row, possibly empty.
-inline RowSpans render_region(const AffineView& view, cv::Size image_size, double margin) {
-  RowSpans spans;
-  spans.reset(0, view.size.height);
+/// The map from the pixels of a pyramid level of size `level_size` of `view` to original pixels:
+/// Pyramid::to_level0, then to_original.
+inline cv::Matx23d level_to_original(const AffineView& view, cv::Size level_size) {
+  const double rx = static_cast<double>(view.size.width) / level_size.width;
+  const double ry = static_cast<double>(view.size.height) / level_size.height;
   const cv::Matx23d& m = view.to_original;
+  return {m(0, 0) * rx, m(0, 1) * ry, m(0, 0) * (0.5 * rx - 0.5) + m(0, 1) * (0.5 * ry - 0.5) + m(0, 2),
+          m(1, 0) * rx, m(1, 1) * ry, m(1, 0) * (0.5 * rx - 0.5) + m(1, 1) * (0.5 * ry - 0.5) + m(1, 2)};
+}
+
+/// The part of an image of size `size` (a view or one of its pyramid levels, mapped to original
+/// pixels by `to_original`) within `margin` of its pixels of the original image: the pixels v
+/// with to_original(v) in [−margin·e_x, W − 1 + margin·e_x] x [−margin·e_y, H − 1 + margin·e_y],
+/// e_x and e_y the extents in original pixels of a unit disc of its pixels along x and y (a
+/// superset of the points within `margin` of the image). One run per row, possibly empty.
+inline RowSpans region_near_image(const cv::Matx23d& to_original, cv::Size size, cv::Size image_size, double margin) {
+  RowSpans spans;
+  spans.reset(0, size.height);
+  const cv::Matx23d& m = to_original;
   const double ex = margin * std::hypot(m(0, 0), m(0, 1));
   const double ey = margin * std::hypot(m(1, 0), m(1, 1));
   const double bounds[2][2] = {{-ex, image_size.width - 1.0 + ex}, {-ey, image_size.height - 1.0 + ey}};
-  for (int y = 0; y < view.size.height; ++y) {
+  for (int y = 0; y < size.height; ++y) {
     double lo = 0.0;
-    double hi = view.size.width - 1.0;
+    double hi = size.width - 1.0;
     for (int k = 0; k < 2; ++k) {
       // m(k, 0)·x + m(k, 1)·y + m(k, 2) within bounds[k].
       const double a = m(k, 0);
@@ -44,9 +55,14 @@ inline RowSpans render_region(const AffineView& view, cv::Size image_size, doubl
     }
     if (hi < lo) continue;
     spans.begin[static_cast<std::size_t>(y)] = std::max(0, static_cast<int>(std::floor(lo)));
-    spans.end[static_cast<std::size_t>(y)] = std::min(view.size.width, static_cast<int>(std::ceil(hi)) + 1);
+    spans.end[static_cast<std::size_t>(y)] = std::min(size.width, static_cast<int>(std::ceil(hi)) + 1);
   }
   return spans;
+}
+
+/// region_near_image() of a view: the view pixels within `margin` view pixels of the image.
+inline RowSpans render_region(const AffineView& view, cv::Size image_size, double margin) {
+  return region_near_image(view.to_original, view.size, image_size, margin);
 }
 
 /// The pixels (x, y) of a pyramid level of size `level_size` of `view`, at least `border` pixels
@@ -65,8 +81,8 @@ inline RowSpans support_region(const AffineView& view, cv::Size image_size, cv::
   const double margin_x = radius * std::hypot(back(0, 0), back(0, 1));
   const double margin_y = radius * std::hypot(back(1, 0), back(1, 1));
   auto original = [&](double x, int y) {
-    return apply_affine(back, Pyramid::to_level0(cv::Point2f(static_cast<float>(x), static_cast<float>(y)), view.size,
-                                                 level_size));
+    return apply_affine(
+        back, Pyramid::to_level0(cv::Point2f(static_cast<float>(x), static_cast<float>(y)), view.size, level_size));
   };
   auto inside = [&](int x, int y) {
     const cv::Point2d q = original(x, y);

@@ -206,8 +206,7 @@ inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s,
 #endif
 
 /// sample_canvas_row_sse2() where the target has SSE2, else the scalar reference.
-inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
-                              std::uint8_t* out) {
+inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1, std::uint8_t* out) {
 #if defined(__SSE2__)
   sample_canvas_row_sse2(image, s, y, c0, c1, out);
 #else
@@ -328,9 +327,15 @@ inline void resample_row_sse2_rounds(const ViewResampler& r, const std::uint8_t*
 inline void resample_row_sse2(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                               std::uint8_t* out) {
   switch (r.stride) {
-    case 16: resample_row_sse2_rounds<1>(r, row, row_first, x0, x1, out); break;
-    case 32: resample_row_sse2_rounds<2>(r, row, row_first, x0, x1, out); break;
-    default: resample_row_sse2_rounds<0>(r, row, row_first, x0, x1, out); break;
+    case 16:
+      resample_row_sse2_rounds<1>(r, row, row_first, x0, x1, out);
+      break;
+    case 32:
+      resample_row_sse2_rounds<2>(r, row, row_first, x0, x1, out);
+      break;
+    default:
+      resample_row_sse2_rounds<0>(r, row, row_first, x0, x1, out);
+      break;
   }
 }
 #endif

@@ -509,6 +509,20 @@ TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole
       CHECK(cv::countNonZero(ours != expected) == 0);
     }
   }
+  // Squares of every small width (the narrow ones take the scalar path), some at the image edges.
+  const std::vector<std::uint16_t> kernel = affine_orb::detail::gaussian_kernel_q8(7, 2.0);
+  cv::Mat expected;
+  cv::GaussianBlur(boat, expected, cv::Size(7, 7), 2.0, 2.0, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+  affine_orb::detail::GaussianQ8Work work;
+  cv::Mat ours(boat.size(), CV_8UC1, cv::Scalar(0));
+  for (int width = 1; width <= 12; ++width) {
+    for (const cv::Point corner : {cv::Point(0, 0), cv::Point(100, 50), cv::Point(boat.cols - width, boat.rows - 9)}) {
+      const cv::Rect square(corner, cv::Size(width, 9));
+      affine_orb::detail::smooth_square_q8(boat, square, kernel, work, ours);
+      CAPTURE(width);
+      CHECK(cv::countNonZero(ours(square) != expected(square)) == 0);
+    }
+  }
   // σ = 2, 7 taps (ORB's smoothing): the kernel is the one OpenCV measures to.
   CHECK(affine_orb::detail::gaussian_kernel_q8(7, 2.0) == std::vector<std::uint16_t>{18, 34, 48, 56, 48, 34, 18});
 }

@@ -91,15 +91,95 @@ inline std::vector<std::uint16_t> gaussian_kernel_q8(int size, double sigma) {
 /// Buffers of smooth_square_q8(), reused across calls.
 struct GaussianQ8Work {
   cv::Mat tile;                     ///< the source square with its margin, reflected at the level edges
-  std::vector<std::uint16_t> rows;  ///< the x pass: (height + 2r) rows of `width` values
+  std::vector<std::uint16_t> high;  ///< the x pass h, h >> 8: (height + 2r) rows of `width` values
+  std::vector<std::uint16_t> low;   ///< the x pass, h & 255
 };
 
+/// smooth_square_q8() on the source rows `base` (step `step`, starting r rows above and r columns
+/// left of the square) for a kernel of kTaps taps (0: kernel.size()). The x pass h < 2^16 is kept
+/// as h >> 8 and h & 255, so that the y pass runs in 16 bits: with A = Σ k_j·(h_j >> 8) and
+/// B = Σ k_j·(h_j & 255), both below 2^16, (256·A + B + 2^15) >> 16 = (A + (B >> 8) + 128) >> 8.
+/// The kernel is symmetric, so taps j and n − 1 − j are added before multiplying (any partial sum
+/// of the nonnegative terms stays below the total, below 2^16).
+template <int kTaps>
+inline void smooth_rows_q8(const std::uint8_t* base, std::ptrdiff_t step, cv::Size square,
+                           const std::vector<std::uint16_t>& kernel, GaussianQ8Work& work, std::uint8_t* out,
+                           std::ptrdiff_t out_step) {
+  const int n = kTaps > 0 ? kTaps : static_cast<int>(kernel.size());
+  const int half = n / 2;
+  const int width = square.width;
+  const int rows = square.height + 2 * half;
+  work.high.resize(static_cast<std::size_t>(rows) * static_cast<std::size_t>(width));
+  work.low.resize(work.high.size());
+  std::uint16_t* high = work.high.data();
+  std::uint16_t* low = work.low.data();
+  const std::uint16_t* k = kernel.data();
+#if defined(__SSE2__)
+  if (width >= 8) {
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i byte = _mm_set1_epi16(0xFF);
+    const __m128i round = _mm_set1_epi16(128);
+    __m128i weight[16];
+    for (int j = 0; j <= half; ++j) weight[j] = _mm_set1_epi16(static_cast<short>(k[j]));
+    for (int y = 0; y < rows; ++y) {
+      const std::uint8_t* s = base + y * step;
+      for (int x = 0;; x = std::min(x + 8, width - 8)) {
+        auto at = [&](int i) {
+          return _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + x + i)), zero);
+        };
+        __m128i sum = _mm_mullo_epi16(at(half), weight[half]);
+        for (int i = 0; i < half; ++i) {
+          sum = _mm_add_epi16(sum, _mm_mullo_epi16(_mm_add_epi16(at(i), at(n - 1 - i)), weight[i]));
+        }
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(high + y * width + x), _mm_srli_epi16(sum, 8));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(low + y * width + x), _mm_and_si128(sum, byte));
+        if (x + 8 >= width) break;
+      }
+    }
+    for (int y = 0; y < square.height; ++y) {
+      for (int x = 0;; x = std::min(x + 8, width - 8)) {
+        auto column = [&](const std::uint16_t* plane, int j) {
+          return _mm_loadu_si128(reinterpret_cast<const __m128i*>(plane + (y + j) * width + x));
+        };
+        __m128i a = _mm_mullo_epi16(column(high, half), weight[half]);
+        __m128i b = _mm_mullo_epi16(column(low, half), weight[half]);
+        for (int j = 0; j < half; ++j) {
+          a = _mm_add_epi16(a, _mm_mullo_epi16(_mm_add_epi16(column(high, j), column(high, n - 1 - j)), weight[j]));
+          b = _mm_add_epi16(b, _mm_mullo_epi16(_mm_add_epi16(column(low, j), column(low, n - 1 - j)), weight[j]));
+        }
+        const __m128i v = _mm_srli_epi16(_mm_add_epi16(_mm_add_epi16(a, _mm_srli_epi16(b, 8)), round), 8);
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(out + y * out_step + x), _mm_packus_epi16(v, v));
+        if (x + 8 >= width) break;
+      }
+    }
+    return;
+  }
+#endif
+  for (int y = 0; y < rows; ++y) {
+    const std::uint8_t* s = base + y * step;
+    for (int x = 0; x < width; ++x) {
+      std::uint32_t sum = 0;
+      for (int i = 0; i < n; ++i) sum += k[i] * s[x + i];
+      high[y * width + x] = static_cast<std::uint16_t>(sum >> 8);
+      low[y * width + x] = static_cast<std::uint16_t>(sum & 255);
+    }
+  }
+  for (int y = 0; y < square.height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      std::uint32_t sum = 1u << 15;
+      for (int j = 0; j < n; ++j) {
+        sum += k[j] * (256u * high[(y + j) * width + x] + low[(y + j) * width + x]);
+      }
+      out[y * out_step + x] = static_cast<std::uint8_t>(sum >> 16);
+    }
+  }
+}
+
 /// Writes the smoothing (file comment) of the pixels of `square` (inside `level`) into the same
-/// pixels of `out` (of the level's size).
+/// pixels of `out` (of the level's size). The kernel has at most 31 taps.
 inline void smooth_square_q8(const cv::Mat& level, cv::Rect square, const std::vector<std::uint16_t>& kernel,
                              GaussianQ8Work& work, cv::Mat& out) {
-  const int n = static_cast<int>(kernel.size());
-  const int r = n / 2;
+  const int r = static_cast<int>(kernel.size()) / 2;
   const cv::Rect source(square.x - r, square.y - r, square.width + 2 * r, square.height + 2 * r);
   const cv::Rect bounds(0, 0, level.cols, level.rows);
   const std::uint8_t* base = nullptr;
@@ -117,65 +197,12 @@ inline void smooth_square_q8(const cv::Mat& level, cv::Rect square, const std::v
     base = work.tile.ptr<std::uint8_t>(0);
     step = static_cast<std::ptrdiff_t>(work.tile.step[0]);
   }
-  const int width = square.width;
-  work.rows.resize(static_cast<std::size_t>(source.height) * static_cast<std::size_t>(width));
-  std::uint16_t* h = work.rows.data();
-  // x pass (sums below 2^16: 255·256 at most).
-  for (int y = 0; y < source.height; ++y) {
-    const std::uint8_t* s = base + y * step;
-    std::uint16_t* d = h + static_cast<std::ptrdiff_t>(y) * width;
-#if defined(__SSE2__)
-    if (width >= 8) {
-      const __m128i zero = _mm_setzero_si128();
-      for (int x = 0;; x = std::min(x + 8, width - 8)) {
-        __m128i sum = zero;
-        for (int i = 0; i < n; ++i) {
-          const __m128i v = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + x + i)), zero);
-          sum = _mm_add_epi16(
-              sum, _mm_mullo_epi16(v, _mm_set1_epi16(static_cast<short>(kernel[static_cast<std::size_t>(i)]))));
-        }
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(d + x), sum);
-        if (x + 8 >= width) break;
-      }
-      continue;
-    }
-#endif
-    for (int x = 0; x < width; ++x) {
-      std::uint32_t sum = 0;
-      for (int i = 0; i < n; ++i) sum += kernel[static_cast<std::size_t>(i)] * s[x + i];
-      d[x] = static_cast<std::uint16_t>(sum);
-    }
-  }
-  // y pass in 32 bits, one rounding.
-  for (int y = 0; y < square.height; ++y) {
-    std::uint8_t* d = out.ptr<std::uint8_t>(square.y + y) + square.x;
-    const std::uint16_t* column = h + static_cast<std::ptrdiff_t>(y) * width;
-#if defined(__SSE2__)
-    if (width >= 8) {
-      const __m128i round = _mm_set1_epi32(1 << 15);
-      for (int x = 0;; x = std::min(x + 8, width - 8)) {
-        __m128i lo = round;
-        __m128i hi = round;
-        for (int j = 0; j < n; ++j) {
-          const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(column + j * width + x));
-          const __m128i k = _mm_set1_epi16(static_cast<short>(kernel[static_cast<std::size_t>(j)]));
-          const __m128i p_lo = _mm_mullo_epi16(v, k);
-          const __m128i p_hi = _mm_mulhi_epu16(v, k);
-          lo = _mm_add_epi32(lo, _mm_unpacklo_epi16(p_lo, p_hi));
-          hi = _mm_add_epi32(hi, _mm_unpackhi_epi16(p_lo, p_hi));
-        }
-        const __m128i words = _mm_packs_epi32(_mm_srli_epi32(lo, 16), _mm_srli_epi32(hi, 16));
-        _mm_storel_epi64(reinterpret_cast<__m128i*>(d + x), _mm_packus_epi16(words, words));
-        if (x + 8 >= width) break;
-      }
-      continue;
-    }
-#endif
-    for (int x = 0; x < width; ++x) {
-      std::uint32_t sum = 1u << 15;
-      for (int j = 0; j < n; ++j) sum += kernel[static_cast<std::size_t>(j)] * column[j * width + x];
-      d[x] = static_cast<std::uint8_t>(sum >> 16);
-    }
+  std::uint8_t* target = out.ptr<std::uint8_t>(square.y) + square.x;
+  const std::ptrdiff_t target_step = static_cast<std::ptrdiff_t>(out.step[0]);
+  if (kernel.size() == 7) {
+    smooth_rows_q8<7>(base, step, square.size(), kernel, work, target, target_step);
+  } else {
+    smooth_rows_q8<0>(base, step, square.size(), kernel, work, target, target_step);
   }
 }
 

@@ -279,3 +279,26 @@ TEST_CASE("suppression on row spans keeps the rectangle's maxima that lie on the
     }
   }
 }
+
+TEST_CASE("the SSE2 suppression row equals the scalar reference, ties included") {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    // Score maps with few distinct values (many ties) and with mostly zeros.
+    cv::Mat scores = random_image(101, 23, seed, seed % 2 ? 3 : 9);
+    if (seed > 3) scores.setTo(0, random_image(101, 23, seed + 7, 2) == 0);
+    for (int threshold : {1, 40, 200}) {
+      for (int y = 1; y < scores.rows - 1; ++y) {
+        for (const auto& [x0, x1] : {std::pair<int, int>(1, 100), {5, 38}, {17, 33}, {40, 41}}) {
+          std::vector<affine_orb::Corner> expected;
+          std::vector<affine_orb::Corner> got;
+          affine_orb::detail::non_max_row_scalar(scores, y, x0, x1, threshold, expected);
+          affine_orb::detail::non_max_row(scores, y, x0, x1, threshold, got);
+          REQUIRE(got.size() == expected.size());
+          for (std::size_t i = 0; i < got.size(); ++i) {
+            CHECK(got[i].x == expected[i].x);
+            CHECK(got[i].score == expected[i].score);
+          }
+        }
+      }
+    }
+  }
+}

@@ -152,43 +152,58 @@ inline __m128i arc_strength_sse2(const std::uint8_t* p, const std::array<std::pt
   return strength;
 }
 
-/// SSE2 scoring of pixels [x0, x1) of one row, 16 at a time, equal to score_row_scalar() bit for
-/// bit: saturated differences, arc minima by doubling (runs of 2, 4, 8, then 9), max over starts.
-inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
-                           int threshold, std::uint8_t* out) {
-  const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
+/// The FAST scores of the 16 pixels at p[0, 16) (see score_row_scalar()), all 0 when none passes
+/// the test of pixels 0, 4, 8 and 12.
+inline __m128i score_chunk_sse2(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset, __m128i t) {
   const __m128i one = _mm_set1_epi8(1);
   const __m128i zero = _mm_setzero_si128();
+  auto load = [p](std::ptrdiff_t o) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + o)); };
+  const __m128i v = load(0);
+  const __m128i hi = _mm_adds_epu8(v, t);
+  const __m128i lo = _mm_subs_epu8(v, t);
+  auto brighter = [&](__m128i a) { return _mm_subs_epu8(a, hi); };  // non-zero where a > hi
+  auto darker = [&](__m128i a) { return _mm_subs_epu8(lo, a); };    // non-zero where a < lo
+  const __m128i c0 = load(offset[0]), c4 = load(offset[4]), c8 = load(offset[8]), c12 = load(offset[12]);
+  auto both = [&](__m128i a, __m128i b) {  // non-zero lanes: a and b both non-zero
+    return _mm_andnot_si128(_mm_or_si128(_mm_cmpeq_epi8(a, zero), _mm_cmpeq_epi8(b, zero)), _mm_set1_epi8(-1));
+  };
+  const __m128i possible =
+      _mm_or_si128(both(_mm_or_si128(brighter(c0), brighter(c8)), _mm_or_si128(brighter(c4), brighter(c12))),
+                   both(_mm_or_si128(darker(c0), darker(c8)), _mm_or_si128(darker(c4), darker(c12))));
+  if (_mm_movemask_epi8(possible) == 0) return zero;
+  const __m128i strength = _mm_max_epu8(arc_strength_sse2<true>(p, offset, v), arc_strength_sse2<false>(p, offset, v));
+  const __m128i not_corner = _mm_cmpeq_epi8(_mm_subs_epu8(strength, t), zero);  // strength <= t
+  return _mm_andnot_si128(not_corner, _mm_subs_epu8(strength, one));
+}
+
+/// SSE2 scoring of pixels [x0, x1) of one row, 16 at a time, equal to score_row_scalar() bit for
+/// bit. [lo, hi) ⊇ [x0, x1) are the columns whose circle lies inside the image: a run shorter
+/// than 16 is scored as the 16 pixels from clamp(x0, lo, hi − 16) and only its own lanes are
+/// stored (the scalar path remains for rows narrower than 16 such columns).
+inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                           int lo, int hi, int threshold, std::uint8_t* out) {
+  const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
+  if (x1 <= x0) return;
   if (x1 - x0 < 16) {
-    score_row_scalar(row, offset, x0, x1, threshold, out);
+    if (hi - lo < 16) {
+      score_row_scalar(row, offset, x0, x1, threshold, out);
+      return;
+    }
+    const int c = std::clamp(x0, lo, hi - 16);
+    const __m128i lane = _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    // Lanes i with x0 − c <= i < x1 − c (signed compares of small values).
+    const __m128i keep = _mm_andnot_si128(_mm_cmpgt_epi8(_mm_set1_epi8(static_cast<char>(x0 - c)), lane),
+                                          _mm_cmpgt_epi8(_mm_set1_epi8(static_cast<char>(x1 - c)), lane));
+    const __m128i scores = score_chunk_sse2(row + c, offset, t);
+    const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(out + c));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c),
+                     _mm_or_si128(_mm_and_si128(keep, scores), _mm_andnot_si128(keep, old)));
     return;
   }
   // The last chunk overlaps the previous one so that it ends exactly at x1: scoring a pixel twice
   // writes the same value, and nothing outside [x0, x1) is touched.
   for (int x = x0;; x = std::min(x + 16, x1 - 16)) {
-    const std::uint8_t* p = row + x;
-    auto load = [p](std::ptrdiff_t o) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + o)); };
-    const __m128i v = load(0);
-    const __m128i hi = _mm_adds_epu8(v, t);
-    const __m128i lo = _mm_subs_epu8(v, t);
-    auto brighter = [&](__m128i a) { return _mm_subs_epu8(a, hi); };  // non-zero where a > hi
-    auto darker = [&](__m128i a) { return _mm_subs_epu8(lo, a); };    // non-zero where a < lo
-    const __m128i c0 = load(offset[0]), c4 = load(offset[4]), c8 = load(offset[8]), c12 = load(offset[12]);
-    auto both = [&](__m128i a, __m128i b) {  // non-zero lanes: a and b both non-zero
-      return _mm_andnot_si128(_mm_or_si128(_mm_cmpeq_epi8(a, zero), _mm_cmpeq_epi8(b, zero)), _mm_set1_epi8(-1));
-    };
-    const __m128i possible =
-        _mm_or_si128(both(_mm_or_si128(brighter(c0), brighter(c8)), _mm_or_si128(brighter(c4), brighter(c12))),
-                     both(_mm_or_si128(darker(c0), darker(c8)), _mm_or_si128(darker(c4), darker(c12))));
-    if (_mm_movemask_epi8(possible) == 0) {
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), zero);
-      if (x + 16 >= x1) break;
-      continue;
-    }
-    const __m128i strength =
-        _mm_max_epu8(arc_strength_sse2<true>(p, offset, v), arc_strength_sse2<false>(p, offset, v));
-    const __m128i not_corner = _mm_cmpeq_epi8(_mm_subs_epu8(strength, t), zero);  // strength <= t
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm_andnot_si128(not_corner, _mm_subs_epu8(strength, one)));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), score_chunk_sse2(row + x, offset, t));
     if (x + 16 >= x1) break;
   }
 }
@@ -225,8 +240,8 @@ inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, 
   const std::array<std::ptrdiff_t, 16> offset = detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
 #if defined(__SSE2__)
-    detail::score_row_sse2(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, threshold,
-                           scores.ptr<std::uint8_t>(y));
+    detail::score_row_sse2(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, kFastRadius,
+                           image.cols - kFastRadius, threshold, scores.ptr<std::uint8_t>(y));
 #else
     detail::score_row_scalar(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, threshold,
                              scores.ptr<std::uint8_t>(y));
@@ -271,7 +286,7 @@ inline void score_spans(const cv::Mat& image, const RowSpans& region, int thresh
     std::memset(out + x0, 0, static_cast<std::size_t>(s0 - x0));
     std::memset(out + s1, 0, static_cast<std::size_t>(x1 - s1));
 #if defined(__SSE2__)
-    score_row_sse2(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
+    score_row_sse2(image.ptr<std::uint8_t>(y), offset, s0, s1, kFastRadius, image.cols - kFastRadius, threshold, out);
 #else
     score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
 #endif
@@ -302,8 +317,10 @@ struct Corner {
 namespace detail {
 
 /// The local maxima of row y, columns [x0, x1), of a score map, appended to `corners`; see
-/// non_max_suppression(). The caller keeps the columns and rows one pixel inside the map.
-inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
+/// non_max_suppression(). The caller keeps the columns and rows one pixel inside the map. The
+/// scalar reference.
+inline void non_max_row_scalar(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                               std::vector<Corner>& corners) {
   const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
   const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
   const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
@@ -324,6 +341,48 @@ inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int thresh
       corners.push_back({x, y, s});
     }
   }
+}
+
+#if defined(__SSE2__)
+/// non_max_row_scalar() 16 pixels at a time, the same corners in the same order: in saturated
+/// arithmetic a > b iff (a − b) != 0 and a >= b iff (b − a) == 0, so a pixel is a maximum iff the
+/// minimum of its four strict differences is non-zero and the maximum of its four others (and of
+/// threshold − s) is zero.
+inline void non_max_row_sse2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                             std::vector<Corner>& corners) {
+  const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
+  const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
+  const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
+  auto load = [](const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); };
+  int x = x0;
+  for (; x + 16 <= x1; x += 16) {
+    const __m128i s = load(row + x);
+    if (_mm_movemask_epi8(_mm_cmpeq_epi8(s, zero)) == 0xFFFF) continue;
+    __m128i strict = _mm_min_epu8(_mm_subs_epu8(s, load(above + x - 1)), _mm_subs_epu8(s, load(above + x)));
+    strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(above + x + 1)));
+    strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(row + x - 1)));
+    __m128i loose = _mm_max_epu8(_mm_subs_epu8(load(row + x + 1), s), _mm_subs_epu8(load(below + x - 1), s));
+    loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below + x), s));
+    loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below + x + 1), s));
+    loose = _mm_max_epu8(loose, _mm_subs_epu8(t, s));
+    int mask = _mm_movemask_epi8(_mm_andnot_si128(_mm_cmpeq_epi8(strict, zero), _mm_cmpeq_epi8(loose, zero)));
+    for (int i = 0; mask != 0; ++i, mask >>= 1) {
+      if (mask & 1) corners.push_back({x + i, y, row[x + i]});
+    }
+  }
+  non_max_row_scalar(scores, y, x, x1, threshold, corners);
+}
+#endif
+
+/// non_max_row_sse2() where the target has SSE2, else the scalar reference.
+inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
+#if defined(__SSE2__)
+  non_max_row_sse2(scores, y, x0, x1, threshold, corners);
+#else
+  non_max_row_scalar(scores, y, x0, x1, threshold, corners);
+#endif
 }
 
 /// non_max_suppression() on row spans without the argument check.

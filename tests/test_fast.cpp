@@ -302,3 +302,36 @@ TEST_CASE("the SSE2 suppression row equals the scalar reference, ties included")
     }
   }
 }
+
+TEST_CASE("every compiled SIMD row path of FAST equals the scalar reference") {
+  const cv::Mat noise = random_image(150, 12, 33, 256);
+  const cv::Mat coarse = random_image(150, 12, 34, 3);
+  for (const cv::Mat* image : {&noise, &coarse}) {
+    const auto offset = affine_orb::detail::circle_offsets(static_cast<std::ptrdiff_t>(image->step[0]));
+    const std::uint8_t* row = image->ptr<std::uint8_t>(6);
+    const int lo = 3;
+    const int hi = image->cols - 3;
+    for (int threshold : {1, 9, 30}) {
+      for (int x0 = lo; x0 < hi; x0 += 7) {
+        for (int x1 = x0; x1 <= hi; x1 += 5) {
+          std::vector<std::uint8_t> expected(static_cast<std::size_t>(image->cols), 99);
+          affine_orb::detail::score_row_scalar(row, offset, x0, x1, threshold, expected.data());
+          std::vector<std::vector<std::uint8_t>> paths;
+#if defined(__SSE2__)
+          paths.emplace_back(static_cast<std::size_t>(image->cols), 99);
+          affine_orb::detail::score_row_sse2(row, offset, x0, x1, lo, hi, threshold, paths.back().data());
+#endif
+#if defined(__AVX2__)
+          paths.emplace_back(static_cast<std::size_t>(image->cols), 99);
+          affine_orb::detail::score_row_avx2(row, offset, x0, x1, lo, hi, threshold, paths.back().data());
+#endif
+          for (const auto& got : paths) {
+            CAPTURE(x0);
+            CAPTURE(x1);
+            CHECK(got == expected);
+          }
+        }
+      }
+    }
+  }
+}

@@ -71,10 +71,16 @@ struct ExtractorOptions {
 /// Extracts keypoints and descriptors from grey images.
 ///
 /// For an image of size W x H and every view v of ExtractorOptions::views (affine_views.hpp):
-/// 1. the view is rendered and a pyramid of PyramidOptions::levels levels is built on it;
-/// 2. on each level, FAST candidates are graded by DetectorOptions; a candidate is kept only if the
-///    descriptor's support (a disc of Descriptor::border() level pixels) maps inside the original
-///    image and the mask pixel nearest to its original position is non-zero;
+/// 1. the view is rendered (render_view()) and a pyramid of PyramidOptions::levels levels is built
+///    on it; for a tilted view, level pixels farther than 8 level pixels from the original image
+///    repeat the nearest computed pixel of their row (only descriptor reads beyond the image, which
+///    are extrapolation anyway, can see them);
+/// 2. on each level, FAST candidates are detected (detect_candidates(), grid cells anchored at the
+///    support border) among the level's valid pixels only: those whose support (a disc of
+///    max(Descriptor::border(), DetectorOptions::support_radius()) level pixels) maps inside the
+///    original image (detail::support_region()); a cell falls back to the minimum threshold when
+///    its valid pixels hold no corner at the initial one. A candidate is kept if the mask pixel
+///    nearest to its original position is non-zero;
 /// 3. with DuplicatePolicy::kMerge, candidates of one level that other views put within
 ///    merge_radius · s^l original pixels of a stronger one are dropped;
 /// 4. the budget is split over views in proportion to their area (1/t) and, within a view, over

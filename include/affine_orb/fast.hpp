@@ -20,6 +20,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/row_spans.hpp"
@@ -112,68 +115,114 @@ inline void score_row_scalar(const std::uint8_t* row, const std::array<std::ptrd
 #define AFFINE_ORB_UNROLL
 #endif
 
-/// arc_strength() of the 16 pixels at p[0, 16) at once, for the bright (c − v) or dark (v − c)
-/// polarity, in saturated 8-bit arithmetic. The 16 windows of 9 contiguous differences are split
-/// at the window length (van Herk / Gil-Werman): with e_i = d_(i mod 16), the window starting at
-/// k <= 8 is min(suffix of e_0..e_8 from k, prefix of e_9..e_17 up to k + 8), and the one starting
-/// at 9 <= k <= 15 is min(suffix of e_9..e_17 from k, prefix of e_18..e_23 up to k + 8). At most
-/// 12 vectors are live, so nothing spills on SSE2's 16 registers.
-template <bool kBright>
-inline __m128i arc_strength_sse2(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset, __m128i v) {
+/// 8-bit lane operations of SSE2 (16 lanes), for the FAST code written once for every width.
+struct Lanes128 {
+  using V = __m128i;
+  static constexpr int kLanes = 16;
+  static V load(const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); }
+  static void store(std::uint8_t* p, V v) { _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v); }
+  static V set1(int v) { return _mm_set1_epi8(static_cast<char>(v)); }
+  static V zero() { return _mm_setzero_si128(); }
+  static V adds(V a, V b) { return _mm_adds_epu8(a, b); }
+  static V subs(V a, V b) { return _mm_subs_epu8(a, b); }
+  static V min(V a, V b) { return _mm_min_epu8(a, b); }
+  static V max(V a, V b) { return _mm_max_epu8(a, b); }
+  static V eq(V a, V b) { return _mm_cmpeq_epi8(a, b); }
+  static V or_(V a, V b) { return _mm_or_si128(a, b); }
+  static V andnot(V a, V b) { return _mm_andnot_si128(a, b); }
+  static bool none(V v) { return _mm_movemask_epi8(v) == 0; }
+};
+
+#if defined(__AVX2__)
+/// 8-bit lane operations of AVX2 (32 lanes).
+struct Lanes256 {
+  using V = __m256i;
+  static constexpr int kLanes = 32;
+  static V load(const std::uint8_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p)); }
+  static void store(std::uint8_t* p, V v) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v); }
+  static V set1(int v) { return _mm256_set1_epi8(static_cast<char>(v)); }
+  static V zero() { return _mm256_setzero_si256(); }
+  static V adds(V a, V b) { return _mm256_adds_epu8(a, b); }
+  static V subs(V a, V b) { return _mm256_subs_epu8(a, b); }
+  static V min(V a, V b) { return _mm256_min_epu8(a, b); }
+  static V max(V a, V b) { return _mm256_max_epu8(a, b); }
+  static V eq(V a, V b) { return _mm256_cmpeq_epi8(a, b); }
+  static V or_(V a, V b) { return _mm256_or_si256(a, b); }
+  static V andnot(V a, V b) { return _mm256_andnot_si256(a, b); }
+  static bool none(V v) { return _mm256_movemask_epi8(v) == 0; }
+};
+#endif
+
+/// arc_strength() of the L pixels at p[0, L) at once (L = S::kLanes), for the bright (c − v) or
+/// dark (v − c) polarity, in saturated 8-bit arithmetic. The 16 windows of 9 contiguous
+/// differences are split at the window length (van Herk / Gil-Werman): with e_i = d_(i mod 16),
+/// the window starting at k <= 8 is min(suffix of e_0..e_8 from k, prefix of e_9..e_17 up to
+/// k + 8), and the one starting at 9 <= k <= 15 is min(suffix of e_9..e_17 from k, prefix of
+/// e_18..e_23 up to k + 8). At most 12 vectors are live, so nothing spills on 16 registers.
+template <class S, bool kBright>
+inline typename S::V arc_strength_simd(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset,
+                                       typename S::V v) {
+  using V = typename S::V;
   auto e = [&](int i) {
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + offset[static_cast<std::size_t>(i & 15)]));
-    return kBright ? _mm_subs_epu8(c, v) : _mm_subs_epu8(v, c);
+    const V c = S::load(p + offset[static_cast<std::size_t>(i & 15)]);
+    return kBright ? S::subs(c, v) : S::subs(v, c);
   };
-  __m128i suffix[9];
+  V suffix[9];
   // Windows 0..8: suffixes of block e_0..e_8, running prefix of block e_9..e_17.
   suffix[8] = e(8);
   AFFINE_ORB_UNROLL
-  for (int k = 7; k >= 0; --k) suffix[k] = _mm_min_epu8(e(k), suffix[k + 1]);
-  __m128i strength = suffix[0];
-  __m128i prefix = e(9);
-  strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[1], prefix));
+  for (int k = 7; k >= 0; --k) suffix[k] = S::min(e(k), suffix[k + 1]);
+  V strength = suffix[0];
+  V prefix = e(9);
+  strength = S::max(strength, S::min(suffix[1], prefix));
   AFFINE_ORB_UNROLL
   for (int k = 2; k <= 8; ++k) {
-    prefix = _mm_min_epu8(prefix, e(k + 8));
-    strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[k], prefix));
+    prefix = S::min(prefix, e(k + 8));
+    strength = S::max(strength, S::min(suffix[k], prefix));
   }
   // Windows 9..15: suffixes of block e_9..e_17 (suffix[j] holds e_(9+j)..e_17), prefix of e_18...
   suffix[8] = e(17);
   AFFINE_ORB_UNROLL
-  for (int j = 7; j >= 0; --j) suffix[j] = _mm_min_epu8(e(9 + j), suffix[j + 1]);
-  strength = _mm_max_epu8(strength, suffix[0]);
+  for (int j = 7; j >= 0; --j) suffix[j] = S::min(e(9 + j), suffix[j + 1]);
+  strength = S::max(strength, suffix[0]);
   prefix = e(18);
-  strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[1], prefix));
+  strength = S::max(strength, S::min(suffix[1], prefix));
   AFFINE_ORB_UNROLL
   for (int j = 2; j <= 6; ++j) {
-    prefix = _mm_min_epu8(prefix, e(j + 17));
-    strength = _mm_max_epu8(strength, _mm_min_epu8(suffix[j], prefix));
+    prefix = S::min(prefix, e(j + 17));
+    strength = S::max(strength, S::min(suffix[j], prefix));
   }
   return strength;
 }
 
-/// The FAST scores of the 16 pixels at p[0, 16) (see score_row_scalar()), all 0 when none passes
-/// the test of pixels 0, 4, 8 and 12.
-inline __m128i score_chunk_sse2(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset, __m128i t) {
-  const __m128i one = _mm_set1_epi8(1);
-  const __m128i zero = _mm_setzero_si128();
-  auto load = [p](std::ptrdiff_t o) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + o)); };
-  const __m128i v = load(0);
-  const __m128i hi = _mm_adds_epu8(v, t);
-  const __m128i lo = _mm_subs_epu8(v, t);
-  auto brighter = [&](__m128i a) { return _mm_subs_epu8(a, hi); };  // non-zero where a > hi
-  auto darker = [&](__m128i a) { return _mm_subs_epu8(lo, a); };    // non-zero where a < lo
-  const __m128i c0 = load(offset[0]), c4 = load(offset[4]), c8 = load(offset[8]), c12 = load(offset[12]);
-  auto both = [&](__m128i a, __m128i b) {  // non-zero lanes: a and b both non-zero
-    return _mm_andnot_si128(_mm_or_si128(_mm_cmpeq_epi8(a, zero), _mm_cmpeq_epi8(b, zero)), _mm_set1_epi8(-1));
+/// The FAST scores of the L pixels at p[0, L) (see score_row_scalar()), all 0 when none passes the
+/// test of pixels 0, 4, 8 and 12.
+template <class S>
+inline typename S::V score_chunk_simd(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset,
+                                      typename S::V t) {
+  using V = typename S::V;
+  const V zero = S::zero();
+  const V v = S::load(p);
+  const V hi = S::adds(v, t);
+  const V lo = S::subs(v, t);
+  auto brighter = [&](V a) { return S::subs(a, hi); };  // non-zero where a > hi
+  auto darker = [&](V a) { return S::subs(lo, a); };    // non-zero where a < lo
+  const V c0 = S::load(p + offset[0]), c4 = S::load(p + offset[4]), c8 = S::load(p + offset[8]),
+          c12 = S::load(p + offset[12]);
+  auto both = [&](V a, V b) {  // non-zero lanes: a and b both non-zero
+    return S::andnot(S::or_(S::eq(a, zero), S::eq(b, zero)), S::set1(-1));
   };
-  const __m128i possible =
-      _mm_or_si128(both(_mm_or_si128(brighter(c0), brighter(c8)), _mm_or_si128(brighter(c4), brighter(c12))),
-                   both(_mm_or_si128(darker(c0), darker(c8)), _mm_or_si128(darker(c4), darker(c12))));
-  if (_mm_movemask_epi8(possible) == 0) return zero;
-  const __m128i strength = _mm_max_epu8(arc_strength_sse2<true>(p, offset, v), arc_strength_sse2<false>(p, offset, v));
-  const __m128i not_corner = _mm_cmpeq_epi8(_mm_subs_epu8(strength, t), zero);  // strength <= t
-  return _mm_andnot_si128(not_corner, _mm_subs_epu8(strength, one));
+  const V possible = S::or_(both(S::or_(brighter(c0), brighter(c8)), S::or_(brighter(c4), brighter(c12))),
+                            both(S::or_(darker(c0), darker(c8)), S::or_(darker(c4), darker(c12))));
+  if (S::none(possible)) return zero;
+  const V strength = S::max(arc_strength_simd<S, true>(p, offset, v), arc_strength_simd<S, false>(p, offset, v));
+  const V not_corner = S::eq(S::subs(strength, t), zero);  // strength <= t
+  return S::andnot(not_corner, S::subs(strength, S::set1(1)));
+}
+
+/// score_chunk_simd() on 16 lanes.
+inline __m128i score_chunk_sse2(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset, __m128i t) {
+  return score_chunk_simd<Lanes128>(p, offset, t);
 }
 
 /// SSE2 scoring of pixels [x0, x1) of one row, 16 at a time, equal to score_row_scalar() bit for
@@ -207,6 +256,33 @@ inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdif
     if (x + 16 >= x1) break;
   }
 }
+
+#if defined(__AVX2__)
+/// score_row_sse2() 32 pixels at a time where the run is that long (the last 32 overlapping the
+/// previous ones), identical bytes; shorter runs go to score_row_sse2().
+inline void score_row_avx2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                           int lo, int hi, int threshold, std::uint8_t* out) {
+  if (x1 - x0 < 32) {
+    score_row_sse2(row, offset, x0, x1, lo, hi, threshold, out);
+    return;
+  }
+  const __m256i t = _mm256_set1_epi8(static_cast<char>(threshold));
+  for (int x = x0;; x = std::min(x + 32, x1 - 32)) {
+    Lanes256::store(out + x, score_chunk_simd<Lanes256>(row + x, offset, t));
+    if (x + 32 >= x1) break;
+  }
+}
+#endif
+
+/// score_row_avx2() where the target has AVX2, score_row_sse2() where it has SSE2.
+inline void score_row_simd(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                           int lo, int hi, int threshold, std::uint8_t* out) {
+#if defined(__AVX2__)
+  score_row_avx2(row, offset, x0, x1, lo, hi, threshold, out);
+#else
+  score_row_sse2(row, offset, x0, x1, lo, hi, threshold, out);
+#endif
+}
 #endif
 
 /// The 16 circle offsets in bytes for a row step of `step` bytes.
@@ -227,8 +303,8 @@ inline int fast_score(const std::uint8_t* p, std::ptrdiff_t step) {
 /// Writes the FAST scores of the pixels of `rect` whose score is at least `threshold` into the
 /// CV_8UC1 map `scores` (of the image size), 0 for the other pixels of `rect`; pixels outside `rect`
 /// are left as they are. `rect` is clipped to the pixels whose circle lies inside the image.
-/// Uses SSE2 where the target has it (every x86-64), a scalar loop elsewhere; both write identical
-/// maps.
+/// Uses AVX2 or SSE2 where the target has them (SSE2: every x86-64), a scalar loop elsewhere; all
+/// write identical maps.
 inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, cv::Mat& scores) {
   detail::require_gray8(image, "fast_score_rect");
   detail::require(threshold >= 1 && threshold <= 255,
@@ -240,7 +316,7 @@ inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, 
   const std::array<std::ptrdiff_t, 16> offset = detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
 #if defined(__SSE2__)
-    detail::score_row_sse2(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, kFastRadius,
+    detail::score_row_simd(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, kFastRadius,
                            image.cols - kFastRadius, threshold, scores.ptr<std::uint8_t>(y));
 #else
     detail::score_row_scalar(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, threshold,
@@ -286,7 +362,7 @@ inline void score_spans(const cv::Mat& image, const RowSpans& region, int thresh
     std::memset(out + x0, 0, static_cast<std::size_t>(s0 - x0));
     std::memset(out + s1, 0, static_cast<std::size_t>(x1 - s1));
 #if defined(__SSE2__)
-    score_row_sse2(image.ptr<std::uint8_t>(y), offset, s0, s1, kFastRadius, image.cols - kFastRadius, threshold, out);
+    score_row_simd(image.ptr<std::uint8_t>(y), offset, s0, s1, kFastRadius, image.cols - kFastRadius, threshold, out);
 #else
     score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
 #endif

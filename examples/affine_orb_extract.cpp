@@ -71,14 +71,11 @@ Report run(const cv::Mat& image, affine_orb::ExtractorOptions options, int repea
 int main(int argc, char** argv) {
   try {
     affine_orb::examples::Args args(argc, argv);
-    if (args.flag("--help") || args.flag("-h")) {
+    affine_orb::ExtractorOptions options;
+    if (affine_orb::examples::parse_common(args, options)) {
       std::fputs(kUsage, stdout);
       return 0;
     }
-    affine_orb::ExtractorOptions options;
-    options.features = args.integer("--features", options.features);
-    options.views.max_tilt = args.real("--max-tilt", options.views.max_tilt);
-    options.threads = args.integer("--threads", options.threads);
     const std::string descriptor = args.value("--descriptor", "rbrief");
     const int repeat = args.integer("--repeat", 1);
     const std::string out = args.value("--out", "");

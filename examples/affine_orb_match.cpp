@@ -172,14 +172,13 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const affine_orb::Extr
 int main(int argc, char** argv) {
   try {
     affine_orb::examples::Args args(argc, argv);
-    if (args.flag("--help") || args.flag("-h")) {
+    affine_orb::ExtractorOptions options;
+    options.features = 2000;
+    options.threads = 2;
+    if (affine_orb::examples::parse_common(args, options)) {
       std::fputs(kUsage, stdout);
       return 0;
     }
-    affine_orb::ExtractorOptions options;
-    options.features = args.integer("--features", 2000);
-    options.views.max_tilt = args.real("--max-tilt", options.views.max_tilt);
-    options.threads = args.integer("--threads", 2);
     const std::string descriptor = args.value("--descriptor", "rbrief");
     std::string homography = args.value("--homography", "");
     const std::string out = args.value("--out", "");

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "affine_orb/extractor.hpp"
+
 namespace affine_orb::examples {
 
 /// Command-line arguments: positional ones and `--name value` / `--flag` options.
@@ -63,6 +65,16 @@ class Args {
  private:
   std::vector<std::string> args_;
 };
+
+/// Consumes `--help`/`-h` (true when given) and the extractor flags shared by the examples:
+/// --features N, --max-tilt T, --threads K, starting from `options`.
+inline bool parse_common(Args& args, ExtractorOptions& options) {
+  const bool help = args.flag("--help") || args.flag("-h");
+  options.features = args.integer("--features", options.features);
+  options.views.max_tilt = args.real("--max-tilt", options.views.max_tilt);
+  options.threads = args.integer("--threads", options.threads);
+  return help;
+}
 
 inline double median(std::vector<double> values) {
   if (values.empty()) return 0.0;

@@ -1,0 +1,439 @@
+#pragma once
+/// \file
+/// The implementation shared by the ORB-SLAM2 and ORB-SLAM3 drop-in extractors (internal: the
+/// adapters' ORBextractor.cc files include it; ORB-SLAM code never sees it).
+///
+/// AdapterCore runs affine_orb::Extractor (the image's keypoints, plus the tilted views' with the
+/// views on, see AdapterCore) and turns its output into what ORB-SLAM's Frame, Tracking,
+/// ORBmatcher, MapPoint and stereo matching rely on (SPEC §6):
+/// - `octave` o means σ = s^o: a keypoint found on level l of a view of tilt t has the scale
+///   s^l·√t (SPEC §1), so o = round(l + log √t / log s), clamped to [0, nlevels); `size` = 31·s^o;
+/// - keypoints grouped by octave, level 0 first (within an octave: the image's keypoints, then the
+///   views', each in the extractor's order), descriptor row i belonging to keypoint i, N x 32 CV_8U;
+/// - every keypoint at least kBorderMargin pixels inside mvImagePyramid[o] at round(pt / s^o),
+///   others dropped: the 11x11 window of stereo matching (radius kStereoWindowRadius) plus its
+///   search range (kStereoSearchRadius) fit in the level;
+/// - the pyramid is the original image's, level l of size round(W/s^l) x round(H/s^l), copied so
+///   that it stays valid after the next frame.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdlib>
+#include <locale>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/affine_views.hpp"
+#include "affine_orb/brisk.hpp"
+#include "affine_orb/detail/check.hpp"
+#include "affine_orb/extractor.hpp"
+#include "affine_orb/features.hpp"
+#include "affine_orb/rbrief.hpp"
+#include "affine_orb_adapter/options.hpp"
+
+namespace affine_orb::adapters {
+
+/// Half side of the SAD window ORB-SLAM2/3 stereo matching cuts around a keypoint at its octave
+/// (Frame::ComputeStereoMatches: an 11x11 window, w = 5).
+inline constexpr int kStereoWindowRadius = 5;
+/// Search range of that window along the row, in level pixels (L = 5 in the same function).
+inline constexpr int kStereoSearchRadius = 5;
+/// Distance in level pixels every output keypoint keeps from the borders of mvImagePyramid[octave].
+inline constexpr int kBorderMargin = kStereoWindowRadius + kStereoSearchRadius;
+/// Bytes per descriptor row: ORBmatcher::DescriptorDistance reads 8 x int32, DBoW2's FORB 32 bytes.
+inline constexpr int kDescriptorBytes = 32;
+/// ORB's patch diameter: ORB-SLAM's keypoint size is 31·s^octave.
+inline constexpr float kOrbPatchSize = 31.0f;
+
+/// ORB-SLAM's per-level tables for scale factor s, levels i = 0 … n−1: s^i, 1/s^i, s^(2i), 1/s^(2i).
+/// Computed in float by repeated multiplication, the way ORB-SLAM's callers expect them.
+struct ScaleTables {
+  std::vector<float> factors;
+  std::vector<float> inverse_factors;
+  std::vector<float> sigma2;
+  std::vector<float> inverse_sigma2;
+};
+
+inline ScaleTables make_scale_tables(float scale_factor, int levels) {
+  ScaleTables t;
+  const auto n = static_cast<std::size_t>(std::max(levels, 0));
+  t.factors.resize(n);
+  t.inverse_factors.resize(n);
+  t.sigma2.resize(n);
+  t.inverse_sigma2.resize(n);
+  float factor = 1.0f;
+  for (std::size_t i = 0; i < n; ++i) {
+    t.factors[i] = factor;
+    t.sigma2[i] = factor * factor;
+    t.inverse_factors[i] = 1.0f / t.factors[i];
+    t.inverse_sigma2[i] = 1.0f / t.sigma2[i];
+    factor *= scale_factor;
+  }
+  return t;
+}
+
+/// The ORB-SLAM octave of a keypoint found on level `level` of a view of tilt `tilt`: the level
+/// whose scale s^o is nearest (in log scale) to the keypoint scale s^level·√tilt, clamped to
+/// [0, levels).
+inline int octave_for(int level, double tilt, double scale_factor, int levels) {
+  const double o = level + 0.5 * std::log(tilt) / std::log(scale_factor);
+  return std::clamp(static_cast<int>(std::lround(o)), 0, levels - 1);
+}
+
+/// Parsing of environment-variable values; a failure throws std::invalid_argument naming the variable.
+namespace detail_env {
+
+inline std::string quoted(const char* text) { return std::string("\"") + text + "\""; }
+
+/// A number as a person writes it ("1", "2.5"), for messages.
+inline std::string format(double value) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << value;
+  return out.str();
+}
+
+inline double parse_number(const char* name, const char* text, double lo, double hi, bool lo_open) {
+  std::istringstream in{std::string(text)};
+  in.imbue(std::locale::classic());
+  double value = 0.0;
+  in >> value;
+  const bool parsed = !in.fail() && (in >> std::ws).eof();
+  const bool in_range = parsed && std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
+  affine_orb::detail::require(in_range, std::string(name) + " must be a number in " + (lo_open ? "(" : "[") +
+                                            format(lo) + ", " + format(hi) + "], got " + quoted(text));
+  return value;
+}
+
+inline int parse_integer(const char* name, const char* text, int lo, int hi) {
+  std::istringstream in{std::string(text)};
+  in.imbue(std::locale::classic());
+  long long value = 0;
+  in >> value;
+  const bool parsed = !in.fail() && (in >> std::ws).eof();
+  affine_orb::detail::require(parsed && value >= lo && value <= hi, std::string(name) + " must be an integer in [" +
+                                                                        std::to_string(lo) + ", " + std::to_string(hi) +
+                                                                        "], got " + quoted(text));
+  return static_cast<int>(value);
+}
+
+}  // namespace detail_env
+
+/// `base` with every set AFFINE_ORB_* environment variable (options.hpp) applied over its field.
+/// Throws std::invalid_argument naming the variable for a malformed or out-of-range value
+/// (an empty value included).
+inline AdapterOptions apply_environment(AdapterOptions base) {
+  if (const char* v = std::getenv(kEnvMaxTilt))
+    base.max_tilt = detail_env::parse_number(kEnvMaxTilt, v, 1.0, 16.0, false);
+  if (const char* v = std::getenv(kEnvDescriptor)) {
+    const std::string s(v);
+    affine_orb::detail::require(
+        s == "rbrief" || s == "brisk",
+        std::string(kEnvDescriptor) + " must be \"rbrief\" or \"brisk\", got " + detail_env::quoted(v));
+    base.descriptor = s == "rbrief" ? AdapterDescriptor::kRbrief : AdapterDescriptor::kBrisk;
+  }
+  if (const char* v = std::getenv(kEnvThreads)) base.threads = detail_env::parse_integer(kEnvThreads, v, 1, 256);
+  if (const char* v = std::getenv(kEnvDuplicates)) {
+    const std::string s(v);
+    affine_orb::detail::require(
+        s == "merge" || s == "keep",
+        std::string(kEnvDuplicates) + " must be \"merge\" or \"keep\", got " + detail_env::quoted(v));
+    base.duplicates = s == "merge" ? AdapterDuplicates::kMerge : AdapterDuplicates::kKeepAll;
+  }
+  if (const char* v = std::getenv(kEnvMergeRadius)) {
+    base.merge_radius = detail_env::parse_number(kEnvMergeRadius, v, 0.0, 64.0, true);
+  }
+  if (const char* v = std::getenv(kEnvViewFeatures)) {
+    base.view_features = detail_env::parse_number(kEnvViewFeatures, v, 0.0, 16.0, false);
+  }
+  base.check();
+  return base;
+}
+
+/// The defaults behind an adapter's static SetAffineOptions()/GetAffineOptions(), guarded by a
+/// mutex: the only shared mutable state of the adapters.
+class DefaultOptionsStore {
+ public:
+  void set(const AdapterOptions& options) {
+    options.check();
+    const std::lock_guard<std::mutex> lock(mutex_);
+    options_ = options;
+  }
+  AdapterOptions get() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return options_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  AdapterOptions options_;
+};
+
+/// One frame's output in ORB-SLAM's layout.
+struct AdapterFrame {
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;           ///< keypoints.size() x 32, CV_8U (empty when there is no keypoint)
+  std::vector<cv::Mat> pyramid;  ///< the original image at each level, owned (not shared)
+};
+
+/// Features to ask of an extractor over all views of `views` so that the views other than the
+/// identity get about `extra` of them: Extractor splits its budget over views in proportion to 1/t
+/// (extractor.hpp), so the identity view takes 1/Σ(1/t) of it. 0 when `views` has no tilted view.
+inline int views_budget(int extra, const AffineViewOptions& views) {
+  double total = 0.0;
+  for (const auto& view : view_parameters(views)) total += 1.0 / view.first;
+  if (extra <= 0 || total <= 1.0) return 0;
+  return static_cast<int>(std::ceil(extra * total / (total - 1.0)));
+}
+
+/// ORB-SLAM's five extractor parameters plus the affine options, checked, and the extractors built
+/// from them. `who` names the adapter class in error messages.
+///
+/// The image itself is extracted as ORB-SLAM2 does (nfeatures keypoints, geometric budget over the
+/// levels): those keypoints are the same with the views on or off, so ORB-SLAM's monocular
+/// initialisation, which matches octave-0 keypoints only, keeps all of its candidates. With the
+/// views on, a second extractor over the views of max_tilt contributes the keypoints of its tilted
+/// views (about view_features · nfeatures of them; its keypoints of the untilted image are dropped),
+/// each mapped to its nearest octave and, with AdapterDuplicates::kMerge, dropped when a keypoint of
+/// the image lies within merge_radius · s^octave pixels at the same octave.
+class AdapterCore {
+ public:
+  AdapterCore(const char* who, int nfeatures, float scale_factor, int nlevels, int ini_th_fast, int min_th_fast,
+              const AdapterOptions& affine)
+      : who_(who), affine_((affine.check(), affine)) {
+    const std::string w(who);
+    affine_orb::detail::require(nfeatures >= 1 && nfeatures <= 1000000,
+                                w + ": nfeatures must be in [1, 1000000], got " + std::to_string(nfeatures));
+    affine_orb::detail::require(std::isfinite(scale_factor) && scale_factor > 1.0f && scale_factor <= 4.0f,
+                                w + ": scaleFactor must be in (1, 4], got " + std::to_string(scale_factor));
+    affine_orb::detail::require(nlevels >= 1 && nlevels <= 32,
+                                w + ": nlevels must be in [1, 32], got " + std::to_string(nlevels));
+    affine_orb::detail::require(ini_th_fast >= 1 && ini_th_fast <= 254,
+                                w + ": iniThFAST must be in [1, 254], got " + std::to_string(ini_th_fast));
+    affine_orb::detail::require(min_th_fast >= 1 && min_th_fast <= ini_th_fast,
+                                w + ": minThFAST must be in [1, iniThFAST], got " + std::to_string(min_th_fast));
+    scale_factor_ = scale_factor;
+    levels_ = nlevels;
+    scales_ = make_scale_tables(scale_factor, nlevels);
+
+    ExtractorOptions plain;
+    plain.features = nfeatures;
+    plain.pyramid.scale_factor = static_cast<double>(scale_factor);
+    plain.pyramid.levels = nlevels;
+    plain.detector.initial_threshold = ini_th_fast;
+    plain.detector.min_threshold = min_th_fast;
+    plain.detector.score = ScoreType::kFast;  // ORB-SLAM ranks by the FAST score
+    plain.views.max_tilt = 1.0;
+
+    ExtractorOptions views = plain;
+    views.views.max_tilt = affine.max_tilt;
+    views.duplicates =
+        affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;
+    views.merge_radius = affine.merge_radius;
+    views.threads = affine.threads;
+    const int extra = static_cast<int>(std::lround(affine.view_features * nfeatures));
+    views.features = std::min(views_budget(extra, views.views), 1000000);
+    if (affine.descriptor == AdapterDescriptor::kRbrief) {
+      build(rbrief_, plain, views);
+    } else {
+      build(brisk_, plain, views);
+    }
+  }
+
+  const AdapterOptions& affine_options() const { return affine_; }
+  const ScaleTables& scales() const { return scales_; }
+  int levels() const { return levels_; }
+  float scale_factor() const { return scale_factor_; }
+  /// Whether the tilted views contribute keypoints (max_tilt reaches the first tilt and
+  /// view_features · nfeatures >= 1).
+  bool views_on() const { return rbrief_ ? rbrief_->views.has_value() : brisk_->views.has_value(); }
+
+  /// Checks the image and mask: nullopt for an empty image (ORB-SLAM's "return, outputs untouched");
+  /// std::invalid_argument for a type other than CV_8UC1 or a mask that is neither empty nor CV_8UC1
+  /// of the image size (non-zero = allowed, as affine_orb::Extractor::extract).
+  std::optional<AdapterFrame> run(const cv::Mat& image, const cv::Mat& mask) {
+    if (image.empty()) return std::nullopt;
+    affine_orb::detail::require_gray8(image, who_);
+    affine_orb::detail::require_mask(mask, image.size(), who_);
+    return rbrief_ ? convert(*rbrief_, image, mask) : convert(*brisk_, image, mask);
+  }
+
+ private:
+  /// The image's extractor and, with the views on, the views' extractor.
+  template <class Descriptor>
+  struct Extractors {
+    Extractor<Descriptor> plain;
+    std::optional<Extractor<Descriptor>> views;
+  };
+
+  /// A keypoint chosen for the output: which extractor (0 = the image's, 1 = the views'), its index.
+  struct Pick {
+    int source;
+    std::size_t index;
+  };
+
+  template <class Descriptor>
+  static void build(std::optional<Extractors<Descriptor>>& out, const ExtractorOptions& plain,
+                    const ExtractorOptions& views) {
+    out.emplace(Extractors<Descriptor>{Extractor<Descriptor>(plain), std::nullopt});
+    if (views.features >= 1) out->views.emplace(views);
+  }
+
+  /// Whether the stereo window around keypoint `pt` fits at octave `o` (kBorderMargin).
+  bool fits(cv::Point2f pt, int o, const std::vector<cv::Mat>& pyramid) const {
+    const cv::Mat& level = pyramid[static_cast<std::size_t>(o)];
+    const float inv = scales_.inverse_factors[static_cast<std::size_t>(o)];
+    const int x = cvRound(pt.x * inv);
+    const int y = cvRound(pt.y * inv);
+    return x >= kBorderMargin && y >= kBorderMargin && x <= level.cols - 1 - kBorderMargin &&
+           y <= level.rows - 1 - kBorderMargin;
+  }
+
+  template <class Descriptor>
+  AdapterFrame convert(Extractors<Descriptor>& extractors, const cv::Mat& image, const cv::Mat& mask) const {
+    const Features<Descriptor::kBits> plain = extractors.plain.extract(image, mask);
+    AdapterFrame frame;
+    for (const cv::Mat& level : extractors.plain.pyramid().images()) frame.pyramid.push_back(level.clone());
+
+    std::vector<std::vector<Pick>> by_octave(static_cast<std::size_t>(levels_));
+    // The image's keypoints keep their level as octave.
+    for (std::size_t i = 0; i < plain.size(); ++i) {
+      const cv::KeyPoint& kp = plain.keypoints[i];
+      if (fits(kp.pt, kp.octave, frame.pyramid)) by_octave[static_cast<std::size_t>(kp.octave)].push_back({0, i});
+    }
+    Features<Descriptor::kBits> views;
+    if (extractors.views) {
+      views = extractors.views->extract(image, mask);
+      const std::vector<AffineView> view_set = extractors.views->views();
+      const std::vector<OctaveGrid> grids = octave_grids(plain.keypoints);
+      for (std::size_t i = 0; i < views.size(); ++i) {
+        const AffineView& view = view_set[static_cast<std::size_t>(views.views[i])];
+        if (view.is_identity()) continue;
+        const cv::KeyPoint& kp = views.keypoints[i];
+        const int o = octave_for(kp.octave, view.tilt, static_cast<double>(scale_factor_), levels_);
+        if (!fits(kp.pt, o, frame.pyramid)) continue;
+        if (affine_.duplicates == AdapterDuplicates::kMerge && grids[static_cast<std::size_t>(o)].near(kp.pt)) continue;
+        by_octave[static_cast<std::size_t>(o)].push_back({1, i});
+      }
+    }
+
+    const cv::Mat rows[2] = {descriptors_to_mat(plain.descriptors), descriptors_to_mat(views.descriptors)};
+    const std::vector<cv::KeyPoint>* keypoints[2] = {&plain.keypoints, &views.keypoints};
+    std::size_t n = 0;
+    for (const auto& group : by_octave) n += group.size();
+    frame.keypoints.reserve(n);
+    if (n > 0) frame.descriptors.create(static_cast<int>(n), kDescriptorBytes, CV_8U);
+    for (int o = 0; o < levels_; ++o) {
+      for (const Pick& pick : by_octave[static_cast<std::size_t>(o)]) {
+        cv::KeyPoint kp = (*keypoints[pick.source])[pick.index];
+        kp.octave = o;
+        kp.size = kOrbPatchSize * scales_.factors[static_cast<std::size_t>(o)];
+        // BRISK's 512 bits: the first 256 (bytes 0–31) are kept, see AdapterDescriptor::kBrisk.
+        rows[pick.source]
+            .row(static_cast<int>(pick.index))
+            .colRange(0, kDescriptorBytes)
+            .copyTo(frame.descriptors.row(static_cast<int>(frame.keypoints.size())));
+        frame.keypoints.push_back(kp);
+      }
+    }
+    return frame;
+  }
+
+  /// The image's keypoints of one octave on a grid of cells of the merge radius, for the duplicate
+  /// test of the views' keypoints.
+  struct OctaveGrid {
+    double radius = 1.0;
+    std::unordered_map<long long, std::vector<cv::Point2f>> cells;
+
+    static long long key(long long cx, long long cy) { return cx * 1000003LL + cy; }
+    long long cell(float v) const { return static_cast<long long>(std::floor(v / radius)); }
+    void add(cv::Point2f p) { cells[key(cell(p.x), cell(p.y))].push_back(p); }
+    /// Whether a point lies within `radius` (strictly) of p.
+    bool near(cv::Point2f p) const {
+      const long long cx = cell(p.x);
+      const long long cy = cell(p.y);
+      for (long long dy = -1; dy <= 1; ++dy) {
+        for (long long dx = -1; dx <= 1; ++dx) {
+          const auto it = cells.find(key(cx + dx, cy + dy));
+          if (it == cells.end()) continue;
+          for (const cv::Point2f& q : it->second) {
+            if (std::hypot(q.x - p.x, q.y - p.y) < radius) return true;
+          }
+        }
+      }
+      return false;
+    }
+  };
+
+  std::vector<OctaveGrid> octave_grids(const std::vector<cv::KeyPoint>& keypoints) const {
+    std::vector<OctaveGrid> grids(static_cast<std::size_t>(levels_));
+    for (int o = 0; o < levels_; ++o) {
+      grids[static_cast<std::size_t>(o)].radius = affine_.merge_radius * scales_.factors[static_cast<std::size_t>(o)];
+    }
+    for (const cv::KeyPoint& kp : keypoints) grids[static_cast<std::size_t>(kp.octave)].add(kp.pt);
+    return grids;
+  }
+
+  const char* who_;
+  AdapterOptions affine_;
+  float scale_factor_ = 1.2f;
+  int levels_ = 8;
+  ScaleTables scales_;
+  std::optional<Extractors<Rbrief>> rbrief_;
+  std::optional<Extractors<Brisk>> brisk_;
+};
+
+/// Writes descriptors to an ORB-SLAM output array: released when there is no keypoint (ORB-SLAM's
+/// behaviour), else an N x 32 CV_8U copy.
+inline void write_descriptors(const cv::Mat& descriptors, cv::OutputArray out) {
+  if (descriptors.empty()) {
+    out.release();
+    return;
+  }
+  descriptors.copyTo(out);
+}
+
+/// Throws std::invalid_argument unless ORB-SLAM3's `vLappingArea` has exactly two elements.
+inline void check_lapping_area(const std::vector<int>& area, const char* who) {
+  affine_orb::detail::require(
+      area.size() == 2, std::string(who) + ": vLappingArea must have 2 elements, got " + std::to_string(area.size()));
+}
+
+/// ORB-SLAM3's lapping-area split: keypoints whose x lies in [area[0], area[1]] (level-0 pixels,
+/// bounds included) move to the end of `frame`, descriptor rows with them; both parts keep their
+/// order, so each stays grouped by octave (ORB-SLAM3 itself fills the end part backwards; its
+/// callers use the two parts as sets). Returns the number of keypoints outside the area.
+/// Throws std::invalid_argument unless `area` has exactly two elements.
+inline int split_lapping_area(AdapterFrame& frame, const std::vector<int>& area, const char* who) {
+  check_lapping_area(area, who);
+  const auto inside = [&](const cv::KeyPoint& kp) { return kp.pt.x >= area[0] && kp.pt.x <= area[1]; };
+  std::vector<std::size_t> order;
+  order.reserve(frame.keypoints.size());
+  for (std::size_t i = 0; i < frame.keypoints.size(); ++i) {
+    if (!inside(frame.keypoints[i])) order.push_back(i);
+  }
+  const int outside = static_cast<int>(order.size());
+  for (std::size_t i = 0; i < frame.keypoints.size(); ++i) {
+    if (inside(frame.keypoints[i])) order.push_back(i);
+  }
+  std::vector<cv::KeyPoint> keypoints;
+  keypoints.reserve(order.size());
+  cv::Mat descriptors(frame.descriptors.size(), CV_8U);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    keypoints.push_back(frame.keypoints[order[k]]);
+    frame.descriptors.row(static_cast<int>(order[k])).copyTo(descriptors.row(static_cast<int>(k)));
+  }
+  frame.keypoints = std::move(keypoints);
+  frame.descriptors = descriptors;
+  return outside;
+}
+
+}  // namespace affine_orb::adapters

@@ -1,0 +1,95 @@
+#pragma once
+/// \file
+/// The Affine-ORB options of the ORB-SLAM2/3 drop-in extractors that ORB-SLAM's constructor
+/// ORBextractor(nfeatures, scaleFactor, nlevels, iniThFAST, minThFAST) cannot carry (SPEC §6).
+///
+/// Where an extractor's options come from, read once when it is constructed:
+/// 1. the defaults: AdapterOptions{} (compiled in), or the options last given to the adapter's
+///    static ORBextractor::SetAffineOptions();
+/// 2. each environment variable below that is set overrides its field of those defaults.
+/// A malformed or out-of-range value throws std::invalid_argument naming the variable.
+///
+/// | variable                  | field          | values                                     |
+/// |---------------------------|----------------|--------------------------------------------|
+/// | `AFFINE_ORB_MAX_TILT`     | max_tilt       | number in [1, 16]; 1 = views off           |
+/// | `AFFINE_ORB_DESCRIPTOR`   | descriptor     | `rbrief` or `brisk`                        |
+/// | `AFFINE_ORB_THREADS`      | threads        | integer in [1, 256]                        |
+/// | `AFFINE_ORB_DUPLICATES`   | duplicates     | `merge` or `keep`                          |
+/// | `AFFINE_ORB_MERGE_RADIUS` | merge_radius   | number in (0, 64], pixels                  |
+/// | `AFFINE_ORB_VIEW_FEATURES`| view_features  | number in [0, 16], fraction of nfeatures   |
+///
+/// This header is included by the adapters' ORBextractor.h, which every ORB-SLAM file including
+/// Frame.h sees, and ORB-SLAM2/3 compile those as C++11: so it stays light (no extractor code) and
+/// valid C++11. Only the adapters' ORBextractor.cc needs C++17.
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace affine_orb {
+namespace adapters {
+
+/// Environment variable names (see the table above).
+constexpr const char* kEnvMaxTilt = "AFFINE_ORB_MAX_TILT";
+constexpr const char* kEnvDescriptor = "AFFINE_ORB_DESCRIPTOR";
+constexpr const char* kEnvThreads = "AFFINE_ORB_THREADS";
+constexpr const char* kEnvDuplicates = "AFFINE_ORB_DUPLICATES";
+constexpr const char* kEnvMergeRadius = "AFFINE_ORB_MERGE_RADIUS";
+constexpr const char* kEnvViewFeatures = "AFFINE_ORB_VIEW_FEATURES";
+
+/// Throws std::invalid_argument("affine_orb: " + what) unless `condition` holds (detail::require,
+/// which is C++17).
+inline void require_option(bool condition, const std::string& what) {
+  if (!condition) throw std::invalid_argument("affine_orb: " + what);
+}
+
+/// Descriptor computed in every view. ORB-SLAM reads 256 bits per row whichever is chosen.
+enum class AdapterDescriptor {
+  kRbrief,  ///< ORB's rBRIEF-256: bit-compatible with ORB, so ORB-SLAM's ORBvoc.txt stays valid.
+  kBrisk,   ///< BRISK-512 of which the first 256 bits (bytes 0–31) are output; needs its own vocabulary.
+};
+
+/// What to do with the keypoints several views put on the same corner (affine_orb::DuplicatePolicy).
+enum class AdapterDuplicates {
+  kMerge,    ///< One keypoint per corner and level, the strongest (SPEC §2: the SLAM default).
+  kKeepAll,  ///< Every view's keypoint.
+};
+
+/// Options of the drop-in extractors beyond ORB-SLAM's five constructor arguments.
+struct AdapterOptions {
+  /// Largest simulated tilt t (views t = √2^k <= max_tilt, SPEC §1); 1 = plain ORB extraction.
+  /// A value between two tilts keeps the tilts below it: write 1.42 for √2, 2.83 for 2√2.
+  /// Default 1 (views off): the choice measured with ORB-SLAM2 mono_kitti on KITTI 06
+  /// (adapters/README.md, "Measurements").
+  double max_tilt = 1.0;
+  AdapterDescriptor descriptor = AdapterDescriptor::kRbrief;
+  /// Worker threads for the views of one frame (ExtractorOptions::threads); results do not depend
+  /// on it. 1 because ORB-SLAM already runs tracking, local mapping and loop closing in parallel.
+  int threads = 1;
+  AdapterDuplicates duplicates = AdapterDuplicates::kMerge;
+  /// Merge radius in original pixels times the level scale (ExtractorOptions::merge_radius): 2 px is
+  /// the SPEC §7 duplicate cell.
+  double merge_radius = 2.0;
+  /// Keypoints the tilted views add to ORB-SLAM's nfeatures keypoints of the image, as a fraction
+  /// of nfeatures (about view_features · nfeatures, fewer after the duplicate merge); 0 adds none.
+  /// The image's own keypoints never change, so that monocular initialisation keeps them.
+  double view_features = 1.0;
+
+  void check() const {
+    require_option(std::isfinite(max_tilt) && max_tilt >= 1.0 && max_tilt <= 16.0,
+                   "AdapterOptions::max_tilt must be in [1, 16], got " + std::to_string(max_tilt));
+    require_option(descriptor == AdapterDescriptor::kRbrief || descriptor == AdapterDescriptor::kBrisk,
+                   "AdapterOptions::descriptor is invalid");
+    require_option(threads >= 1 && threads <= 256,
+                   "AdapterOptions::threads must be in [1, 256], got " + std::to_string(threads));
+    require_option(duplicates == AdapterDuplicates::kMerge || duplicates == AdapterDuplicates::kKeepAll,
+                   "AdapterOptions::duplicates is invalid");
+    require_option(std::isfinite(merge_radius) && merge_radius > 0.0 && merge_radius <= 64.0,
+                   "AdapterOptions::merge_radius must be in (0, 64], got " + std::to_string(merge_radius));
+    require_option(std::isfinite(view_features) && view_features >= 0.0 && view_features <= 16.0,
+                   "AdapterOptions::view_features must be in [0, 16], got " + std::to_string(view_features));
+  }
+};
+
+}  // namespace adapters
+}  // namespace affine_orb

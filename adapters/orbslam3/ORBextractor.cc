@@ -1,0 +1,60 @@
+// ORB-SLAM3's ORBextractor interface implemented by affine_orb (see ORBextractor.h); the work is
+// done by the implementation shared with the ORB-SLAM2 adapter, affine_orb_adapter/core.hpp.
+#include "ORBextractor.h"
+
+#include <cstddef>
+#include <utility>
+
+#include "affine_orb_adapter/core.hpp"
+
+namespace ORB_SLAM3 {
+
+namespace {
+
+constexpr const char* kWho = "ORB_SLAM3::ORBextractor";
+
+affine_orb::adapters::DefaultOptionsStore& defaults() {
+  static affine_orb::adapters::DefaultOptionsStore store;
+  return store;
+}
+
+}  // namespace
+
+class ORBextractor::Impl : public affine_orb::adapters::AdapterCore {
+ public:
+  using AdapterCore::AdapterCore;
+};
+
+ORBextractor::ORBextractor(int nfeatures, float scaleFactor, int nlevels, int iniThFAST, int minThFAST)
+    : impl_(new Impl(kWho, nfeatures, scaleFactor, nlevels, iniThFAST, minThFAST,
+                     affine_orb::adapters::apply_environment(defaults().get()))) {
+  mvImagePyramid.resize(static_cast<std::size_t>(nlevels));
+}
+
+ORBextractor::~ORBextractor() { delete impl_; }
+
+int ORBextractor::operator()(cv::InputArray image, cv::InputArray mask, std::vector<cv::KeyPoint>& keypoints,
+                             cv::OutputArray descriptors, std::vector<int>& vLappingArea) {
+  const cv::Mat im = image.getMat();
+  if (im.empty()) return -1;
+  affine_orb::adapters::check_lapping_area(vLappingArea, kWho);
+  affine_orb::adapters::AdapterFrame frame = impl_->run(im, mask.getMat()).value();  // not empty here
+  const int outside = affine_orb::adapters::split_lapping_area(frame, vLappingArea, kWho);
+  keypoints = std::move(frame.keypoints);
+  affine_orb::adapters::write_descriptors(frame.descriptors, descriptors);
+  mvImagePyramid = std::move(frame.pyramid);
+  return outside;
+}
+
+int ORBextractor::GetLevels() const { return impl_->levels(); }
+float ORBextractor::GetScaleFactor() const { return impl_->scale_factor(); }
+std::vector<float> ORBextractor::GetScaleFactors() const { return impl_->scales().factors; }
+std::vector<float> ORBextractor::GetInverseScaleFactors() const { return impl_->scales().inverse_factors; }
+std::vector<float> ORBextractor::GetScaleSigmaSquares() const { return impl_->scales().sigma2; }
+std::vector<float> ORBextractor::GetInverseScaleSigmaSquares() const { return impl_->scales().inverse_sigma2; }
+
+void ORBextractor::SetAffineOptions(const AffineOrbAdapterOptions& options) { defaults().set(options); }
+AffineOrbAdapterOptions ORBextractor::GetAffineOptions() { return defaults().get(); }
+AffineOrbAdapterOptions ORBextractor::AffineOptions() const { return impl_->affine_options(); }
+
+}  // namespace ORB_SLAM3

@@ -1,0 +1,108 @@
+// Conformance of the ORB-SLAM3 adapter (adapters/orbslam3): the shared suite of conformance.hpp,
+// driving ORB_SLAM3::ORBextractor as ORB-SLAM3's Frame does, plus the lapping-area split.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "ORBextractor.h"
+#include "conformance.hpp"
+
+namespace {
+
+struct Orbslam3 {
+  using Extractor = ORB_SLAM3::ORBextractor;
+  using Options = ORB_SLAM3::AffineOrbAdapterOptions;
+  /// Tracking builds mpIniORBextractor with 5·nFeatures.
+  static constexpr int kInitialisationFactor = 5;
+  static constexpr bool kReturnsCount = true;
+
+  /// Frame::ExtractORB with a lapping area no keypoint falls in (x in [−2, −1]).
+  static int extract(Extractor& extractor, const cv::Mat& image, const cv::Mat& mask,
+                     std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
+    std::vector<int> lapping{-2, -1};
+    return extractor(image, mask, keypoints, descriptors, lapping);
+  }
+};
+
+}  // namespace
+
+TEST_CASE_TEMPLATE_INVOKE(getters, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(invariants, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(mapping, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(rbrief_definition, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(hamming, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(threads, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(pyramid_ownership, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(empty, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(initialisation, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(options, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(bad_input, Orbslam3);
+
+TEST_CASE("lapping area: keypoints with x in [a, b] go to the end with their rows; the rest are counted") {
+  const cv::Mat image = affine_orb::test::kitti_frame(3);
+  ORB_SLAM3::ORBextractor extractor(1000, 1.2f, 8, 20, 7);
+  std::vector<cv::KeyPoint> all;
+  cv::Mat all_rows;
+  std::vector<int> none{-2, -1};
+  const int counted = extractor(image, cv::Mat(), all, all_rows, none);
+  REQUIRE(counted == static_cast<int>(all.size()));
+  REQUIRE(all.size() == 1000);
+
+  // A level-0 keypoint has an integer x: use it as the lower bound, to check the bound is included.
+  int lower = -1;
+  for (const cv::KeyPoint& kp : all) {
+    if (kp.octave == 0 && kp.pt.x > 300.0f && kp.pt.x < 500.0f &&
+        kp.pt.x == static_cast<float>(static_cast<int>(kp.pt.x))) {
+      lower = static_cast<int>(kp.pt.x);
+      break;
+    }
+  }
+  REQUIRE(lower > 0);
+  for (const std::vector<int>& area : {std::vector<int>{lower, 800}, std::vector<int>{0, 1000},
+                                       std::vector<int>{0, 100000}, std::vector<int>{900, 400}}) {
+    CAPTURE(area[0]);
+    CAPTURE(area[1]);
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat rows;
+    std::vector<int> lapping = area;
+    const int outside = extractor(image, cv::Mat(), keypoints, rows, lapping);
+    // Reference: the unsplit output filtered twice, order kept.
+    std::vector<std::size_t> expected;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (!(all[i].pt.x >= area[0] && all[i].pt.x <= area[1])) expected.push_back(i);
+    }
+    const std::size_t n_outside = expected.size();
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (all[i].pt.x >= area[0] && all[i].pt.x <= area[1]) expected.push_back(i);
+    }
+    CHECK(outside == static_cast<int>(n_outside));
+    REQUIRE(keypoints.size() == all.size());
+    REQUIRE(rows.rows == all_rows.rows);
+    int differences = 0;
+    for (std::size_t k = 0; k < expected.size(); ++k) {
+      const cv::KeyPoint& a = keypoints[k];
+      const cv::KeyPoint& b = all[expected[k]];
+      differences += a.pt != b.pt || a.octave != b.octave || a.angle != b.angle;
+      differences +=
+          cv::norm(rows.row(static_cast<int>(k)), all_rows.row(static_cast<int>(expected[k])), cv::NORM_HAMMING) != 0.0;
+    }
+    CHECK(differences == 0);
+    if (area[0] == lower) {
+      CHECK(n_outside < all.size());
+      CHECK(n_outside > 0);
+    }
+  }
+
+  // The empty image returns −1 before the area is looked at; a malformed area is rejected.
+  std::vector<int> bad{5};
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat rows;
+  CHECK(extractor(cv::Mat(), cv::Mat(), keypoints, rows, bad) == -1);
+  CHECK_THROWS_AS(extractor(image, cv::Mat(), keypoints, rows, bad), std::invalid_argument);
+  std::vector<int> three{1, 2, 3};
+  CHECK_THROWS_AS(extractor(image, cv::Mat(), keypoints, rows, three), std::invalid_argument);
+}

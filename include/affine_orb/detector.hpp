@@ -69,7 +69,7 @@ struct Candidates {
 
 /// Buffers of detect_candidates() reused across calls (the FAST score map and the grid).
 struct DetectorWorkspace {
-  cv::Mat scores;
+  cv::Mat scores;  ///< grown to the largest image seen, never shrunk; its top-left part is used
   std::vector<char> strong;
   std::vector<Corner> corners;
   RowSpans cell;
@@ -90,13 +90,16 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
   const RowSpans& all = region;
   const cv::Rect bounds = all.bounds() & cv::Rect(0, 0, image.cols, image.rows);
   if (bounds.empty()) return;
-  work.scores.create(image.size(), CV_8UC1);
+  if (work.scores.type() != CV_8UC1 || work.scores.rows < image.rows || work.scores.cols < image.cols) {
+    work.scores.create(std::max(work.scores.rows, image.rows), std::max(work.scores.cols, image.cols), CV_8UC1);
+  }
+  cv::Mat scores = work.scores(cv::Rect(0, 0, image.cols, image.rows));
   std::vector<Corner>& corners = out.corners;
   // Pass 1: scores at the initial threshold over the region grown by one pixel, so that
   // suppression at its edge sees the true neighbours.
   all.dilate_into(work.margin);
-  detail::score_spans(image, work.margin, options.initial_threshold, work.scores);
-  detail::non_max_spans(work.scores, all, options.initial_threshold, corners);
+  detail::score_spans(image, work.margin, options.initial_threshold, scores);
+  detail::non_max_spans(scores, all, options.initial_threshold, corners);
 
   // Pass 2: cells without a corner are scored again at the minimum threshold (with the same
   // one-pixel margin). A weak score never suppresses a strong corner, so this gives exactly the
@@ -127,8 +130,8 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
         all.intersect_into(cell, work.cell);
         if (work.cell.area() == 0) continue;
         work.cell.dilate_into(work.margin);
-        detail::score_spans(image, work.margin, options.min_threshold, work.scores);
-        detail::non_max_spans(work.scores, work.cell, options.min_threshold, corners);
+        detail::score_spans(image, work.margin, options.min_threshold, scores);
+        detail::non_max_spans(scores, work.cell, options.min_threshold, corners);
       }
     }
     // The strong corners are in raster order already: sort the weak ones and merge.

@@ -135,7 +135,10 @@ class Extractor {
     const int n_views = static_cast<int>(view_work_.size());
     const int levels = options_.pyramid.levels;
 
-    for_each_view([&](int v) { detect_view(image, mask, view_work_[static_cast<std::size_t>(v)]); });
+    scratch_.resize(static_cast<std::size_t>(options_.threads));
+    for_each_view([&](int v, int w) {
+      detect_view(image, mask, view_work_[static_cast<std::size_t>(v)], scratch_[static_cast<std::size_t>(w)]);
+    });
     if (options_.duplicates == DuplicatePolicy::kMerge && n_views > 1) merge_duplicates(image.size());
 
     // Budget: views in proportion to their area 1/t, levels geometric within a view.
@@ -170,7 +173,7 @@ class Extractor {
       }
     }
 
-    for_each_view([&](int v) { describe_view(view_work_[static_cast<std::size_t>(v)]); });
+    for_each_view([&](int v, int) { describe_view(view_work_[static_cast<std::size_t>(v)]); });
 
     Features<kBits> features;
     for (int l = 0; l < levels; ++l) {
@@ -187,7 +190,6 @@ class Extractor {
  private:
   struct LevelWork {
     RowSpans valid;  ///< level pixels whose support maps inside the original image (image-size dependent)
-    DetectorWorkspace detector;
     Candidates candidates;
     std::vector<cv::Point2f> level_points;     ///< candidate positions, level pixels of the view
     std::vector<cv::Point2f> original_points;  ///< the same, original pixels
@@ -249,20 +251,21 @@ class Extractor {
   /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
   int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }
 
-  /// Runs fn(v) for every view, on options_.threads threads (the calling thread included).
+  /// Runs fn(v, w) for every view v, on options_.threads threads (the calling thread included); w
+  /// in [0, threads) numbers the thread, for per-thread scratch buffers.
   template <class Fn>
   void for_each_view(Fn fn) {
     const int n = static_cast<int>(view_work_.size());
     const int workers = std::min(options_.threads, n);
     if (workers <= 1) {
-      for (int v = 0; v < n; ++v) fn(v);
+      for (int v = 0; v < n; ++v) fn(v, 0);
       return;
     }
     std::atomic<int> next{0};
     std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
     auto work = [&](int w) {
       try {
-        for (int v = next++; v < n; v = next++) fn(v);
+        for (int v = next++; v < n; v = next++) fn(v, w);
       } catch (...) {
         errors[static_cast<std::size_t>(w)] = std::current_exception();
         next = n;
@@ -299,7 +302,7 @@ class Extractor {
   }
 
   /// Step 1–2 for one view: render, pyramid, candidates in the valid regions, mask check.
-  void detect_view(const cv::Mat& image, const cv::Mat& mask, ViewWork& work) {
+  void detect_view(const cv::Mat& image, const cv::Mat& mask, ViewWork& work, DetectorWorkspace& detector) {
     work.renderer.render(image, &work.regions.front(), work.scratch, work.image);
     work.pyramid.build_swap(work.image, work.view.is_identity() ? nullptr : &work.regions);
     const int border = support_border();
@@ -312,7 +315,7 @@ class Extractor {
       level.alive.clear();
       if (level.valid.rows() == 0) continue;
       const cv::Mat& level_image = work.pyramid.level(l);
-      detect_candidates(level_image, level.valid, cv::Point(border, border), options_.detector, level.detector,
+      detect_candidates(level_image, level.valid, cv::Point(border, border), options_.detector, detector,
                         level.candidates);
       const Candidates& candidates = level.candidates;
       for (std::size_t i = 0; i < candidates.corners.size(); ++i) {
@@ -484,6 +487,8 @@ class Extractor {
 
   ExtractorOptions options_;
   MergeWork merge_;
+  /// Per worker thread: the detection buffers (one score map reused by every level of every view).
+  std::vector<DetectorWorkspace> scratch_;
   Descriptor descriptor_;
   cv::Size views_size_;
   std::vector<ViewWork> view_work_;

@@ -65,7 +65,7 @@ class Rbrief {
   struct LevelData {
     cv::Mat image;
     cv::Mat smoothed;
-    detail::GaussianQ8Work squares;  ///< scratch for the sparse prepare()
+    detail::GaussianQ8Work squares;  ///< scratch of the integer smoothing
   };
 
   explicit Rbrief(const Options& options = {})
@@ -87,12 +87,19 @@ class Rbrief {
   int border() const { return border_; }
 
   /// Smooths the whole level. The border is reflected about the level's own edge even when the
-  /// level is a ROI of a larger image (BORDER_ISOLATED), as the definition says.
+  /// level is a ROI of a larger image (BORDER_ISOLATED), as the definition says. Uses
+  /// cv::GaussianBlur's integer arithmetic (detail/gaussian_q8.hpp) when it was confirmed at
+  /// construction, cv::GaussianBlur itself otherwise: the same bytes.
   void prepare(const cv::Mat& level, LevelData& data) const {
     detail::require_gray8(level, "Rbrief::prepare");
     data.image = level;
-    cv::GaussianBlur(level, data.smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel), options_.blur_sigma,
-                     options_.blur_sigma, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+    if (kernel_q8_.empty()) {
+      cv::GaussianBlur(level, data.smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel), options_.blur_sigma,
+                       options_.blur_sigma, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+      return;
+    }
+    data.smoothed.create(level.size(), CV_8UC1);
+    detail::smooth_square_q8(level, cv::Rect(0, 0, level.cols, level.rows), kernel_q8_, data.squares, data.smoothed);
   }
 
   /// Smooths only the squares of side 2·border()+1 around `points` (level pixels, rounded) when

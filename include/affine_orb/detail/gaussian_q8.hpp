@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -188,11 +189,16 @@ inline void smooth_square_q8(const cv::Mat& level, cv::Rect square, const std::v
     base = level.ptr<std::uint8_t>(source.y) + source.x;
     step = static_cast<std::ptrdiff_t>(level.step[0]);
   } else {
+    // The columns inside the level are copied, the others reflected one by one.
     work.tile.create(source.height, source.width, CV_8UC1);
+    const int inside0 = std::clamp(-source.x, 0, source.width);
+    const int inside1 = std::clamp(level.cols - source.x, inside0, source.width);
     for (int y = 0; y < source.height; ++y) {
       const std::uint8_t* row = level.ptr<std::uint8_t>(reflect101(source.y + y, level.rows));
       std::uint8_t* t = work.tile.ptr<std::uint8_t>(y);
-      for (int x = 0; x < source.width; ++x) t[x] = row[reflect101(source.x + x, level.cols)];
+      for (int x = 0; x < inside0; ++x) t[x] = row[reflect101(source.x + x, level.cols)];
+      std::memcpy(t + inside0, row + source.x + inside0, static_cast<std::size_t>(inside1 - inside0));
+      for (int x = inside1; x < source.width; ++x) t[x] = row[reflect101(source.x + x, level.cols)];
     }
     base = work.tile.ptr<std::uint8_t>(0);
     step = static_cast<std::ptrdiff_t>(work.tile.step[0]);

@@ -136,7 +136,8 @@ class Extractor {
     const int levels = options_.pyramid.levels;
 
     scratch_.resize(static_cast<std::size_t>(options_.threads));
-    for_each_view([&](int v, int w) {
+    merge_.resize(static_cast<std::size_t>(options_.threads));
+    for_each(n_views, [&](int v, int w) {
       detect_view(image, mask, view_work_[static_cast<std::size_t>(v)], scratch_[static_cast<std::size_t>(w)]);
     });
     if (options_.duplicates == DuplicatePolicy::kMerge && n_views > 1) merge_duplicates(image.size());
@@ -155,13 +156,13 @@ class Extractor {
     }
     const std::vector<int> take = allocate_with_carry(budgets, available);
     const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(image.cols), static_cast<float>(image.rows));
-    for (int v = 0; v < n_views; ++v) {
+    for_each(n_views, [&](int v, int) {
+      std::vector<cv::Point2f> points;
+      std::vector<float> responses;
       for (int l = 0; l < levels; ++l) {
         LevelWork& work = level_of(v, l);
-        std::vector<cv::Point2f> points;
-        std::vector<float> responses;
-        points.reserve(work.alive.size());
-        responses.reserve(work.alive.size());
+        points.clear();
+        responses.clear();
         for (int i : work.alive) {
           points.push_back(work.original_points[static_cast<std::size_t>(i)]);
           responses.push_back(work.responses[static_cast<std::size_t>(i)]);
@@ -171,9 +172,8 @@ class Extractor {
           work.kept.push_back(work.alive[static_cast<std::size_t>(k)]);
         }
       }
-    }
-
-    for_each_view([&](int v, int) { describe_view(view_work_[static_cast<std::size_t>(v)]); });
+      describe_view(view_work_[static_cast<std::size_t>(v)]);
+    });
 
     Features<kBits> features;
     for (int l = 0; l < levels; ++l) {
@@ -188,6 +188,23 @@ class Extractor {
   }
 
  private:
+  struct MergeRef {
+    float response;
+    int view;
+    int index;
+  };
+  struct MergeKept {
+    cv::Point2f point;
+    int view;
+    int next;  ///< next kept candidate of the same cell, −1 at the end
+  };
+  /// Buffers of merge_duplicates() reused across frames.
+  struct MergeWork {
+    std::vector<MergeRef> order;
+    std::vector<int> head;  ///< per grid cell, the last kept candidate in it (−1: none)
+    std::vector<MergeKept> kept;
+  };
+
   struct LevelWork {
     RowSpans valid;  ///< level pixels whose support maps inside the original image (image-size dependent)
     Candidates candidates;
@@ -251,11 +268,10 @@ class Extractor {
   /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
   int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }
 
-  /// Runs fn(v, w) for every view v, on options_.threads threads (the calling thread included); w
-  /// in [0, threads) numbers the thread, for per-thread scratch buffers.
+  /// Runs fn(i, w) for every i in [0, n), on options_.threads threads (the calling thread
+  /// included); w in [0, threads) numbers the thread, for per-thread scratch buffers.
   template <class Fn>
-  void for_each_view(Fn fn) {
-    const int n = static_cast<int>(view_work_.size());
+  void for_each(int n, Fn fn) {
     const int workers = std::min(options_.threads, n);
     if (workers <= 1) {
       for (int v = 0; v < n; ++v) fn(v, 0);
@@ -339,61 +355,62 @@ class Extractor {
   /// (FAST) responses are visited by a counting sort, others by a comparison sort; kept candidates
   /// are found again through a grid of cells one radius wide over the original image.
   void merge_duplicates(cv::Size size) {
+    for_each(options_.pyramid.levels, [&](int l, int w) { merge_level(l, size, merge_[static_cast<std::size_t>(w)]); });
+  }
+
+  /// merge_duplicates() for level l, with the buffers `m`.
+  void merge_level(int l, cv::Size size, MergeWork& m) {
     const int n_views = static_cast<int>(view_work_.size());
-    MergeWork& m = merge_;
-    for (int l = 0; l < options_.pyramid.levels; ++l) {
-      order_candidates(l);
-      const double radius = options_.merge_radius * options_.pyramid.scale(l);
-      const double cell = radius;
-      // Cells of points in [−0.5, W − 0.5): floor(x / cell) + 1 lies in [0, columns − 1].
-      const int columns = static_cast<int>(std::floor(size.width / cell)) + 3;
-      const int rows = static_cast<int>(std::floor(size.height / cell)) + 3;
-      m.head.assign(static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows), -1);
-      m.kept.clear();
-      for (int v = 0; v < n_views; ++v) {
-        LevelWork& work = level_of(v, l);
-        work.keep_flags.assign(work.level_points.size(), 0);
-      }
-      for (const MergeRef& r : m.order) {
-        const cv::Point2f& p = level_of(r.view, l).original_points[static_cast<std::size_t>(r.index)];
-        const int cx = static_cast<int>(std::floor(p.x / cell)) + 1;
-        const int cy = static_cast<int>(std::floor(p.y / cell)) + 1;
-        bool duplicate = false;
-        for (int y = cy - 1; y <= cy + 1 && !duplicate; ++y) {
-          for (int x = cx - 1; x <= cx + 1 && !duplicate; ++x) {
-            for (int k = m.head[static_cast<std::size_t>(y) * static_cast<std::size_t>(columns) +
-                                static_cast<std::size_t>(x)];
-                 k >= 0; k = m.kept[static_cast<std::size_t>(k)].next) {
-              const MergeKept& o = m.kept[static_cast<std::size_t>(k)];
-              if (o.view != r.view && std::hypot(o.point.x - p.x, o.point.y - p.y) < radius) {
-                duplicate = true;
-                break;
-              }
+    order_candidates(l, m);
+    const double radius = options_.merge_radius * options_.pyramid.scale(l);
+    const double cell = radius;
+    // Cells of points in [−0.5, W − 0.5): floor(x / cell) + 1 lies in [0, columns − 1].
+    const int columns = static_cast<int>(std::floor(size.width / cell)) + 3;
+    const int rows = static_cast<int>(std::floor(size.height / cell)) + 3;
+    m.head.assign(static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows), -1);
+    m.kept.clear();
+    for (int v = 0; v < n_views; ++v) {
+      LevelWork& work = level_of(v, l);
+      work.keep_flags.assign(work.level_points.size(), 0);
+    }
+    for (const MergeRef& r : m.order) {
+      const cv::Point2f& p = level_of(r.view, l).original_points[static_cast<std::size_t>(r.index)];
+      const int cx = static_cast<int>(std::floor(p.x / cell)) + 1;
+      const int cy = static_cast<int>(std::floor(p.y / cell)) + 1;
+      bool duplicate = false;
+      for (int y = cy - 1; y <= cy + 1 && !duplicate; ++y) {
+        for (int x = cx - 1; x <= cx + 1 && !duplicate; ++x) {
+          for (int k = m.head[static_cast<std::size_t>(y) * static_cast<std::size_t>(columns) +
+                              static_cast<std::size_t>(x)];
+               k >= 0; k = m.kept[static_cast<std::size_t>(k)].next) {
+            const MergeKept& o = m.kept[static_cast<std::size_t>(k)];
+            if (o.view != r.view && std::hypot(o.point.x - p.x, o.point.y - p.y) < radius) {
+              duplicate = true;
+              break;
             }
           }
         }
-        if (duplicate) continue;
-        int& head =
-            m.head[static_cast<std::size_t>(cy) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(cx)];
-        m.kept.push_back({p, r.view, head});
-        head = static_cast<int>(m.kept.size()) - 1;
-        level_of(r.view, l).keep_flags[static_cast<std::size_t>(r.index)] = 1;
       }
-      for (int v = 0; v < n_views; ++v) {
-        LevelWork& work = level_of(v, l);
-        work.alive.clear();
-        for (std::size_t i = 0; i < work.keep_flags.size(); ++i) {
-          if (work.keep_flags[i]) work.alive.push_back(static_cast<int>(i));
-        }
+      if (duplicate) continue;
+      int& head =
+          m.head[static_cast<std::size_t>(cy) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(cx)];
+      m.kept.push_back({p, r.view, head});
+      head = static_cast<int>(m.kept.size()) - 1;
+      level_of(r.view, l).keep_flags[static_cast<std::size_t>(r.index)] = 1;
+    }
+    for (int v = 0; v < n_views; ++v) {
+      LevelWork& work = level_of(v, l);
+      work.alive.clear();
+      for (std::size_t i = 0; i < work.keep_flags.size(); ++i) {
+        if (work.keep_flags[i]) work.alive.push_back(static_cast<int>(i));
       }
     }
   }
 
-  /// merge_.order: the candidates of level l, strongest first, ties to the lower view, then the
-  /// lower index.
-  void order_candidates(int l) {
+  /// m.order: the candidates of level l, strongest first, ties to the lower view, then the lower
+  /// index.
+  void order_candidates(int l, MergeWork& m) {
     const int n_views = static_cast<int>(view_work_.size());
-    MergeWork& m = merge_;
     m.order.clear();
     bool integral = true;
     for (int v = 0; v < n_views && integral; ++v) {
@@ -468,25 +485,9 @@ class Extractor {
     }
   }
 
-  struct MergeRef {
-    float response;
-    int view;
-    int index;
-  };
-  struct MergeKept {
-    cv::Point2f point;
-    int view;
-    int next;  ///< next kept candidate of the same cell, −1 at the end
-  };
-  /// Buffers of merge_duplicates() reused across frames.
-  struct MergeWork {
-    std::vector<MergeRef> order;
-    std::vector<int> head;  ///< per grid cell, the last kept candidate in it (−1: none)
-    std::vector<MergeKept> kept;
-  };
-
   ExtractorOptions options_;
-  MergeWork merge_;
+  /// Per worker thread: the buffers of merge_level().
+  std::vector<MergeWork> merge_;
   /// Per worker thread: the detection buffers (one score map reused by every level of every view).
   std::vector<DetectorWorkspace> scratch_;
   Descriptor descriptor_;

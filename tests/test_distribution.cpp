@@ -449,10 +449,16 @@ TEST_CASE("the view renderer is within a grey level of the exact definition and 
 
 TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' bytes") {
   const cv::Mat image = affine_orb::test::oxford_image("boat", 1)(cv::Rect(40, 30, 300, 200));  // a ROI
-  for (double phi : {0.0, 17.0, 50.9, 101.8, 178.2}) {
-    const affine_orb::AffineView view = affine_orb::make_view(2.0 * std::sqrt(2.0), phi, image.size());
+  // Tilts √2, 2, 2√2, 4√2: 8, 12, 16 and 30 resampling taps (strides 8, 16, 16, 32).
+  for (const auto& [tilt, phi] : {std::pair<double, double>(2.0 * std::sqrt(2.0), 0.0),
+                                  {2.0 * std::sqrt(2.0), 17.0},
+                                  {std::sqrt(2.0), 50.9},
+                                  {2.0, 101.8},
+                                  {4.0 * std::sqrt(2.0), 178.2}}) {
+    const affine_orb::AffineView view = affine_orb::make_view(tilt, phi, image.size());
     const affine_orb::detail::CanvasSampler sampler(view.to_original_canvas(), image.size());
-    const affine_orb::detail::ViewResampler resampler(view.canvas_size.width, view.size.width, 0.8 * std::sqrt(7.0));
+    const affine_orb::detail::ViewResampler resampler(view.canvas_size.width, view.size.width,
+                                                      0.8 * std::sqrt(tilt * tilt - 1.0));
     std::vector<std::uint8_t> a(static_cast<std::size_t>(view.canvas_size.width) + 64);
     std::vector<std::uint8_t> b(a.size());
     std::vector<std::uint8_t> out_a(static_cast<std::size_t>(view.size.width));
@@ -483,6 +489,7 @@ TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' byt
 #endif
       mismatches += out_a != out_b;
     }
+    CAPTURE(tilt);
     CAPTURE(phi);
     CHECK(mismatches == 0);
   }

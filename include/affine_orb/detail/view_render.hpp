@@ -216,7 +216,7 @@ inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int 
 
 /// The x resampling of one view (see the file comment): for view column x the weights
 /// weights[x·stride, x·stride + taps) apply to canvas columns first[x], first[x] + 1, ...; the
-/// weights are padded with zeros to `stride`, a multiple of 16.
+/// weights are padded with zeros to `stride`: 8 for at most 8 taps, else a multiple of 16.
 struct ViewResampler {
   int taps = 0;
   int stride = 0;
@@ -237,7 +237,7 @@ struct ViewResampler {
     }
     for (double& g : gauss) g /= total;
     taps = 2 * radius + 2;
-    stride = (taps + 15) / 16 * 16;
+    stride = taps <= 8 ? 8 : (taps + 15) / 16 * 16;
     first.resize(static_cast<std::size_t>(view_width));
     weights.assign(static_cast<std::size_t>(view_width) * static_cast<std::size_t>(stride), 0);
     const double scale = static_cast<double>(canvas_width) / view_width;
@@ -322,11 +322,41 @@ inline void resample_row_sse2_rounds(const ViewResampler& r, const std::uint8_t*
   if (x < x1) resample_row_scalar(r, row, row_first, x, x1, out);
 }
 
-/// resample_row_scalar() with 16 taps per multiply-add round, identical bytes (the padding
+/// resample_row_sse2() for a stride of 8: the windows of two columns share one vector.
+inline void resample_row_sse2_8(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
+                                std::uint8_t* out) {
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i round = _mm_set1_epi32(1 << (kWeightBits - 1));
+  const int* first = r.first.data();
+  const std::int16_t* weights = r.weights.data();
+  auto window = [&](int x) { return _mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + (first[x] - row_first))); };
+  auto weight = [&](int x) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(weights + 8 * x)); };
+  int x = x0;
+  for (; x + 4 <= x1; x += 4) {
+    const __m128i ab = _mm_unpacklo_epi64(window(x), window(x + 1));
+    const __m128i cd = _mm_unpacklo_epi64(window(x + 2), window(x + 3));
+    const __m128i s0 = _mm_madd_epi16(_mm_unpacklo_epi8(ab, zero), weight(x));
+    const __m128i s1 = _mm_madd_epi16(_mm_unpackhi_epi8(ab, zero), weight(x + 1));
+    const __m128i s2 = _mm_madd_epi16(_mm_unpacklo_epi8(cd, zero), weight(x + 2));
+    const __m128i s3 = _mm_madd_epi16(_mm_unpackhi_epi8(cd, zero), weight(x + 3));
+    const __m128i t0 = _mm_add_epi32(_mm_unpacklo_epi32(s0, s1), _mm_unpackhi_epi32(s0, s1));
+    const __m128i t1 = _mm_add_epi32(_mm_unpacklo_epi32(s2, s3), _mm_unpackhi_epi32(s2, s3));
+    const __m128i sum = _mm_add_epi32(_mm_unpacklo_epi64(t0, t1), _mm_unpackhi_epi64(t0, t1));
+    const __m128i v = _mm_srai_epi32(_mm_add_epi32(sum, round), kWeightBits);
+    const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), zero));
+    std::memcpy(out + x, &bytes, sizeof(bytes));
+  }
+  if (x < x1) resample_row_scalar(r, row, row_first, x, x1, out);
+}
+
+/// resample_row_scalar() with 8 or 16 taps per multiply-add round, identical bytes (the padding
 /// weights are zero, so reading `stride` canvas columns adds nothing).
 inline void resample_row_sse2(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                               std::uint8_t* out) {
   switch (r.stride) {
+    case 8:
+      resample_row_sse2_8(r, row, row_first, x0, x1, out);
+      break;
     case 16:
       resample_row_sse2_rounds<1>(r, row, row_first, x0, x1, out);
       break;

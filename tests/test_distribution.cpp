@@ -20,6 +20,7 @@
 #include "affine_orb/detector.hpp"
 #include "affine_orb/distribution.hpp"
 #include "affine_orb/extractor.hpp"
+#include "affine_orb/orientation.hpp"
 #include "affine_orb/rbrief.hpp"
 #include "test_data.hpp"
 
@@ -672,5 +673,30 @@ TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a g
     affine_orb::detail::resize_bilinear_reference(level, next, affine_orb::pyramid_level_size(image.size(), {}, l));
     CHECK(cv::countNonZero(pyramid.level(l) != next) == 0);
     level = next;
+  }
+}
+
+TEST_CASE("rBRIEF orientation equals the intensity-centroid angle of the scalar disc") {
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(30, 40, 600, 500));
+  std::mt19937 rng(12);
+  for (int radius : {3, 8, 15, 22, 64}) {
+    affine_orb::RbriefOptions options;
+    options.orientation_radius = radius;
+    const affine_orb::Rbrief rbrief(options);
+    const affine_orb::CentroidDisc disc(radius);
+    affine_orb::Rbrief::LevelData data;
+    rbrief.prepare(image, {}, data);
+    const int border = rbrief.border();
+    std::uniform_int_distribution<int> px(border, image.cols - 1 - border);
+    std::uniform_int_distribution<int> py(border, image.rows - 1 - border);
+    int mismatches = 0;
+    for (int k = 0; k < 300; ++k) {
+      const int x = px(rng);
+      const int y = py(rng);
+      mismatches += rbrief.orientation(data, cv::Point2f(static_cast<float>(x), static_cast<float>(y))) !=
+                    disc.angle(image, x, y);
+    }
+    CAPTURE(radius);
+    CHECK(mismatches == 0);
   }
 }

@@ -79,6 +79,9 @@ class Rbrief {
     // A rotated test point has |x'|, |y'| <= round(|(x, y)|), the rounded radius.
     border_ = std::max(extent, options_.orientation_radius);
     kernel_q8_ = detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
+#if defined(__SSE2__)
+    disc_chunks_ = disc_chunks(options_.orientation_radius);
+#endif
   }
 
   const Options& options() const { return options_; }
@@ -125,9 +128,15 @@ class Rbrief {
     }
   }
 
-  /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it.
+  /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it:
+  /// CentroidDisc::angle(), whose integer moments are summed 8 columns at a time where the target
+  /// has SSE2 (the same sums, so the same angle).
   float orientation(const LevelData& data, cv::Point2f pt) const {
+#if defined(__SSE2__)
+    return centroid_angle_sse2(data.image, cvRound(pt.x), cvRound(pt.y));
+#else
     return disc_.angle(data.image, cvRound(pt.x), cvRound(pt.y));
+#endif
   }
 
   BinaryDescriptor<kBits> describe(const LevelData& data, cv::Point2f pt, float angle) const {
@@ -197,8 +206,91 @@ class Rbrief {
 #endif
   }
 
+#if defined(__SSE2__)
+  /// The disc of CentroidDisc in 8-column chunks from column −r: for chunk j (columns
+  /// chunk_x[j] .. chunk_x[j] + 7, the last one ending at r and overlapping the one before) and row
+  /// v, the weight u of column u inside the disc and not in an earlier chunk (else 0), and the
+  /// weight v of the same columns.
+  struct DiscChunks {
+    std::vector<int> x;
+    std::vector<std::array<std::int16_t, 8>> u;  ///< [v·chunks + j]
+    std::vector<std::array<std::int16_t, 8>> v;  ///< [v·chunks + j]
+  };
+
+  static DiscChunks disc_chunks(int r) {
+    DiscChunks d;
+    for (int x = -r;; x = std::min(x + 8, r - 7)) {
+      d.x.push_back(x);
+      if (x + 8 > r) break;
+    }
+    const std::size_t chunks = d.x.size();
+    d.u.assign((static_cast<std::size_t>(r) + 1) * chunks, {});
+    d.v.assign(d.u.size(), {});
+    for (int v = 0; v <= r; ++v) {
+      int half = 0;
+      while ((half + 1) * (half + 1) + v * v <= r * r) ++half;
+      for (std::size_t j = 0; j < chunks; ++j) {
+        for (int i = 0; i < 8; ++i) {
+          const int u = d.x[j] + i;
+          const bool earlier = j > 0 && u < d.x[j - 1] + 8;
+          if (std::abs(u) > half || earlier) continue;
+          d.u[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(u);
+          d.v[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(v);
+        }
+      }
+    }
+    return d;
+  }
+
+  /// CentroidDisc::angle() with the moments m10 = Σ u·I, m01 = Σ v·I summed by 16-bit multiply-adds:
+  /// per row pair ±v, u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|, |v| <= 64, sums below
+  /// 2^15 per lane product), exactly the integers of the scalar loop.
+  float centroid_angle_sse2(const cv::Mat& image, int cx, int cy) const {
+    const int r = options_.orientation_radius;
+    const std::size_t chunks = disc_chunks_.x.size();
+    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
+    const std::uint8_t* center = image.ptr<std::uint8_t>(cy) + cx;
+    const __m128i zero = _mm_setzero_si128();
+    __m128i m10 = zero;
+    __m128i m01 = zero;
+    auto load8 = [&](const std::uint8_t* p) {
+      return _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
+    };
+    for (std::size_t j = 0; j < chunks; ++j) {
+      m10 = _mm_add_epi32(m10,
+                          _mm_madd_epi16(load8(center + disc_chunks_.x[j]),
+                                         _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.u[j].data()))));
+    }
+    for (int v = 1; v <= r; ++v) {
+      const std::uint8_t* below = center + v * step;
+      const std::uint8_t* above = center - v * step;
+      for (std::size_t j = 0; j < chunks; ++j) {
+        const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
+        const __m128i b = load8(below + disc_chunks_.x[j]);
+        const __m128i a = load8(above + disc_chunks_.x[j]);
+        m10 = _mm_add_epi32(
+            m10, _mm_madd_epi16(_mm_add_epi16(a, b),
+                                _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.u[k].data()))));
+        m01 = _mm_add_epi32(
+            m01, _mm_madd_epi16(_mm_sub_epi16(b, a),
+                                _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.v[k].data()))));
+      }
+    }
+    alignas(16) std::int32_t x[4];
+    alignas(16) std::int32_t y[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(x), m10);
+    _mm_store_si128(reinterpret_cast<__m128i*>(y), m01);
+    const std::int64_t sx = static_cast<std::int64_t>(x[0]) + x[1] + x[2] + x[3];
+    const std::int64_t sy = static_cast<std::int64_t>(y[0]) + y[1] + y[2] + y[3];
+    return std::atan2(static_cast<float>(sy), static_cast<float>(sx));
+  }
+#endif
+
   Options options_;
   CentroidDisc disc_;
+#if defined(__SSE2__)
+  DiscChunks disc_chunks_;
+#endif
   int border_ = 0;
   /// cv::GaussianBlur's integer kernel for the options (empty: not reproduced, see prepare()).
   std::vector<std::uint16_t> kernel_q8_;

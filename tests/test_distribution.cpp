@@ -700,3 +700,137 @@ TEST_CASE("rBRIEF orientation equals the intensity-centroid angle of the scalar 
     CHECK(mismatches == 0);
   }
 }
+
+namespace {
+
+// The quadtree spreading as first written (a vector of members per cell), the reference for the
+// in-place version.
+std::vector<int> reference_quadtree(const std::vector<cv::Point2f>& points, const std::vector<float>& responses,
+                                    cv::Rect2f region, int target) {
+  const int n = static_cast<int>(points.size());
+  std::vector<int> kept;
+  if (target == 0 || n == 0) return kept;
+  auto stronger = [&](int a, int b) {
+    return responses[static_cast<std::size_t>(a)] > responses[static_cast<std::size_t>(b)] ||
+           (responses[static_cast<std::size_t>(a)] == responses[static_cast<std::size_t>(b)] && a < b);
+  };
+  if (n <= target) {
+    kept.resize(static_cast<std::size_t>(n));
+    std::iota(kept.begin(), kept.end(), 0);
+    return kept;
+  }
+
+  struct Cell {
+    cv::Rect2f box;
+    std::vector<int> members;
+  };
+  std::vector<Cell> cells;
+  const int roots = std::max(1, static_cast<int>(std::lround(region.width / std::max(region.height, 1.0f))));
+  const float root_width = region.width / static_cast<float>(roots);
+  cells.resize(static_cast<std::size_t>(roots));
+  for (int r = 0; r < roots; ++r) {
+    cells[static_cast<std::size_t>(r)].box = {region.x + r * root_width, region.y, root_width, region.height};
+  }
+  for (int i = 0; i < n; ++i) {
+    const cv::Point2f& p = points[static_cast<std::size_t>(i)];
+    int r = static_cast<int>((p.x - region.x) / root_width);
+    r = std::clamp(r, 0, roots - 1);
+    cells[static_cast<std::size_t>(r)].members.push_back(i);
+  }
+  cells.erase(std::remove_if(cells.begin(), cells.end(), [](const Cell& c) { return c.members.empty(); }), cells.end());
+
+  auto splittable = [](const Cell& c) { return c.members.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f; };
+  while (static_cast<int>(cells.size()) < target) {
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (splittable(cells[i])) order.push_back(i);
+    }
+    if (order.empty()) break;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return cells[a].members.size() > cells[b].members.size(); });
+    std::vector<bool> split(cells.size(), false);
+    int count = static_cast<int>(cells.size());
+    std::vector<Cell> children;
+    for (std::size_t idx : order) {
+      if (count >= target) break;
+      const Cell& cell = cells[idx];
+      const float hw = cell.box.width * 0.5f;
+      const float hh = cell.box.height * 0.5f;
+      const float cx = cell.box.x + hw;
+      const float cy = cell.box.y + hh;
+      Cell quad[4] = {{{cell.box.x, cell.box.y, hw, hh}, {}},
+                      {{cx, cell.box.y, hw, hh}, {}},
+                      {{cell.box.x, cy, hw, hh}, {}},
+                      {{cx, cy, hw, hh}, {}}};
+      for (int m : cell.members) {
+        const cv::Point2f& p = points[static_cast<std::size_t>(m)];
+        quad[(p.x >= cx ? 1 : 0) + (p.y >= cy ? 2 : 0)].members.push_back(m);
+      }
+      int nonempty = 0;
+      for (Cell& q : quad) {
+        if (!q.members.empty()) {
+          children.push_back(std::move(q));
+          ++nonempty;
+        }
+      }
+      count += nonempty - 1;
+      split[idx] = true;
+    }
+    std::vector<Cell> next;
+    next.reserve(static_cast<std::size_t>(count));
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (!split[i]) next.push_back(std::move(cells[i]));
+    }
+    for (Cell& c : children) next.push_back(std::move(c));
+    cells = std::move(next);
+  }
+
+  std::vector<char> taken(static_cast<std::size_t>(n), 0);
+  for (const Cell& cell : cells) {
+    const int best = *std::min_element(cell.members.begin(), cell.members.end(), stronger);
+    kept.push_back(best);
+    taken[static_cast<std::size_t>(best)] = 1;
+  }
+  std::sort(kept.begin(), kept.end(), stronger);
+  if (static_cast<int>(kept.size()) > target) {
+    kept.resize(static_cast<std::size_t>(target));
+  } else if (static_cast<int>(kept.size()) < target) {
+    std::vector<int> rest;
+    for (int i = 0; i < n; ++i) {
+      if (!taken[static_cast<std::size_t>(i)]) rest.push_back(i);
+    }
+    const std::size_t missing = static_cast<std::size_t>(target) - kept.size();
+    std::partial_sort(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(missing), rest.end(), stronger);
+    kept.insert(kept.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(missing));
+  }
+  std::sort(kept.begin(), kept.end());
+  return kept;
+}
+
+}  // namespace
+
+TEST_CASE("the quadtree equals its first, per-cell-vector implementation") {
+  std::mt19937 rng(21);
+  for (int trial = 0; trial < 60; ++trial) {
+    const int n = 1 + static_cast<int>(rng() % 3000);
+    const cv::Rect2f region(5.0f, 7.0f, 100.0f + static_cast<float>(rng() % 900),
+                            100.0f + static_cast<float>(rng() % 500));
+    std::uniform_real_distribution<float> ux(region.x, region.x + region.width);
+    std::uniform_real_distribution<float> uy(region.y, region.y + region.height);
+    std::vector<cv::Point2f> points;
+    std::vector<float> responses;
+    for (int i = 0; i < n; ++i) {
+      // Clusters, duplicates and few distinct responses (ties) as well as spread points.
+      const bool clustered = rng() % 3 == 0;
+      points.emplace_back(clustered ? region.x + static_cast<float>(rng() % 8) : ux(rng),
+                          clustered ? region.y + static_cast<float>(rng() % 8) : uy(rng));
+      responses.push_back(static_cast<float>(rng() % 12));
+    }
+    for (int target : {1, 3, n / 10 + 1, n / 2 + 1, n - 1, n}) {
+      CAPTURE(trial);
+      CAPTURE(target);
+      CHECK(affine_orb::distribute_quadtree(points, responses, region, target) ==
+            reference_quadtree(points, responses, region, target));
+    }
+  }
+}

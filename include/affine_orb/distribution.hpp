@@ -88,75 +88,96 @@ inline std::vector<int> distribute_quadtree(const std::vector<cv::Point2f>& poin
     return kept;
   }
 
+  // Cells hold ranges of one index buffer; splitting a cell partitions its range in place (the
+  // order of a cell's members does not matter: every step depends only on the member set).
   struct Cell {
     cv::Rect2f box;
-    std::vector<int> members;
+    int begin;
+    int end;
+    int size() const { return end - begin; }
   };
   std::vector<Cell> cells;
+  std::vector<int> index(static_cast<std::size_t>(n));
   const int roots = std::max(1, static_cast<int>(std::lround(region.width / std::max(region.height, 1.0f))));
   const float root_width = region.width / static_cast<float>(roots);
-  cells.resize(static_cast<std::size_t>(roots));
-  for (int r = 0; r < roots; ++r) {
-    cells[static_cast<std::size_t>(r)].box = {region.x + r * root_width, region.y, root_width, region.height};
+  {
+    std::vector<int> root_of(static_cast<std::size_t>(n));
+    std::vector<int> start(static_cast<std::size_t>(roots) + 1, 0);
+    for (int i = 0; i < n; ++i) {
+      const cv::Point2f& p = points[static_cast<std::size_t>(i)];
+      const int r = std::clamp(static_cast<int>((p.x - region.x) / root_width), 0, roots - 1);
+      root_of[static_cast<std::size_t>(i)] = r;
+      ++start[static_cast<std::size_t>(r) + 1];
+    }
+    for (int r = 0; r < roots; ++r) start[static_cast<std::size_t>(r) + 1] += start[static_cast<std::size_t>(r)];
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int i = 0; i < n; ++i)
+      index[static_cast<std::size_t>(fill[static_cast<std::size_t>(root_of[static_cast<std::size_t>(i)])]++)] = i;
+    for (int r = 0; r < roots; ++r) {
+      if (start[static_cast<std::size_t>(r)] == start[static_cast<std::size_t>(r) + 1]) continue;
+      cells.push_back({{region.x + r * root_width, region.y, root_width, region.height},
+                       start[static_cast<std::size_t>(r)],
+                       start[static_cast<std::size_t>(r) + 1]});
+    }
   }
-  for (int i = 0; i < n; ++i) {
-    const cv::Point2f& p = points[static_cast<std::size_t>(i)];
-    int r = static_cast<int>((p.x - region.x) / root_width);
-    r = std::clamp(r, 0, roots - 1);
-    cells[static_cast<std::size_t>(r)].members.push_back(i);
-  }
-  cells.erase(std::remove_if(cells.begin(), cells.end(), [](const Cell& c) { return c.members.empty(); }),
-              cells.end());
 
-  auto splittable = [](const Cell& c) { return c.members.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f; };
+  auto splittable = [](const Cell& c) { return c.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f; };
+  std::vector<std::size_t> order;
+  std::vector<char> split;
+  std::vector<Cell> children;
+  std::vector<Cell> next;
   while (static_cast<int>(cells.size()) < target) {
-    std::vector<std::size_t> order;
+    order.clear();
     for (std::size_t i = 0; i < cells.size(); ++i) {
       if (splittable(cells[i])) order.push_back(i);
     }
     if (order.empty()) break;
     std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return cells[a].members.size() > cells[b].members.size(); });
-    std::vector<bool> split(cells.size(), false);
+                     [&](std::size_t a, std::size_t b) { return cells[a].size() > cells[b].size(); });
+    split.assign(cells.size(), 0);
     int count = static_cast<int>(cells.size());
-    std::vector<Cell> children;
+    children.clear();
     for (std::size_t idx : order) {
       if (count >= target) break;
-      const Cell& cell = cells[idx];
+      const Cell cell = cells[idx];
       const float hw = cell.box.width * 0.5f;
       const float hh = cell.box.height * 0.5f;
       const float cx = cell.box.x + hw;
       const float cy = cell.box.y + hh;
-      Cell quad[4] = {{{cell.box.x, cell.box.y, hw, hh}, {}},
-                      {{cx, cell.box.y, hw, hh}, {}},
-                      {{cell.box.x, cy, hw, hh}, {}},
-                      {{cx, cy, hw, hh}, {}}};
-      for (int m : cell.members) {
+      // Quadrant q = (x >= cx) + 2·(y >= cy): partition the range by q, quadrant by quadrant.
+      auto quadrant = [&](int m) {
         const cv::Point2f& p = points[static_cast<std::size_t>(m)];
-        quad[(p.x >= cx ? 1 : 0) + (p.y >= cy ? 2 : 0)].members.push_back(m);
+        return (p.x >= cx ? 1 : 0) + (p.y >= cy ? 2 : 0);
+      };
+      int* first = index.data() + cell.begin;
+      int* last = index.data() + cell.end;
+      int* bounds[5] = {first, nullptr, nullptr, nullptr, last};
+      for (int q = 0; q < 3; ++q) {
+        bounds[q + 1] = std::partition(bounds[q], last, [&](int m) { return quadrant(m) == q; });
       }
+      const cv::Rect2f boxes[4] = {
+          {cell.box.x, cell.box.y, hw, hh}, {cx, cell.box.y, hw, hh}, {cell.box.x, cy, hw, hh}, {cx, cy, hw, hh}};
       int nonempty = 0;
-      for (Cell& q : quad) {
-        if (!q.members.empty()) {
-          children.push_back(std::move(q));
-          ++nonempty;
-        }
+      for (int q = 0; q < 4; ++q) {
+        if (bounds[q] == bounds[q + 1]) continue;
+        children.push_back(
+            {boxes[q], static_cast<int>(bounds[q] - index.data()), static_cast<int>(bounds[q + 1] - index.data())});
+        ++nonempty;
       }
       count += nonempty - 1;
-      split[idx] = true;
+      split[idx] = 1;
     }
-    std::vector<Cell> next;
-    next.reserve(static_cast<std::size_t>(count));
+    next.clear();
     for (std::size_t i = 0; i < cells.size(); ++i) {
-      if (!split[i]) next.push_back(std::move(cells[i]));
+      if (!split[i]) next.push_back(cells[i]);
     }
-    for (Cell& c : children) next.push_back(std::move(c));
-    cells = std::move(next);
+    next.insert(next.end(), children.begin(), children.end());
+    cells.swap(next);
   }
 
   std::vector<char> taken(static_cast<std::size_t>(n), 0);
   for (const Cell& cell : cells) {
-    const int best = *std::min_element(cell.members.begin(), cell.members.end(), stronger);
+    const int best = *std::min_element(index.begin() + cell.begin, index.begin() + cell.end, stronger);
     kept.push_back(best);
     taken[static_cast<std::size_t>(best)] = 1;
   }

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <exception>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -43,7 +44,8 @@ const char* const kUsage =
     "  DIR                KITTI odometry (image_0/, times.txt, poses.txt, calib.txt), TUM RGB-D (rgb.txt,\n"
     "                     groundtruth.txt) or a folder of images in name order; --format auto guesses\n"
     "  --step K           keep every K-th frame: K times the camera speed (default 1)\n"
-    "  --max-tilt T       largest simulated tilt, 1 = plain ORB-style features (default 2.828: 18 views)\n"
+    "  --max-tilt T       largest simulated tilt, 1 = plain ORB-style features (default 2√2: 18 views;\n"
+    "                     tilts are powers of √2, so 2.8284 < 2√2 gives 10 views and 2.83 gives 18)\n"
     "  --features N       features per frame (default 1000)\n"
     "  --threads K        extraction threads (default 2)\n"
     "  --frames N         use only the first N frames of the sequence (before --step)\n"
@@ -77,10 +79,13 @@ struct FrameRecord {
 struct Summary {
   int step = 1;
   double max_tilt = 1.0;
+  int views = 1;  // simulated views of the extractor
   int frames = 0, lost = 0, keyframes = 0;
   double loss_rate = 0.0;
   double ms_extract_mean = 0.0, ms_extract_median = 0.0, ms_track_mean = 0.0;
-  int truth_pairs = 0, rotations = 0;
+  int truth_pairs = 0;  // consecutive kept frames with ground truth (and intrinsics)
+  int rotations = 0;    // relative rotations recovered
+  int compared = 0;     // ... of which have ground truth
   double rotation_error_median = 0.0, rotation_error_mean = 0.0, truth_angle_median = 0.0;
 };
 
@@ -187,6 +192,7 @@ Run track(const ex::Sequence& sequence, const std::vector<int>& indices, int ste
   s.ms_extract_mean = mean(extract_ms);
   s.ms_extract_median = ex::median(extract_ms);
   s.ms_track_mean = mean(track_ms);
+  s.compared = static_cast<int>(errors.size());
   s.rotation_error_median = ex::median(errors);
   s.rotation_error_mean = mean(errors);
   s.truth_angle_median = ex::median(truth_angles);
@@ -202,22 +208,23 @@ std::vector<int> kept_indices(int count, int step) {
 std::string summary_json(const Summary& s, bool with_rotation) {
   char buffer[1024];
   std::snprintf(buffer, sizeof(buffer),
-                "{\"step\": %d, \"max_tilt\": %.4f, \"frames\": %d, \"lost\": %d, \"frame_loss_rate\": %.4f, "
+                "{\"step\": %d, \"max_tilt\": %.4f, \"views\": %d, \"frames\": %d, \"lost\": %d, \"frame_loss_rate\": %.4f, "
                 "\"keyframes\": %d, \"ms_extract_mean\": %.2f, \"ms_extract_median\": %.2f, \"ms_track_mean\": %.2f, ",
-                s.step, s.max_tilt, s.frames, s.lost, s.loss_rate, s.keyframes, s.ms_extract_mean, s.ms_extract_median,
+                s.step, s.max_tilt, s.views, s.frames, s.lost, s.loss_rate, s.keyframes, s.ms_extract_mean, s.ms_extract_median,
                 s.ms_track_mean);
   std::string out = buffer;
   if (with_rotation) {
-    const bool any = s.rotations > 0 && s.truth_pairs > 0;
+    const bool any = s.compared > 0;
     out += "\"truth_pairs\": " + std::to_string(s.truth_pairs) + ", \"rotations_recovered\": " +
-           std::to_string(s.rotations) + ", \"rotation_error_median_deg\": " +
+           std::to_string(s.rotations) + ", \"rotations_compared\": " + std::to_string(s.compared) +
+           ", \"rotation_error_median_deg\": " +
            json_number(any ? std::optional<double>(s.rotation_error_median) : std::nullopt) +
            ", \"rotation_error_mean_deg\": " +
            json_number(any ? std::optional<double>(s.rotation_error_mean) : std::nullopt) +
            ", \"truth_rotation_median_deg\": " + json_number(s.truth_angle_median) + "}";
   } else {
     out += "\"truth_pairs\": 0, \"rotations_recovered\": " + std::to_string(s.rotations) +
-           ", \"rotation_error_median_deg\": null, \"rotation_error_mean_deg\": null, "
+           ", \"rotations_compared\": 0, \"rotation_error_median_deg\": null, \"rotation_error_mean_deg\": null, "
            "\"truth_rotation_median_deg\": null}";
   }
   return out;
@@ -305,14 +312,14 @@ void draw_plot(const std::string& path, const std::string& name, const std::vect
   }
   draw_panel(canvas, cv::Rect(0, 30, 550, 440), "frame loss rate (lost / frames, eq. 22)", loss_plain, loss_affine, true);
   draw_panel(canvas, cv::Rect(550, 30, 550, 440), "keyframes", kf_plain, kf_affine, false);
-  char legend[160];
-  std::snprintf(legend, sizeof(legend), "plain (max tilt 1)      affine (max tilt %.2f)", affine.front().max_tilt);
   cv::putText(canvas, name, {10, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   cv::rectangle(canvas, cv::Rect(640, 10, 14, 14), cv::Scalar(180, 120, 60), cv::FILLED);
   cv::rectangle(canvas, cv::Rect(820, 10, 14, 14), cv::Scalar(40, 140, 240), cv::FILLED);
   cv::putText(canvas, "plain (max tilt 1)", {660, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1,
               cv::LINE_AA);
-  std::snprintf(legend, sizeof(legend), "affine (max tilt %.2f)", affine.front().max_tilt);
+  char legend[64];
+  std::snprintf(legend, sizeof(legend), "affine (max tilt %.2f, %d views)", affine.front().max_tilt,
+                affine.front().views);
   cv::putText(canvas, legend, {840, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   if (!cv::imwrite(path, canvas)) throw std::runtime_error("cannot write " + path);
 }
@@ -323,10 +330,10 @@ void print_summary_text(const Summary& s, bool rotation) {
   std::printf("extraction %.1f ms/frame (median %.1f), tracking %.1f ms/frame\n", s.ms_extract_mean,
               s.ms_extract_median, s.ms_track_mean);
   if (!rotation) return;
-  if (s.rotations > 0 && s.truth_pairs > 0) {
+  if (s.compared > 0) {
     std::printf("rotation error vs ground truth: median %.3f deg, mean %.3f deg, recovered for %d of %d frame pairs "
                 "(true rotation: median %.2f deg)\n",
-                s.rotation_error_median, s.rotation_error_mean, s.rotations, s.truth_pairs, s.truth_angle_median);
+                s.rotation_error_median, s.rotation_error_mean, s.compared, s.truth_pairs, s.truth_angle_median);
   } else {
     std::printf("rotation error vs ground truth: no rotation recovered for %d frame pairs\n", s.truth_pairs);
   }
@@ -343,7 +350,9 @@ int main(int argc, char** argv) {
     }
     const std::string format = args.value("--format", "auto");
     const std::string step_text = args.value("--step", "");
-    const int step = step_text.empty() ? 1 : std::stoi(step_text);
+    std::size_t used = 0;
+    const int step = step_text.empty() ? 1 : std::stoi(step_text, &used);
+    if (!step_text.empty() && used != step_text.size()) throw std::invalid_argument("--step: not an integer: " + step_text);
     affine_orb::ExtractorOptions extractor_options;
     extractor_options.views.max_tilt = args.real("--max-tilt", extractor_options.views.max_tilt);
     extractor_options.features = args.integer("--features", 1000);
@@ -395,8 +404,9 @@ int main(int argc, char** argv) {
         std::vector<Extracted> cache;
         for (const ex::SequenceFrame& frame : sequence.frames) cache.push_back(extract(extractor, frame));
         for (int k = 1; k <= 5; ++k) {
-          const Run run = track(sequence, kept_indices(count, k), k, tilt, options, camera,
-                                [&](int i) { return cache[static_cast<std::size_t>(i)]; });
+          Run run = track(sequence, kept_indices(count, k), k, tilt, options, camera,
+                          [&](int i) { return cache[static_cast<std::size_t>(i)]; });
+          run.summary.views = static_cast<int>(extractor.views().size());
           (tilt == 1.0 ? plain : affine).push_back(run.summary);
         }
       }
@@ -423,14 +433,15 @@ int main(int argc, char** argv) {
                     "rotations recovered | ms/frame (extract) |\n|---|---|---|---|---|---|---|---|---|\n");
         for (const std::vector<Summary>* set : {&plain, &affine}) {
           for (const Summary& s : *set) {
-            char tilt[48];
-            std::snprintf(tilt, sizeof(tilt), s.max_tilt == 1.0 ? "plain" : "affine (tilt %.2f)", s.max_tilt);
+            char tilt[64];
+            std::snprintf(tilt, sizeof(tilt), "affine (tilt %.2f, %d views)", s.max_tilt, s.views);
+            if (s.max_tilt == 1.0) std::snprintf(tilt, sizeof(tilt), "plain");
             char error[64] = "n/a";
-            if (rotation && s.rotations > 0) {
+            if (rotation && s.compared > 0) {
               std::snprintf(error, sizeof(error), "%.3f / %.3f", s.rotation_error_median, s.rotation_error_mean);
             }
             std::printf("| %s | %d | %d | %d | %.1f %% | %d | %s | %d / %d | %.1f |\n", tilt, s.step, s.frames, s.lost,
-                        100.0 * s.loss_rate, s.keyframes, error, s.rotations, s.truth_pairs, s.ms_extract_mean);
+                        100.0 * s.loss_rate, s.keyframes, error, s.compared, s.truth_pairs, s.ms_extract_mean);
           }
         }
         std::printf("plot: %s\n", plot.c_str());
@@ -439,9 +450,10 @@ int main(int argc, char** argv) {
     }
 
     affine_orb::Extractor<affine_orb::Rbrief> extractor(extractor_options);
-    const Run run = track(sequence, kept_indices(count, step), step, extractor_options.views.max_tilt, options, camera,
-                          [&](int i) { return extract(extractor, sequence.frames[static_cast<std::size_t>(i)]); });
+    Run run = track(sequence, kept_indices(count, step), step, extractor_options.views.max_tilt, options, camera,
+                    [&](int i) { return extract(extractor, sequence.frames[static_cast<std::size_t>(i)]); });
     const std::size_t views = extractor.views().size();
+    run.summary.views = static_cast<int>(views);
     if (json) {
       std::printf("{\"sequence\": %s, \"format\": %s, \"features\": %d, \"threads\": %d, \"views\": %zu, "
                   "\"summary\": %s, \"frames\": [",
@@ -457,7 +469,7 @@ int main(int argc, char** argv) {
                 dir.c_str(), sequence.format.c_str(), count, step, run.frames.size(), extractor_options.views.max_tilt,
                 views, extractor_options.features, extractor_options.threads,
                 rotation ? "" : (camera ? "; no poses: no rotation check" : "; no intrinsics: no rotation check"));
-    std::printf("%6s %10s %5s %6s %5s %5s %5s %6s %-11s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match",
+    std::printf("%6s %10s %5s %6s %5s %5s %5s %6s %-16s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match",
                 "inl", "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
     for (const FrameRecord& r : run.frames) {
       const affine_orb::TrackedFrame& t = r.tracked;
@@ -465,7 +477,7 @@ int main(int argc, char** argv) {
       if (t.keyframe) state += t.initialised ? "+KF(init)" : "+KF";
       const std::string truth = r.truth_angle ? json_number(r.truth_angle, "%.3f") : "-";
       const std::string error = r.rotation_error ? json_number(r.rotation_error, "%.3f") : "-";
-      std::printf("%6d %10.3f %5d %6d %5d %5s %5.2f %6.3f %-11s %8d %8s %8s %7.1f %7.1f\n", r.sequence_index,
+      std::printf("%6d %10.3f %5d %6d %5d %5s %5.2f %6.3f %-16s %8d %8s %8s %7.1f %7.1f\n", r.sequence_index,
                   r.timestamp, t.features, r.matches, t.inliers, model_name(t.model), t.homography_ratio,
                   t.inlier_ratio, state.c_str(), t.previous_inliers, truth.c_str(), error.c_str(), r.ms_extract,
                   r.ms_track);

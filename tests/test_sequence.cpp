@@ -41,6 +41,22 @@ using Features = affine_orb::Features<affine_orb::Rbrief::kBits>;
 
 constexpr double kPi = 3.14159265358979323846;
 
+// Under AddressSanitizer (about 5x slower in RelWithDebInfo, 40x in a Debug build, mostly in the
+// 18-view extraction) the affine runs use fewer frames; plain runs keep all of them.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+#else
+constexpr bool kSanitized = false;
+#endif
+
+bool is_affine(double max_tilt) { return max_tilt > 1.0; }
+
 // A fresh directory under the system temporary directory, removed with its contents at the end.
 class TempDir {
  public:
@@ -379,7 +395,9 @@ TEST_CASE("tracker: a noise frame is lost, tracking recovers after it, inliers a
     Tracker tracker(options, scene.camera);
     std::vector<affine_orb::TrackedFrame> results;
     std::vector<Features> features;
-    for (std::size_t i = 0; i < scene.frames.size(); ++i) {
+    // 12 frames; 8 (still two after the noise frame) for affine features under a sanitizer.
+    const std::size_t frames = kSanitized && is_affine(max_tilt) ? 8 : scene.frames.size();
+    for (std::size_t i = 0; i < frames; ++i) {
       const cv::Mat image = i == kNoiseFrame ? noise_image(photo.size(), 7) : scene.frames[i];
       features.push_back(extractor.extract(image));
       results.push_back(tracker.track(features.back()));
@@ -413,9 +431,9 @@ TEST_CASE("tracker: a noise frame is lost, tracking recovers after it, inliers a
         CHECK(rotation_angle_degrees(t.relative_pose.rotation, relative) < 0.5);
       }
     }
-    CHECK(tracker.frames() == 12);
+    CHECK(tracker.frames() == static_cast<int>(frames));
     CHECK(tracker.lost_frames() == 1);
-    CHECK(tracker.frame_loss_rate() == doctest::Approx(1.0 / 12.0));
+    CHECK(tracker.frame_loss_rate() == doctest::Approx(1.0 / static_cast<double>(frames)));
     int keyframes = 0;
     for (const affine_orb::TrackedFrame& t : results) keyframes += t.keyframe ? 1 : 0;
     CHECK(tracker.keyframes() == keyframes);
@@ -529,11 +547,13 @@ TEST_CASE("tracker: bad options and inconsistent features throw") {
 }
 
 TEST_CASE("KITTI 06, first 20 frames: every frame tracked, rotations against the ground truth") {
-  // Measured (1000 features, 2 threads): plain features track all 20 frames with 125–200 inliers
-  // to the keyframe (the loss threshold is 30), affine features (max tilt 2√2) likewise; frame-to-
-  // frame rotation errors have a median below 0.2° (plain) and 0.3° (affine) over these frames,
-  // where the car turns by 0.03–0.14° per frame. Floors: at most one lost frame, rotations for at
-  // least 17 of 19 pairs with a median error below 0.5° (the accuracy the synthetic tests demand).
+  // Measured (1000 features, 2 threads, default options): plain features track all 20 frames with
+  // 71–194 inliers to the keyframe (the loss threshold is 30) and take 7 keyframes; affine features
+  // (max tilt 2√2, 18 views) also track all 20 and take 8. Frame-to-frame rotations are recovered
+  // for 18 (plain) and 19 (affine) of the 19 pairs with median errors of 0.13° and 0.35°; the car
+  // turns by a median 0.06° per frame. Floors: at most one lost frame, at least two keyframes,
+  // rotations for all but two pairs, median error below 0.5° (the accuracy the synthetic tests
+  // demand).
   ex::Sequence sequence = ex::read_kitti(affine_orb::test::data_dir() + "/kitti06");
   REQUIRE(sequence.frames.size() == 51);
   REQUIRE(sequence.camera);
@@ -546,7 +566,9 @@ TEST_CASE("KITTI 06, first 20 frames: every frame tracked, rotations against the
     Tracker tracker(options, sequence.camera);
     std::vector<affine_orb::TrackedFrame> results;
     std::vector<double> errors;
-    for (std::size_t i = 0; i < sequence.frames.size(); ++i) {
+    // 20 frames; the first 6 for affine features under a sanitizer.
+    const std::size_t frames = kSanitized && is_affine(max_tilt) ? 6 : sequence.frames.size();
+    for (std::size_t i = 0; i < frames; ++i) {
       results.push_back(tracker.track(extractor.extract(ex::load_frame(sequence.frames[i]))));
       const affine_orb::TrackedFrame& t = results.back();
       if (i > 0 && t.relative_pose.success) {
@@ -557,7 +579,7 @@ TEST_CASE("KITTI 06, first 20 frames: every frame tracked, rotations against the
     check_keyframe_rules(results, options);
     CHECK(tracker.lost_frames() <= 1);
     CHECK(tracker.keyframes() >= 2);
-    CHECK(errors.size() >= 17);
+    CHECK(errors.size() + 2 >= frames - 1);
     CHECK(median(errors) < 0.5);
     MESSAGE("KITTI 06 frames 0-19, max tilt " << max_tilt << ": lost " << tracker.lost_frames() << ", keyframes "
                                               << tracker.keyframes() << ", rotations " << errors.size()

@@ -202,8 +202,8 @@ inline int views_budget(int extra, const AffineViewOptions& views) {
 /// initialisation, which matches octave-0 keypoints only, keeps all of its candidates. With the
 /// views on, a second extractor over the views of max_tilt contributes the keypoints of its tilted
 /// views (about view_features · nfeatures of them; its keypoints of the untilted image are dropped),
-/// each mapped to its nearest octave and, with AdapterDuplicates::kMerge, dropped when a keypoint of
-/// the image lies within merge_radius · s^octave pixels at the same octave.
+/// each mapped to its nearest octave o and, with AdapterDuplicates::kMerge, dropped when a keypoint
+/// of the image of octave o' in {o − 1, o, o + 1} lies within merge_radius · s^o' pixels.
 class AdapterCore {
  public:
   AdapterCore(const char* who, int nfeatures, float scale_factor, int nlevels, int ini_th_fast, int min_th_fast,
@@ -320,7 +320,7 @@ class AdapterCore {
         const cv::KeyPoint& kp = views.keypoints[i];
         const int o = octave_for(kp.octave, view.tilt, static_cast<double>(scale_factor_), levels_);
         if (!fits(kp.pt, o, frame.pyramid)) continue;
-        if (affine_.duplicates == AdapterDuplicates::kMerge && grids[static_cast<std::size_t>(o)].near(kp.pt)) continue;
+        if (affine_.duplicates == AdapterDuplicates::kMerge && duplicate(grids, kp.pt, o)) continue;
         by_octave[static_cast<std::size_t>(o)].push_back({1, i});
       }
     }
@@ -372,6 +372,17 @@ class AdapterCore {
       return false;
     }
   };
+
+  /// Whether an image keypoint of octave o − 1, o or o + 1 lies within merge_radius · s^o' of p
+  /// (o' its octave): ORB-SLAM's matchers search a keypoint's octave and its neighbours, and its
+  /// ratio tests (SearchByBoW across all octaves) reject a match when two keypoints of one corner
+  /// compete.
+  bool duplicate(const std::vector<OctaveGrid>& grids, cv::Point2f p, int o) const {
+    for (int q = std::max(o - 1, 0); q <= std::min(o + 1, levels_ - 1); ++q) {
+      if (grids[static_cast<std::size_t>(q)].near(p)) return true;
+    }
+    return false;
+  }
 
   std::vector<OctaveGrid> octave_grids(const std::vector<cv::KeyPoint>& keypoints) const {
     std::vector<OctaveGrid> grids(static_cast<std::size_t>(levels_));

@@ -4,6 +4,7 @@
 // every sequence in ../shared/data/oxford, and Debian opencv-doc's graf1/graf3 pair, for every
 // method, in one run:
 //   ours plain rBRIEF, ours plain BRISK, ours affine rBRIEF, ours affine BRISK (N features, 18 views),
+//   with the quadtree spreading (the SLAM default) and, for three of them, the strongest-N selection,
 //   cv::ORB 1000, cv::ORB 2000, cv::BRISK, cv::AffineFeature(cv::ORB) with the same 18 views.
 // All methods are matched the same way (affine_orb::match_features: ratio 0.8, location-aware ratio
 // test, duplicate removal) and verified with the same estimator (cv::findHomography, RANSAC, 3 px).
@@ -61,11 +62,13 @@ struct Row {
 };
 
 template <class Descriptor>
-Method ours(const std::string& name, int features, double max_tilt, int threads) {
+Method ours(const std::string& name, int features, double max_tilt, int threads,
+            affine_orb::Spreading spreading = affine_orb::Spreading::kQuadtree) {
   affine_orb::ExtractorOptions options;
   options.features = features;
   options.views.max_tilt = max_tilt;
   options.threads = threads;
+  options.spreading = spreading;
   auto extractor = std::make_shared<affine_orb::Extractor<Descriptor>>(options);
   return {name, [extractor](const cv::Mat& image) {
             const auto start = Clock::now();
@@ -177,7 +180,7 @@ cv::Mat read_gray(const std::string& path) {
 }
 
 void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, const std::string& path) {
-  const int width = 900, height = 560, left = 80, right = 250, top = 40, bottom = 60;
+  const int width = 1000, height = 560, left = 80, right = 300, top = 40, bottom = 60;
   cv::Mat canvas(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
   const int angles[] = {20, 30, 40, 50, 60};  // graf img2..img6 (approximate viewpoint change)
   std::size_t ymax = 10;
@@ -201,9 +204,10 @@ void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, cons
   cv::putText(canvas, "viewpoint change (degrees), graf 1->2 ... 1->6", cv::Point(left + 120, height - 15),
               cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0));
   cv::putText(canvas, "distinct correct matches", cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0));
-  const cv::Scalar colours[] = {{200, 120, 0}, {120, 60, 0}, {0, 160, 0}, {0, 90, 0}, {0, 0, 220}, {0, 0, 130}, {150, 0, 150}, {0, 140, 255}};
+  const cv::Scalar colours[] = {{200, 120, 0}, {120, 60, 0}, {0, 160, 0}, {0, 90, 0},     {230, 180, 90}, {90, 220, 90},
+                                {0, 60, 0},    {0, 0, 220},  {0, 0, 130}, {150, 0, 150}, {0, 140, 255}};
   for (std::size_t m = 0; m < methods.size(); ++m) {
-    const cv::Scalar colour = colours[m % 8];
+    const cv::Scalar colour = colours[m % (sizeof(colours) / sizeof(colours[0]))];
     cv::Point previous(-1, -1);
     for (int image = 2; image <= 6; ++image) {
       for (const Row& r : rows) {
@@ -247,6 +251,11 @@ int main(int argc, char** argv) {
       ours<affine_orb::Brisk>("ours plain BRISK", features, 1.0, threads),
       ours<affine_orb::Rbrief>("ours affine rBRIEF", features, max_tilt, threads),
       ours<affine_orb::Brisk>("ours affine BRISK", features, max_tilt, threads),
+      ours<affine_orb::Rbrief>("ours plain rBRIEF strongest", features, 1.0, threads, affine_orb::Spreading::kStrongest),
+      ours<affine_orb::Rbrief>("ours affine rBRIEF strongest", features, max_tilt, threads,
+                               affine_orb::Spreading::kStrongest),
+      ours<affine_orb::Brisk>("ours affine BRISK strongest", features, max_tilt, threads,
+                              affine_orb::Spreading::kStrongest),
       peer("cv::ORB 1000", cv::ORB::create(1000)),
       peer("cv::ORB 2000", cv::ORB::create(2000)),
       peer("cv::BRISK", cv::BRISK::create()),

@@ -834,3 +834,49 @@ TEST_CASE("the quadtree equals its first, per-cell-vector implementation") {
     }
   }
 }
+
+TEST_CASE("select_strongest keeps the target strongest, ties to the lower index") {
+  const std::vector<float> responses = {5, 9, 1, 9, 7, 3, 9, 0};
+  CHECK(affine_orb::select_strongest(responses, 3) == std::vector<int>{1, 3, 6});
+  CHECK(affine_orb::select_strongest(responses, 2) == std::vector<int>{1, 3});
+  CHECK(affine_orb::select_strongest(responses, 4) == std::vector<int>{1, 3, 4, 6});
+  CHECK(affine_orb::select_strongest(responses, 0).empty());
+  CHECK(affine_orb::select_strongest(responses, 100).size() == responses.size());
+  CHECK_THROWS_AS(affine_orb::select_strongest(responses, -1), std::invalid_argument);
+  // Against a full sort on random responses with many ties.
+  std::mt19937 rng(4);
+  std::vector<float> random(500);
+  for (float& r : random) r = static_cast<float>(rng() % 40);
+  std::vector<int> order(random.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return random[static_cast<std::size_t>(a)] > random[static_cast<std::size_t>(b)];
+  });
+  order.resize(123);
+  std::sort(order.begin(), order.end());
+  CHECK(affine_orb::select_strongest(random, 123) == order);
+}
+
+TEST_CASE("the strongest spreading gives the budget and more matches; the quadtree spreads wider") {
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  affine_orb::ExtractorOptions options;
+  options.features = 1000;
+  options.views.max_tilt = 1.0;
+  affine_orb::ExtractorOptions strongest = options;
+  strongest.spreading = affine_orb::Spreading::kStrongest;
+  const auto spread = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
+  const auto strong = affine_orb::Extractor<affine_orb::Rbrief>(strongest).extract(image);
+  CHECK(strong.size() == 1000);
+  double spread_mean = 0.0;
+  double strong_mean = 0.0;
+  std::set<int> spread_cells;
+  std::set<int> strong_cells;
+  for (std::size_t i = 0; i < 1000; ++i) {
+    spread_mean += spread.keypoints[i].response;
+    strong_mean += strong.keypoints[i].response;
+    spread_cells.insert(static_cast<int>(spread.keypoints[i].pt.y / 64) * 16 + static_cast<int>(spread.keypoints[i].pt.x / 64));
+    strong_cells.insert(static_cast<int>(strong.keypoints[i].pt.y / 64) * 16 + static_cast<int>(strong.keypoints[i].pt.x / 64));
+  }
+  CHECK(strong_mean > spread_mean);
+  CHECK(spread_cells.size() > strong_cells.size());
+}

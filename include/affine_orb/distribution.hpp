@@ -60,6 +60,24 @@ inline std::vector<int> allocate_with_carry(const std::vector<int>& budgets, con
   return take;
 }
 
+/// The `target` strongest of `responses` (ties: the lower index), as indices ascending; all of
+/// them when there are no more than `target`. cv::ORB's selection (no spatial spreading).
+inline std::vector<int> select_strongest(const std::vector<float>& responses, int target) {
+  detail::require(target >= 0, "select_strongest: target must be >= 0");
+  std::vector<int> kept(responses.size());
+  std::iota(kept.begin(), kept.end(), 0);
+  if (static_cast<std::size_t>(target) < kept.size()) {
+    std::nth_element(kept.begin(), kept.begin() + target, kept.end(), [&](int a, int b) {
+      const float ra = responses[static_cast<std::size_t>(a)];
+      const float rb = responses[static_cast<std::size_t>(b)];
+      return ra > rb || (ra == rb && a < b);
+    });
+    kept.resize(static_cast<std::size_t>(target));
+  }
+  std::sort(kept.begin(), kept.end());
+  return kept;
+}
+
 /// Spatial spreading by a quadtree over `region` (the same role as ORB-SLAM2's octree distribution;
 /// this is an independent formulation):
 /// 1. the region is cut into max(1, round(width/height)) roughly square root cells;

@@ -37,6 +37,14 @@ enum class DuplicatePolicy {
              ///< within ExtractorOptions::merge_radius of each other: for SLAM, one point per corner.
 };
 
+/// How each (view, level) keeps its share of the budget among its candidates.
+enum class Spreading {
+  kQuadtree,   ///< distribute_quadtree(): spread over the image (ORB-SLAM2's octree distribution);
+               ///< keeps tracking alive in weakly textured parts, the SLAM choice (SPEC §2).
+  kStrongest,  ///< select_strongest(): the strongest corners wherever they are (cv::ORB's choice);
+               ///< more repeatable, so more correct matches between two wide-baseline images.
+};
+
 /// Extraction parameters (SPEC §2).
 struct ExtractorOptions {
   /// Number of features returned when the image has enough corners (exactly this many); ORB-SLAM2's
@@ -50,6 +58,9 @@ struct ExtractorOptions {
   /// Radius in original pixels, times the level scale s^l, within which kMerge treats keypoints of
   /// different views on the same level as one; 2 px is the SPEC §7 duplicate cell size.
   double merge_radius = 2.0;
+  /// Selection within each (view, level); kQuadtree for SLAM, kStrongest for matching two images
+  /// (bench/eval_viewpoint measures both).
+  Spreading spreading = Spreading::kQuadtree;
   /// Worker threads for the views (1 = the calling thread only). The output does not depend on it.
   int threads = 1;
 
@@ -63,6 +74,8 @@ struct ExtractorOptions {
                     "ExtractorOptions::duplicates is invalid");
     detail::require(std::isfinite(merge_radius) && merge_radius > 0.0 && merge_radius <= 64.0,
                     "ExtractorOptions::merge_radius must be in (0, 64], got " + std::to_string(merge_radius));
+    detail::require(spreading == Spreading::kQuadtree || spreading == Spreading::kStrongest,
+                    "ExtractorOptions::spreading is invalid");
     detail::require(threads >= 1 && threads <= 256,
                     "ExtractorOptions::threads must be in [1, 256], got " + std::to_string(threads));
   }
@@ -86,7 +99,8 @@ struct ExtractorOptions {
 /// 4. the budget is split over views in proportion to their area (1/t) and, within a view, over
 ///    levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry()); each
 ///    (view, level) keeps its share by quadtree spreading (distribute_quadtree()) in original
-///    coordinates;
+///    coordinates, or its strongest candidates (select_strongest()), per
+///    ExtractorOptions::spreading;
 /// 5. kept keypoints are oriented and described in their view, then mapped back: position through
 ///    the inverse view map, orientation by mapping the direction vector, scale s^l·√t (SPEC §1).
 ///
@@ -168,7 +182,9 @@ class Extractor {
           responses.push_back(work.responses[static_cast<std::size_t>(i)]);
         }
         work.kept.clear();
-        for (int k : distribute_quadtree(points, responses, region, take[static_cast<std::size_t>(v * levels + l)])) {
+        const int target = take[static_cast<std::size_t>(v * levels + l)];
+        for (int k : options_.spreading == Spreading::kQuadtree ? distribute_quadtree(points, responses, region, target)
+                                                                  : select_strongest(responses, target)) {
           work.kept.push_back(work.alive[static_cast<std::size_t>(k)]);
         }
       }

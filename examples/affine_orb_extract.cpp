@@ -22,6 +22,7 @@ namespace {
 
 const char* const kUsage =
     "usage: affine_orb_extract IMAGE [--features N] [--descriptor rbrief|brisk] [--max-tilt T] [--threads K]\n"
+    "                          [--spreading quadtree|strongest]\n"
     "                          [--repeat R] [--out PNG] [--json]\n"
     "  --max-tilt T  largest simulated tilt (1 = no affine views; default 2.828 = 18 views)\n";
 

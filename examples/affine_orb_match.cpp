@@ -1,5 +1,6 @@
 // affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]
-//                  [--features N] [--threads K] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]
+//                  [--features N] [--threads K] [--spreading strongest|quadtree] [--out PNG]
+//                  [--rectified PNG] [--save-matches FILE] [--json]
 //
 // Extracts Affine-ORB features from two images, matches them (SPEC §4), selects the homography or
 // the fundamental matrix (SPEC §5) and, with a ground-truth homography (x2 ~ H x1: the Oxford
@@ -28,10 +29,12 @@ namespace {
 
 const char* const kUsage =
     "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
-    "                        [--features N] [--threads K] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]\n"
+    "                        [--features N] [--threads K] [--spreading S] [--out PNG] [--rectified PNG]\n"
+    "                        [--save-matches FILE] [--json]\n"
     "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian opencv-doc)\n"
     "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
     "  --max-tilt T       largest simulated tilt, 1 = no affine views (default 2.828: 18 views)\n"
+    "  --spreading S      strongest (default: most repeatable) or quadtree (spread over the image, for SLAM)\n"
     "  --out PNG          the matches side by side (green correct, red wrong; without ground truth:\n"
     "                     green = inlier of the chosen model)\n"
     "  --rectified PNG    image 1 next to image 2 warped into image 1's frame, when a homography is chosen\n"
@@ -175,6 +178,7 @@ int main(int argc, char** argv) {
     affine_orb::ExtractorOptions options;
     options.features = 2000;
     options.threads = 2;
+    options.spreading = affine_orb::Spreading::kStrongest;  // matching two images, not tracking
     if (affine_orb::examples::parse_common(args, options)) {
       std::fputs(kUsage, stdout);
       return 0;

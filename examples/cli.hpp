@@ -67,12 +67,22 @@ class Args {
 };
 
 /// Consumes `--help`/`-h` (true when given) and the extractor flags shared by the examples:
-/// --features N, --max-tilt T, --threads K, starting from `options`.
+/// --features N, --max-tilt T, --threads K, --spreading quadtree|strongest, starting from
+/// `options`.
 inline bool parse_common(Args& args, ExtractorOptions& options) {
   const bool help = args.flag("--help") || args.flag("-h");
   options.features = args.integer("--features", options.features);
   options.views.max_tilt = args.real("--max-tilt", options.views.max_tilt);
   options.threads = args.integer("--threads", options.threads);
+  const std::string spreading =
+      args.value("--spreading", options.spreading == Spreading::kQuadtree ? "quadtree" : "strongest");
+  if (spreading == "quadtree") {
+    options.spreading = Spreading::kQuadtree;
+  } else if (spreading == "strongest") {
+    options.spreading = Spreading::kStrongest;
+  } else {
+    throw std::invalid_argument("--spreading must be quadtree or strongest, got " + spreading);
+  }
   return help;
 }
 

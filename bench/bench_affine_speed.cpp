@@ -10,8 +10,8 @@
 // image, DuplicatePolicy::kKeepAll, ratio 0.8; correct = ‖H x1 − x2‖ < 3 px; matches whose image-1
 // points fall in the same 2-px cell count once).
 //
-// --profile affine|plain|orb|affine_feature N: runs only that extraction N times on the graf image
-// (for instruction counts under callgrind).
+// --profile affine|plain|orb|affine_feature N [--image graf|kitti]: runs only that extraction N
+// times on one of the images (for instruction counts under callgrind).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -172,16 +172,21 @@ void bench_image(const char* name, const cv::Mat& image, int rounds) {
 int main(int argc, char** argv) {
   int rounds = 21;
   std::string profile;
+  std::string profile_image = "graf";
   int profile_runs = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--rounds" && i + 1 < argc) {
       rounds = std::max(1, std::atoi(argv[++i]));
+    } else if (arg == "--image" && i + 1 < argc) {
+      profile_image = argv[++i];
     } else if (arg == "--profile" && i + 2 < argc) {
       profile = argv[++i];
       profile_runs = std::max(0, std::atoi(argv[++i]));
     } else {
-      std::fprintf(stderr, "usage: %s [--rounds N] [--profile affine|plain|orb|affine_feature N]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--rounds N] [--profile affine|plain|orb|affine_feature N [--image graf|kitti]]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -191,6 +196,7 @@ int main(int argc, char** argv) {
   const cv::Mat kitti = to_640x480(load(data + "/kitti06/image_0/000010.png"));
 
   if (!profile.empty()) {
+    const cv::Mat& profiled = profile_image == "kitti" ? kitti : graf;
     std::size_t total = 0;
     if (profile == "orb" || profile == "affine_feature") {
       const int views = static_cast<int>(affine_orb::view_parameters(affine_orb::AffineViewOptions{}).size());
@@ -201,12 +207,12 @@ int main(int argc, char** argv) {
       std::vector<cv::KeyPoint> keypoints;
       cv::Mat descriptors;
       for (int r = 0; r < profile_runs; ++r) {
-        peer->detectAndCompute(graf, cv::noArray(), keypoints, descriptors);
+        peer->detectAndCompute(profiled, cv::noArray(), keypoints, descriptors);
         total += keypoints.size();
       }
     } else {
       affine_orb::Extractor<affine_orb::Rbrief> extractor(profile == "plain" ? plain_options() : affine_options(1));
-      for (int r = 0; r < profile_runs; ++r) total += extractor.extract(graf).size();
+      for (int r = 0; r < profile_runs; ++r) total += extractor.extract(profiled).size();
     }
     std::printf("%s: %d runs, %zu keypoints\n", profile.c_str(), profile_runs, total);
     return 0;

@@ -207,17 +207,18 @@ std::vector<int> kept_indices(int count, int step) {
 
 std::string summary_json(const Summary& s, bool with_rotation) {
   char buffer[1024];
-  std::snprintf(buffer, sizeof(buffer),
-                "{\"step\": %d, \"max_tilt\": %.4f, \"views\": %d, \"frames\": %d, \"lost\": %d, \"frame_loss_rate\": %.4f, "
-                "\"keyframes\": %d, \"ms_extract_mean\": %.2f, \"ms_extract_median\": %.2f, \"ms_track_mean\": %.2f, ",
-                s.step, s.max_tilt, s.views, s.frames, s.lost, s.loss_rate, s.keyframes, s.ms_extract_mean, s.ms_extract_median,
-                s.ms_track_mean);
+  std::snprintf(
+      buffer, sizeof(buffer),
+      "{\"step\": %d, \"max_tilt\": %.4f, \"views\": %d, \"frames\": %d, \"lost\": %d, \"frame_loss_rate\": %.4f, "
+      "\"keyframes\": %d, \"ms_extract_mean\": %.2f, \"ms_extract_median\": %.2f, \"ms_track_mean\": %.2f, ",
+      s.step, s.max_tilt, s.views, s.frames, s.lost, s.loss_rate, s.keyframes, s.ms_extract_mean, s.ms_extract_median,
+      s.ms_track_mean);
   std::string out = buffer;
   if (with_rotation) {
     const bool any = s.compared > 0;
-    out += "\"truth_pairs\": " + std::to_string(s.truth_pairs) + ", \"rotations_recovered\": " +
-           std::to_string(s.rotations) + ", \"rotations_compared\": " + std::to_string(s.compared) +
-           ", \"rotation_error_median_deg\": " +
+    out += "\"truth_pairs\": " + std::to_string(s.truth_pairs) +
+           ", \"rotations_recovered\": " + std::to_string(s.rotations) +
+           ", \"rotations_compared\": " + std::to_string(s.compared) + ", \"rotation_error_median_deg\": " +
            json_number(any ? std::optional<double>(s.rotation_error_median) : std::nullopt) +
            ", \"rotation_error_mean_deg\": " +
            json_number(any ? std::optional<double>(s.rotation_error_mean) : std::nullopt) +
@@ -240,18 +241,20 @@ std::string frame_json(const FrameRecord& r) {
                 "\"previous_inliers\": %d, \"previous_model\": \"%s\", \"rotation_recovered\": %s, ",
                 r.sequence_index, r.timestamp, t.features, t.reference_keyframe, r.matches, t.inliers,
                 model_name(t.model), t.homography_ratio, t.inlier_ratio, t.lost ? "true" : "false",
-                t.keyframe ? "true" : "false", t.initialised ? "true" : "false", t.previous_matches,
-                t.previous_inliers, model_name(t.previous_model), t.relative_pose.success ? "true" : "false");
+                t.keyframe ? "true" : "false", t.initialised ? "true" : "false", t.previous_matches, t.previous_inliers,
+                model_name(t.previous_model), t.relative_pose.success ? "true" : "false");
   return std::string(buffer) + "\"truth_rotation_deg\": " + json_number(r.truth_angle) +
-         ", \"rotation_error_deg\": " + json_number(r.rotation_error) + ", \"ms_extract\": " +
-         json_number(r.ms_extract, "%.2f") + ", \"ms_track\": " + json_number(r.ms_track, "%.2f") + "}";
+         ", \"rotation_error_deg\": " + json_number(r.rotation_error) +
+         ", \"ms_extract\": " + json_number(r.ms_extract, "%.2f") +
+         ", \"ms_track\": " + json_number(r.ms_track, "%.2f") + "}";
 }
 
 /// Draws one bar panel: for each K, the plain value and the affine value side by side.
+/// `frames[k]`: frames at step k + 1, written under each group.
 void draw_panel(cv::Mat& canvas, const cv::Rect& area, const std::string& title, const std::vector<double>& plain,
-                const std::vector<double>& affine, bool percent) {
+                const std::vector<double>& affine, const std::vector<int>& frames, bool percent) {
   const cv::Scalar black(0, 0, 0), grey(200, 200, 200), plain_colour(180, 120, 60), affine_colour(40, 140, 240);
-  const int left = area.x + 60, right = area.x + area.width - 15, top = area.y + 55, bottom = area.y + area.height - 45;
+  const int left = area.x + 60, right = area.x + area.width - 15, top = area.y + 55, bottom = area.y + area.height - 60;
   double top_value = 0.0;
   for (double v : plain) top_value = std::max(top_value, v);
   for (double v : affine) top_value = std::max(top_value, v);
@@ -291,27 +294,32 @@ void draw_panel(cv::Mat& canvas, const cv::Rect& area, const std::string& title,
       std::snprintf(label, sizeof(label), percent ? "%.1f" : "%.0f", values[b]);
       cv::putText(canvas, label, {x, y - 4}, cv::FONT_HERSHEY_SIMPLEX, 0.35, black, 1, cv::LINE_AA);
     }
-    cv::putText(canvas, "K=" + std::to_string(k + 1), {x0 + bar / 2, bottom + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+    cv::putText(canvas, "K=" + std::to_string(k + 1), {x0 + bar / 2, bottom + 17}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
                 black, 1, cv::LINE_AA);
+    cv::putText(canvas, std::to_string(frames[static_cast<std::size_t>(k)]) + " frames", {x0, bottom + 32},
+                cv::FONT_HERSHEY_SIMPLEX, 0.35, black, 1, cv::LINE_AA);
   }
-  cv::putText(canvas, "frame step K (K times the camera speed)", {left + 40, bottom + 40}, cv::FONT_HERSHEY_SIMPLEX,
+  cv::putText(canvas, "frame step K (K times the camera speed)", {left + 40, bottom + 50}, cv::FONT_HERSHEY_SIMPLEX,
               0.45, black, 1, cv::LINE_AA);
 }
 
 void draw_plot(const std::string& path, const std::string& name, const std::vector<Summary>& plain,
                const std::vector<Summary>& affine) {
-  cv::Mat canvas(470, 1100, CV_8UC3, cv::Scalar::all(255));
+  cv::Mat canvas(480, 1100, CV_8UC3, cv::Scalar::all(255));
   std::vector<double> loss_plain, loss_affine, kf_plain, kf_affine;
+  std::vector<int> frames;
   for (const Summary& s : plain) {
     loss_plain.push_back(100.0 * s.loss_rate);
     kf_plain.push_back(s.keyframes);
+    frames.push_back(s.frames);
   }
   for (const Summary& s : affine) {
     loss_affine.push_back(100.0 * s.loss_rate);
     kf_affine.push_back(s.keyframes);
   }
-  draw_panel(canvas, cv::Rect(0, 30, 550, 440), "frame loss rate (lost / frames, eq. 22)", loss_plain, loss_affine, true);
-  draw_panel(canvas, cv::Rect(550, 30, 550, 440), "keyframes", kf_plain, kf_affine, false);
+  draw_panel(canvas, cv::Rect(0, 30, 550, 450), "frame loss rate (lost / frames, eq. 22)", loss_plain, loss_affine,
+             frames, true);
+  draw_panel(canvas, cv::Rect(550, 30, 550, 450), "keyframes", kf_plain, kf_affine, frames, false);
   cv::putText(canvas, name, {10, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   cv::rectangle(canvas, cv::Rect(640, 10, 14, 14), cv::Scalar(180, 120, 60), cv::FILLED);
   cv::rectangle(canvas, cv::Rect(820, 10, 14, 14), cv::Scalar(40, 140, 240), cv::FILLED);
@@ -331,9 +339,10 @@ void print_summary_text(const Summary& s, bool rotation) {
               s.ms_extract_median, s.ms_track_mean);
   if (!rotation) return;
   if (s.compared > 0) {
-    std::printf("rotation error vs ground truth: median %.3f deg, mean %.3f deg, recovered for %d of %d frame pairs "
-                "(true rotation: median %.2f deg)\n",
-                s.rotation_error_median, s.rotation_error_mean, s.compared, s.truth_pairs, s.truth_angle_median);
+    std::printf(
+        "rotation error vs ground truth: median %.3f deg, mean %.3f deg, recovered for %d of %d frame pairs "
+        "(true rotation: median %.2f deg)\n",
+        s.rotation_error_median, s.rotation_error_mean, s.compared, s.truth_pairs, s.truth_angle_median);
   } else {
     std::printf("rotation error vs ground truth: no rotation recovered for %d frame pairs\n", s.truth_pairs);
   }
@@ -352,7 +361,8 @@ int main(int argc, char** argv) {
     const std::string step_text = args.value("--step", "");
     std::size_t used = 0;
     const int step = step_text.empty() ? 1 : std::stoi(step_text, &used);
-    if (!step_text.empty() && used != step_text.size()) throw std::invalid_argument("--step: not an integer: " + step_text);
+    if (!step_text.empty() && used != step_text.size())
+      throw std::invalid_argument("--step: not an integer: " + step_text);
     affine_orb::ExtractorOptions extractor_options;
     extractor_options.views.max_tilt = args.real("--max-tilt", extractor_options.views.max_tilt);
     extractor_options.features = args.integer("--features", 1000);
@@ -410,14 +420,16 @@ int main(int argc, char** argv) {
           (tilt == 1.0 ? plain : affine).push_back(run.summary);
         }
       }
-      draw_plot(plot, dir + " (" + std::to_string(count) + " frames, " +
-                          std::to_string(extractor_options.features) + " features)",
-                plain, affine);
+      draw_plot(
+          plot,
+          dir + " (" + std::to_string(count) + " frames, " + std::to_string(extractor_options.features) + " features)",
+          plain, affine);
       if (json) {
-        std::printf("{\"sequence\": %s, \"format\": %s, \"frames\": %d, \"features\": %d, \"threads\": %d, "
-                    "\"plot\": %s, \"runs\": [",
-                    json_string(dir).c_str(), json_string(sequence.format).c_str(), count, extractor_options.features,
-                    extractor_options.threads, json_string(plot).c_str());
+        std::printf(
+            "{\"sequence\": %s, \"format\": %s, \"frames\": %d, \"features\": %d, \"threads\": %d, "
+            "\"plot\": %s, \"runs\": [",
+            json_string(dir).c_str(), json_string(sequence.format).c_str(), count, extractor_options.features,
+            extractor_options.threads, json_string(plot).c_str());
         bool first = true;
         for (const std::vector<Summary>* set : {&plain, &affine}) {
           for (const Summary& s : *set) {
@@ -429,8 +441,9 @@ int main(int argc, char** argv) {
       } else {
         std::printf("%s: %s, %d frames, %d features, %d thread(s)\n", dir.c_str(), sequence.format.c_str(), count,
                     extractor_options.features, extractor_options.threads);
-        std::printf("| features | K | frames | lost | loss rate | keyframes | rot. err. median / mean (deg) | "
-                    "rotations recovered | ms/frame (extract) |\n|---|---|---|---|---|---|---|---|---|\n");
+        std::printf(
+            "| features | K | frames | lost | loss rate | keyframes | rot. err. median / mean (deg) | "
+            "rotations recovered | ms/frame (extract) |\n|---|---|---|---|---|---|---|---|---|\n");
         for (const std::vector<Summary>* set : {&plain, &affine}) {
           for (const Summary& s : *set) {
             char tilt[64];
@@ -455,10 +468,11 @@ int main(int argc, char** argv) {
     const std::size_t views = extractor.views().size();
     run.summary.views = static_cast<int>(views);
     if (json) {
-      std::printf("{\"sequence\": %s, \"format\": %s, \"features\": %d, \"threads\": %d, \"views\": %zu, "
-                  "\"summary\": %s, \"frames\": [",
-                  json_string(dir).c_str(), json_string(sequence.format).c_str(), extractor_options.features,
-                  extractor_options.threads, views, summary_json(run.summary, rotation).c_str());
+      std::printf(
+          "{\"sequence\": %s, \"format\": %s, \"features\": %d, \"threads\": %d, \"views\": %zu, "
+          "\"summary\": %s, \"frames\": [",
+          json_string(dir).c_str(), json_string(sequence.format).c_str(), extractor_options.features,
+          extractor_options.threads, views, summary_json(run.summary, rotation).c_str());
       for (std::size_t i = 0; i < run.frames.size(); ++i) {
         std::printf("%s%s", i ? ", " : "", frame_json(run.frames[i]).c_str());
       }
@@ -469,8 +483,8 @@ int main(int argc, char** argv) {
                 dir.c_str(), sequence.format.c_str(), count, step, run.frames.size(), extractor_options.views.max_tilt,
                 views, extractor_options.features, extractor_options.threads,
                 rotation ? "" : (camera ? "; no poses: no rotation check" : "; no intrinsics: no rotation check"));
-    std::printf("%6s %10s %5s %6s %5s %5s %5s %6s %-16s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match",
-                "inl", "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
+    std::printf("%6s %10s %5s %6s %5s %5s %5s %6s %-16s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match", "inl",
+                "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
     for (const FrameRecord& r : run.frames) {
       const affine_orb::TrackedFrame& t = r.tracked;
       std::string state = t.lost ? "LOST" : "tracked";

@@ -89,7 +89,8 @@ inline std::vector<double> numbers(const std::string& line, std::size_t count, c
 
 inline bool is_image_file(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   for (const char* known : {".png", ".jpg", ".jpeg", ".pgm", ".ppm", ".bmp", ".tif", ".tiff"}) {
     if (ext == known) return true;
   }
@@ -171,8 +172,11 @@ inline PinholeCamera read_calibration(const std::filesystem::path& path) {
         const std::size_t eq = token.find('=');
         if (eq == std::string::npos) continue;
         const std::string key = token.substr(0, eq);
-        double* target = key == "fx" ? &camera.fx : key == "fy" ? &camera.fy : key == "cx" ? &camera.cx
-                         : key == "cy" ? &camera.cy : nullptr;
+        double* target = key == "fx"   ? &camera.fx
+                         : key == "fy" ? &camera.fy
+                         : key == "cx" ? &camera.cx
+                         : key == "cy" ? &camera.cy
+                                       : nullptr;
         if (!target) continue;
         try {
           std::size_t used = 0;
@@ -192,7 +196,8 @@ inline PinholeCamera read_calibration(const std::filesystem::path& path) {
     if (in.eof() && v.size() == 4) return valid({v[0], v[1], v[2], v[3]});
   }
   if (found < 4) {
-    throw std::runtime_error(path.string() + ": no intrinsics found (expected \"P0: ...\", fx=/fy=/cx=/cy= or "
+    throw std::runtime_error(path.string() +
+                             ": no intrinsics found (expected \"P0: ...\", fx=/fy=/cx=/cy= or "
                              "\"fx fy cx cy\")");
   }
   return valid(camera);

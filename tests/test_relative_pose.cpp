@@ -24,12 +24,12 @@
 
 namespace {
 
+using affine_orb::direction_angle_degrees;
 using affine_orb::GeometricModel;
 using affine_orb::PinholeCamera;
 using affine_orb::PoseHypothesis;
 using affine_orb::RelativePose;
 using affine_orb::rotation_angle_degrees;
-using affine_orb::direction_angle_degrees;
 
 constexpr double kNoise = 0.5;  // px per coordinate, each image
 constexpr double kPi = 3.14159265358979323846;
@@ -49,7 +49,9 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return s;
 }
 
-bool inside(const Eigen::Vector2d& p) { return p.x() >= 0 && p.x() <= kWidth - 1 && p.y() >= 0 && p.y() <= kHeight - 1; }
+bool inside(const Eigen::Vector2d& p) {
+  return p.x() >= 0 && p.x() <= kWidth - 1 && p.y() >= 0 && p.y() <= kHeight - 1;
+}
 
 struct Scene {
   std::vector<cv::Point2f> points1, points2;
@@ -111,11 +113,11 @@ struct Motion {
 
 std::vector<Motion> general_motions() {
   return {
-      {rotation(2.0, {0.0, 1.0, 0.0}), {0.0, 0.0, 1.0}},               // KITTI-like: forward, turning
-      {rotation(5.0, {0.1, 1.0, 0.05}), {0.2, -0.05, 1.0}},            // faster turn
-      {rotation(1.0, {1.0, 0.2, 0.0}), {1.0, 0.0, 0.2}},               // sideways
-      {rotation(8.0, {0.3, -1.0, 0.4}), {-0.5, 0.3, -0.6}},            // backwards, general axis
-      {rotation(0.5, {0.0, 0.0, 1.0}), {0.05, 0.02, 0.5}},             // little rotation, roll
+      {rotation(2.0, {0.0, 1.0, 0.0}), {0.0, 0.0, 1.0}},     // KITTI-like: forward, turning
+      {rotation(5.0, {0.1, 1.0, 0.05}), {0.2, -0.05, 1.0}},  // faster turn
+      {rotation(1.0, {1.0, 0.2, 0.0}), {1.0, 0.0, 0.2}},     // sideways
+      {rotation(8.0, {0.3, -1.0, 0.4}), {-0.5, 0.3, -0.6}},  // backwards, general axis
+      {rotation(0.5, {0.0, 0.0, 1.0}), {0.05, 0.02, 0.5}},   // little rotation, roll
   };
 }
 
@@ -297,8 +299,8 @@ TEST_CASE("a dominant plane with a tenth of the scene off it: the rotation withi
 TEST_CASE("pure rotation: H is chosen and gives the rotation") {
   const PinholeCamera camera = kitti_camera();
   std::uint64_t seed = 300;
-  for (const Eigen::Matrix3d& r : {rotation(2.0, {0.0, 1.0, 0.0}), rotation(4.0, {0.3, 1.0, 0.1}),
-                                   rotation(1.0, {1.0, 0.0, 0.2})}) {
+  for (const Eigen::Matrix3d& r :
+       {rotation(2.0, {0.0, 1.0, 0.0}), rotation(4.0, {0.3, 1.0, 0.1}), rotation(1.0, {1.0, 0.0, 0.2})}) {
     const Scene scene = make_scene(r, Eigen::Vector3d::Zero(), uniform_depth(3.0, 40.0), 300, 60, seed++);
     const affine_orb::ModelSelectionResult sel =
         affine_orb::select_model(scene.points1, scene.points2, selection_options());
@@ -354,7 +356,8 @@ TEST_CASE("a plane whose two decompositions both explain every point is reported
   std::vector<cv::Point2f> q1, q2;
   for (double y = 20; y < kHeight - 20; y += 20) {
     for (double x = 20; x < kWidth - 20; x += 25) {
-      const Eigen::Vector2d q = camera.project(g * camera.ray(cv::Point2f(static_cast<float>(x), static_cast<float>(y))));
+      const Eigen::Vector2d q =
+          camera.project(g * camera.ray(cv::Point2f(static_cast<float>(x), static_cast<float>(y))));
       if (!inside(q)) continue;
       q1.emplace_back(static_cast<float>(x), static_cast<float>(y));
       q2.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));

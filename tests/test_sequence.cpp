@@ -112,9 +112,7 @@ struct RotatingCamera {
   std::vector<cv::Mat> frames;
   std::vector<Eigen::Matrix3d> rotations;
 
-  Eigen::Matrix3d homography(std::size_t i) const {
-    return camera.matrix() * rotations[i] * camera.inverse();
-  }
+  Eigen::Matrix3d homography(std::size_t i) const { return camera.matrix() * rotations[i] * camera.inverse(); }
 };
 
 RotatingCamera rotating_camera(const cv::Mat& photo, int count, double degrees_per_frame, int first_index = 0) {
@@ -551,9 +549,11 @@ TEST_CASE("KITTI 06, first 20 frames: every frame tracked, rotations against the
   // 71–194 inliers to the keyframe (the loss threshold is 30) and take 7 keyframes; affine features
   // (max tilt 2√2, 18 views) also track all 20 and take 8. Frame-to-frame rotations are recovered
   // for 18 (plain) and 19 (affine) of the 19 pairs with median errors of 0.13° and 0.35°; the car
-  // turns by a median 0.06° per frame. Floors: at most one lost frame, at least two keyframes,
-  // rotations for all but two pairs, median error below 0.5° (the accuracy the synthetic tests
-  // demand).
+  // turns by a median 0.06° per frame. Under a sanitizer the affine run covers frames 0-5 only:
+  // 5 rotations, median error 0.45°. Floors: at most one lost frame, at least two keyframes,
+  // rotations for all but two pairs, median error below 0.5° for plain features (the accuracy the
+  // synthetic tests demand) and 0.75° for affine ones, whose keypoints are located less precisely
+  // (mapped back from views subsampled by up to 2√2 along one axis).
   ex::Sequence sequence = ex::read_kitti(affine_orb::test::data_dir() + "/kitti06");
   REQUIRE(sequence.frames.size() == 51);
   REQUIRE(sequence.camera);
@@ -580,7 +580,7 @@ TEST_CASE("KITTI 06, first 20 frames: every frame tracked, rotations against the
     CHECK(tracker.lost_frames() <= 1);
     CHECK(tracker.keyframes() >= 2);
     CHECK(errors.size() + 2 >= frames - 1);
-    CHECK(median(errors) < 0.5);
+    CHECK(median(errors) < (is_affine(max_tilt) ? 0.75 : 0.5));
     MESSAGE("KITTI 06 frames 0-19, max tilt " << max_tilt << ": lost " << tracker.lost_frames() << ", keyframes "
                                               << tracker.keyframes() << ", rotations " << errors.size()
                                               << ", median rotation error " << median(errors) << " deg");

@@ -166,7 +166,8 @@ class KeyframeTracker {
       out.homography_ratio = keyframe_selection.homography_ratio;
       out.inlier_mask = chosen_inliers(keyframe_selection, out.matches.size());
       for (std::uint8_t v : out.inlier_mask) out.inliers += v != 0 ? 1 : 0;
-      out.inlier_ratio = keyframe_.empty() ? 0.0 : static_cast<double>(out.inliers) / static_cast<double>(keyframe_.size());
+      out.inlier_ratio =
+          keyframe_.empty() ? 0.0 : static_cast<double>(out.inliers) / static_cast<double>(keyframe_.size());
       out.lost = !keyframe_selection.success || out.inliers < options_.min_inliers;
       if (!out.lost) {
         lost_streak_ = 0;

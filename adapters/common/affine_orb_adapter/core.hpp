@@ -197,7 +197,7 @@ inline int views_budget(int extra, const AffineViewOptions& views) {
 /// ORB-SLAM's five extractor parameters plus the affine options, checked, and the extractors built
 /// from them. `who` names the adapter class in error messages.
 ///
-/// The image itself is extracted as ORB-SLAM2 does (nfeatures keypoints, geometric budget over the
+/// The image itself is extracted with ORB-SLAM2's budget (nfeatures keypoints, geometric over the
 /// levels): those keypoints are the same with the views on or off, so ORB-SLAM's monocular
 /// initialisation, which matches octave-0 keypoints only, keeps all of its candidates. With the
 /// views on, a second extractor over the views of max_tilt contributes the keypoints of its tilted

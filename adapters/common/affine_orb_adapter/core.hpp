@@ -252,9 +252,6 @@ class AdapterCore {
   const ScaleTables& scales() const { return scales_; }
   int levels() const { return levels_; }
   float scale_factor() const { return scale_factor_; }
-  /// Whether the tilted views contribute keypoints (max_tilt reaches the first tilt and
-  /// view_features · nfeatures >= 1).
-  bool views_on() const { return rbrief_ ? rbrief_->views.has_value() : brisk_->views.has_value(); }
 
   /// Checks the image and mask: nullopt for an empty image (ORB-SLAM's "return, outputs untouched");
   /// std::invalid_argument for a type other than CV_8UC1 or a mask that is neither empty nor CV_8UC1

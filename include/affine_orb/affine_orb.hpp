@@ -2,6 +2,8 @@
 /// \file
 /// Umbrella header: the whole public API of affine_orb.
 
+#include "affine_orb/affine_matching.hpp"
+#include "affine_orb/affine_views.hpp"
 #include "affine_orb/brisk.hpp"
 #include "affine_orb/descriptor.hpp"
 #include "affine_orb/detector.hpp"
@@ -13,9 +15,11 @@
 #include "affine_orb/harris.hpp"
 #include "affine_orb/homography.hpp"
 #include "affine_orb/image_correction.hpp"
+#include "affine_orb/keyframe_tracker.hpp"
 #include "affine_orb/matcher.hpp"
 #include "affine_orb/model_selection.hpp"
 #include "affine_orb/orientation.hpp"
 #include "affine_orb/pyramid.hpp"
 #include "affine_orb/ransac.hpp"
 #include "affine_orb/rbrief.hpp"
+#include "affine_orb/relative_pose.hpp"

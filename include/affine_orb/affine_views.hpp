@@ -81,13 +81,15 @@ struct AffineView {
   bool is_unrotated() const { return rotation_degrees == 0.0; }
 };
 
-/// The (t, φ) pairs of eqs. 15–16 in order: t = 1 (φ = 0 only), then t = a, a², ... <= max_tilt,
+/// The (t, φ) pairs of eqs. 15–16 in order: t = 1 (φ = 0 only), then t = a, a², ... <= max_tilt
+/// (within 0.1 %),
 /// each with φ = 0, b/t, 2b/t, ... < 180°. Tilts {1, √2, 2, 2√2} give 1 + 4 + 5 + 8 = 18 views.
 inline std::vector<std::pair<double, double>> view_parameters(const AffineViewOptions& options) {
   options.check();
   std::vector<std::pair<double, double>> params{{1.0, 0.0}};
-  // A relative tolerance so that max_tilt = 2√2 includes a³ computed in floating point.
-  for (double t = options.tilt_ratio; t <= options.max_tilt * (1.0 + 1e-9); t *= options.tilt_ratio) {
+  // A relative tolerance of 0.1 % so that max_tilt = 2√2, or 2.828 typed on a command line,
+  // includes a³ = 2.8284... computed in floating point.
+  for (double t = options.tilt_ratio; t <= options.max_tilt * (1.0 + 1e-3); t *= options.tilt_ratio) {
     const double step = options.rotation_base_degrees / t;
     for (int k = 0; k * step < 180.0 - 1e-9; ++k) params.emplace_back(t, k * step);
   }

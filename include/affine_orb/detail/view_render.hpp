@@ -287,13 +287,23 @@ inline void resample_row_scalar(const ViewResampler& r, const std::uint8_t* row,
 }
 
 #if defined(__SSE2__)
+/// Rounds four columns' partial dot products (s_i holds column i's four 32-bit partial sums) to
+/// bytes, Q kWeightBits fixed point, and stores them at out[0..3].
+inline void store_four_columns(__m128i s0, __m128i s1, __m128i s2, __m128i s3, std::uint8_t* out) {
+  const __m128i t0 = _mm_add_epi32(_mm_unpacklo_epi32(s0, s1), _mm_unpackhi_epi32(s0, s1));
+  const __m128i t1 = _mm_add_epi32(_mm_unpacklo_epi32(s2, s3), _mm_unpackhi_epi32(s2, s3));
+  const __m128i sum = _mm_add_epi32(_mm_unpacklo_epi64(t0, t1), _mm_unpackhi_epi64(t0, t1));
+  const __m128i v = _mm_srai_epi32(_mm_add_epi32(sum, _mm_set1_epi32(1 << (kWeightBits - 1))), kWeightBits);
+  const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), _mm_setzero_si128()));
+  std::memcpy(out, &bytes, sizeof(bytes));
+}
+
 /// resample_row_sse2() for a compile-time number of 16-tap rounds (0: the resampler's own).
 template <int kRounds>
 inline void resample_row_sse2_rounds(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                                      std::uint8_t* out) {
   const int rounds = kRounds > 0 ? kRounds : r.stride / 16;
   const __m128i zero = _mm_setzero_si128();
-  const __m128i round = _mm_set1_epi32(1 << (kWeightBits - 1));
   const int* first = r.first.data();
   const std::int16_t* weights = r.weights.data();
   const std::size_t stride = static_cast<std::size_t>(r.stride);
@@ -312,12 +322,7 @@ inline void resample_row_sse2_rounds(const ViewResampler& r, const std::uint8_t*
   for (; x + 4 <= x1; x += 4) {
     // Four partial-sum vectors transposed and added: lane i is the dot product of column x + i.
     const __m128i s0 = dot(x), s1 = dot(x + 1), s2 = dot(x + 2), s3 = dot(x + 3);
-    const __m128i t0 = _mm_add_epi32(_mm_unpacklo_epi32(s0, s1), _mm_unpackhi_epi32(s0, s1));
-    const __m128i t1 = _mm_add_epi32(_mm_unpacklo_epi32(s2, s3), _mm_unpackhi_epi32(s2, s3));
-    const __m128i sum = _mm_add_epi32(_mm_unpacklo_epi64(t0, t1), _mm_unpackhi_epi64(t0, t1));
-    const __m128i v = _mm_srai_epi32(_mm_add_epi32(sum, round), kWeightBits);
-    const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), zero));
-    std::memcpy(out + x, &bytes, sizeof(bytes));
+    store_four_columns(s0, s1, s2, s3, out + x);
   }
   if (x < x1) resample_row_scalar(r, row, row_first, x, x1, out);
 }
@@ -326,7 +331,6 @@ inline void resample_row_sse2_rounds(const ViewResampler& r, const std::uint8_t*
 inline void resample_row_sse2_8(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                                 std::uint8_t* out) {
   const __m128i zero = _mm_setzero_si128();
-  const __m128i round = _mm_set1_epi32(1 << (kWeightBits - 1));
   const int* first = r.first.data();
   const std::int16_t* weights = r.weights.data();
   auto window = [&](int x) { return _mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + (first[x] - row_first))); };
@@ -339,12 +343,7 @@ inline void resample_row_sse2_8(const ViewResampler& r, const std::uint8_t* row,
     const __m128i s1 = _mm_madd_epi16(_mm_unpackhi_epi8(ab, zero), weight(x + 1));
     const __m128i s2 = _mm_madd_epi16(_mm_unpacklo_epi8(cd, zero), weight(x + 2));
     const __m128i s3 = _mm_madd_epi16(_mm_unpackhi_epi8(cd, zero), weight(x + 3));
-    const __m128i t0 = _mm_add_epi32(_mm_unpacklo_epi32(s0, s1), _mm_unpackhi_epi32(s0, s1));
-    const __m128i t1 = _mm_add_epi32(_mm_unpacklo_epi32(s2, s3), _mm_unpackhi_epi32(s2, s3));
-    const __m128i sum = _mm_add_epi32(_mm_unpacklo_epi64(t0, t1), _mm_unpackhi_epi64(t0, t1));
-    const __m128i v = _mm_srai_epi32(_mm_add_epi32(sum, round), kWeightBits);
-    const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), zero));
-    std::memcpy(out + x, &bytes, sizeof(bytes));
+    store_four_columns(s0, s1, s2, s3, out + x);
   }
   if (x < x1) resample_row_scalar(r, row, row_first, x, x1, out);
 }

@@ -287,7 +287,9 @@ TEST_CASE("the SSE2 suppression row equals the scalar reference, ties included")
     if (seed > 3) scores.setTo(0, random_image(101, 23, seed + 7, 2) == 0);
     for (int threshold : {1, 40, 200}) {
       for (int y = 1; y < scores.rows - 1; ++y) {
-        for (const auto& [x0, x1] : {std::pair<int, int>(1, 100), {5, 38}, {17, 33}, {40, 41}}) {
+        // Runs of 99, 33, 16, 17 (the last chunk overlaps the previous one), 47, 15 and 1 pixels.
+        for (const auto& [x0, x1] :
+             {std::pair<int, int>(1, 100), {5, 38}, {17, 33}, {3, 20}, {2, 49}, {60, 75}, {40, 41}}) {
           std::vector<affine_orb::Corner> expected;
           std::vector<affine_orb::Corner> got;
           affine_orb::detail::non_max_row_scalar(scores, y, x0, x1, threshold, expected);

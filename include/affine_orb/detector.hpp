@@ -95,15 +95,15 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
   }
   cv::Mat scores = work.scores(cv::Rect(0, 0, image.cols, image.rows));
   std::vector<Corner>& corners = out.corners;
-  // Pass 1: scores at the initial threshold over the region grown by one pixel, so that
-  // suppression at its edge sees the true neighbours.
+  // One score map at min_threshold over the region grown by one pixel, so that suppression at its
+  // edge sees the true neighbours. Pass 1 suppresses at initial_threshold: a neighbour scoring
+  // below it is also below the pixel, so these are exactly the corners of a map scored at
+  // initial_threshold.
   all.dilate_into(work.margin);
-  detail::score_spans(image, work.margin, options.initial_threshold, scores);
+  detail::score_spans(image, work.margin, options.min_threshold, scores);
   detail::non_max_spans(scores, all, options.initial_threshold, corners);
 
-  // Pass 2: cells without a corner are scored again at the minimum threshold (with the same
-  // one-pixel margin). A weak score never suppresses a strong corner, so this gives exactly the
-  // corners of a single map scored at min_threshold, filtered cell by cell.
+  // Pass 2: cells without a corner keep their corners at min_threshold, from the same map.
   if (options.min_threshold < options.initial_threshold) {
     const int size = options.cell_size;
     auto cell_index = [&](int v, int origin) {
@@ -129,8 +129,6 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
         const cv::Rect cell(grid_origin.x + (col0 + col) * size, grid_origin.y + (row0 + row) * size, size, size);
         all.intersect_into(cell, work.cell);
         if (work.cell.area() == 0) continue;
-        work.cell.dilate_into(work.margin);
-        detail::score_spans(image, work.margin, options.min_threshold, scores);
         detail::non_max_spans(scores, work.cell, options.min_threshold, corners);
       }
     }

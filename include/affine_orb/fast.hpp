@@ -212,10 +212,16 @@ inline typename S::V score_chunk_simd(const std::uint8_t* p, const std::array<st
   auto both = [&](V a, V b) {  // non-zero lanes: a and b both non-zero
     return S::andnot(S::or_(S::eq(a, zero), S::eq(b, zero)), S::set1(-1));
   };
-  const V possible = S::or_(both(S::or_(brighter(c0), brighter(c8)), S::or_(brighter(c4), brighter(c12))),
-                            both(S::or_(darker(c0), darker(c8)), S::or_(darker(c4), darker(c12))));
-  if (S::none(possible)) return zero;
-  const V strength = S::max(arc_strength_simd<S, true>(p, offset, v), arc_strength_simd<S, false>(p, offset, v));
+  const V bright = both(S::or_(brighter(c0), brighter(c8)), S::or_(brighter(c4), brighter(c12)));
+  const V dark = both(S::or_(darker(c0), darker(c8)), S::or_(darker(c4), darker(c12)));
+  // A polarity that fails the test in every lane has strength <= t there, which the result
+  // discards (a lane's other polarity decides, or the lane is 0): its arcs are not computed.
+  const bool any_bright = !S::none(bright);
+  const bool any_dark = !S::none(dark);
+  if (!any_bright && !any_dark) return zero;
+  V strength = zero;
+  if (any_bright) strength = arc_strength_simd<S, true>(p, offset, v);
+  if (any_dark) strength = S::max(strength, arc_strength_simd<S, false>(p, offset, v));
   const V not_corner = S::eq(S::subs(strength, t), zero);  // strength <= t
   return S::andnot(not_corner, S::subs(strength, S::set1(1)));
 }
@@ -420,35 +426,59 @@ inline void non_max_row_scalar(const cv::Mat& scores, int y, int x0, int x1, int
 }
 
 #if defined(__SSE2__)
-/// non_max_row_scalar() 16 pixels at a time, the same corners in the same order: in saturated
-/// arithmetic a > b iff (a − b) != 0 and a >= b iff (b − a) == 0, so a pixel is a maximum iff the
-/// minimum of its four strict differences is non-zero and the maximum of its four others (and of
-/// threshold − s) is zero.
+/// Bit i of the result is set when pixel p[i] (i < 16) of the rows above/row/below is a local
+/// maximum at `t` per non_max_row_scalar(): in saturated arithmetic a > b iff (a − b) != 0 and
+/// a >= b iff (b − a) == 0, so a pixel is a maximum iff the minimum of its four strict differences
+/// is non-zero and the maximum of its four others (and of threshold − s) is zero.
+inline int non_max_chunk_sse2(const std::uint8_t* above, const std::uint8_t* row, const std::uint8_t* below,
+                              __m128i t) {
+  auto load = [](const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); };
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i s = load(row);
+  __m128i strict = _mm_min_epu8(_mm_subs_epu8(s, load(above - 1)), _mm_subs_epu8(s, load(above)));
+  strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(above + 1)));
+  strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(row - 1)));
+  __m128i loose = _mm_max_epu8(_mm_subs_epu8(load(row + 1), s), _mm_subs_epu8(load(below - 1), s));
+  loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below), s));
+  loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below + 1), s));
+  loose = _mm_max_epu8(loose, _mm_subs_epu8(t, s));
+  return _mm_movemask_epi8(_mm_andnot_si128(_mm_cmpeq_epi8(strict, zero), _mm_cmpeq_epi8(loose, zero)));
+}
+
+/// Appends the corners of the set bits of `mask` (bit i: column x + i of row y).
+inline void append_corners(unsigned mask, int x, int y, const std::uint8_t* row, std::vector<Corner>& corners) {
+  while (mask != 0) {
+    const int i = __builtin_ctz(mask);
+    corners.push_back({x + i, y, row[x + i]});
+    mask &= mask - 1;
+  }
+}
+
+/// non_max_row_scalar() 16 pixels at a time, the same corners in the same order. Chunks without
+/// a score of at least `threshold` are skipped; a run of at least 16 pixels ends with a chunk that overlaps the
+/// previous one, its already visited lanes masked off.
 inline void non_max_row_sse2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
                              std::vector<Corner>& corners) {
+  if (x1 - x0 < 16) {
+    non_max_row_scalar(scores, y, x0, x1, threshold, corners);
+    return;
+  }
   const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
   const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
   const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
   const __m128i zero = _mm_setzero_si128();
   const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
-  auto load = [](const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); };
-  int x = x0;
-  for (; x + 16 <= x1; x += 16) {
-    const __m128i s = load(row + x);
-    if (_mm_movemask_epi8(_mm_cmpeq_epi8(s, zero)) == 0xFFFF) continue;
-    __m128i strict = _mm_min_epu8(_mm_subs_epu8(s, load(above + x - 1)), _mm_subs_epu8(s, load(above + x)));
-    strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(above + x + 1)));
-    strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(row + x - 1)));
-    __m128i loose = _mm_max_epu8(_mm_subs_epu8(load(row + x + 1), s), _mm_subs_epu8(load(below + x - 1), s));
-    loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below + x), s));
-    loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below + x + 1), s));
-    loose = _mm_max_epu8(loose, _mm_subs_epu8(t, s));
-    int mask = _mm_movemask_epi8(_mm_andnot_si128(_mm_cmpeq_epi8(strict, zero), _mm_cmpeq_epi8(loose, zero)));
-    for (int i = 0; mask != 0; ++i, mask >>= 1) {
-      if (mask & 1) corners.push_back({x + i, y, row[x + i]});
+  for (int x = x0, done = x0;; done = x + 16, x = std::min(x + 16, x1 - 16)) {
+    const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
+    // s >= threshold iff the saturated threshold − s is zero.
+    if (_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(t, s), zero)) != 0) {
+      // Lanes below `done` were visited by the previous chunk.
+      const unsigned fresh = 0xFFFFu << (done - x);
+      append_corners(static_cast<unsigned>(non_max_chunk_sse2(above + x, row + x, below + x, t)) & fresh, x, y, row,
+                     corners);
     }
+    if (x + 16 >= x1) break;
   }
-  non_max_row_scalar(scores, y, x, x1, threshold, corners);
 }
 #endif
 

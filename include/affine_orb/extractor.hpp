@@ -204,10 +204,13 @@ class Extractor {
   }
 
  private:
+  /// A candidate in merge order, with its original position copied so that the visit in that
+  /// order reads memory sequentially.
   struct MergeRef {
     float response;
     int view;
     int index;
+    cv::Point2f point;
   };
   struct MergeKept {
     cv::Point2f point;
@@ -379,6 +382,7 @@ class Extractor {
     const int n_views = static_cast<int>(view_work_.size());
     order_candidates(l, m);
     const double radius = options_.merge_radius * options_.pyramid.scale(l);
+    const double radius_squared = radius * radius;
     const double cell = radius;
     // Cells of points in [−0.5, W − 0.5): floor(x / cell) + 1 lies in [0, columns − 1].
     const int columns = static_cast<int>(std::floor(size.width / cell)) + 3;
@@ -390,7 +394,7 @@ class Extractor {
       work.keep_flags.assign(work.level_points.size(), 0);
     }
     for (const MergeRef& r : m.order) {
-      const cv::Point2f& p = level_of(r.view, l).original_points[static_cast<std::size_t>(r.index)];
+      const cv::Point2f& p = r.point;
       const int cx = static_cast<int>(std::floor(p.x / cell)) + 1;
       const int cy = static_cast<int>(std::floor(p.y / cell)) + 1;
       bool duplicate = false;
@@ -400,7 +404,9 @@ class Extractor {
                               static_cast<std::size_t>(x)];
                k >= 0; k = m.kept[static_cast<std::size_t>(k)].next) {
             const MergeKept& o = m.kept[static_cast<std::size_t>(k)];
-            if (o.view != r.view && std::hypot(o.point.x - p.x, o.point.y - p.y) < radius) {
+            const double dx = o.point.x - p.x;
+            const double dy = o.point.y - p.y;
+            if (o.view != r.view && dx * dx + dy * dy < radius_squared) {
               duplicate = true;
               break;
             }
@@ -440,7 +446,10 @@ class Extractor {
     if (!integral) {
       for (int v = 0; v < n_views; ++v) {
         const LevelWork& work = level_of(v, l);
-        for (int i : work.alive) m.order.push_back({work.responses[static_cast<std::size_t>(i)], v, i});
+        for (int i : work.alive) {
+          m.order.push_back(
+              {work.responses[static_cast<std::size_t>(i)], v, i, work.original_points[static_cast<std::size_t>(i)]});
+        }
       }
       std::sort(m.order.begin(), m.order.end(), [](const MergeRef& a, const MergeRef& b) {
         return a.response > b.response ||
@@ -468,7 +477,7 @@ class Extractor {
       for (int i : work.alive) {
         const float response = work.responses[static_cast<std::size_t>(i)];
         int& slot = start[static_cast<std::size_t>(256 - static_cast<int>(response))];
-        m.order[static_cast<std::size_t>(slot++)] = {response, v, i};
+        m.order[static_cast<std::size_t>(slot++)] = {response, v, i, work.original_points[static_cast<std::size_t>(i)]};
       }
     }
   }

@@ -496,6 +496,71 @@ TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' byt
   }
 }
 
+TEST_CASE("every canvas sampler and resampler path gives the scalar references' bytes on any column range") {
+  // The paths of this build (AVX2 eight at a time, SSE2 four at a time, clamped or not) against the
+  // scalar references, on column ranges of every remainder modulo 8 and on images taller and
+  // wider than the canvas.
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(17, 9, 283, 211));  // a ROI
+  std::mt19937 rng(21);
+  int checked = 0;
+  for (const auto& [tilt, phi] : {std::pair<double, double>(std::sqrt(2.0), 33.3),
+                                  {2.0, 0.0},
+                                  {2.0, 72.0},
+                                  {2.0 * std::sqrt(2.0), 127.3},
+                                  {4.0 * std::sqrt(2.0), 251.0}}) {
+    const affine_orb::AffineView view = affine_orb::make_view(tilt, phi, image.size());
+    const affine_orb::detail::CanvasSampler sampler(view.to_original_canvas(), image.size());
+    const affine_orb::detail::ViewResampler resampler(view.canvas_size.width, view.size.width,
+                                                      0.8 * std::sqrt(tilt * tilt - 1.0));
+    const int first = resampler.first.front();
+    const int last = resampler.first.back() + resampler.stride - 1;
+    std::vector<std::uint8_t> row(static_cast<std::size_t>(last - first + 1));
+    int mismatches = 0;
+    for (int y = -3; y < view.canvas_size.height + 3; y += 5) {
+      const int c0 = -30 + static_cast<int>(rng() % 40);
+      const int c1 = c0 + static_cast<int>(rng() % static_cast<unsigned>(view.canvas_size.width + 40));
+      std::vector<std::uint8_t> a(static_cast<std::size_t>(c1 - c0) + 1, 0);
+      std::vector<std::uint8_t> b(a.size(), 0);
+      affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, c0, c1, a.data());
+      affine_orb::detail::sample_canvas_row(image, sampler, y, c0, c1, b.data());
+      mismatches += a != b;
+#if defined(__SSE2__)
+      std::fill(b.begin(), b.end(), 0);
+      affine_orb::detail::sample_canvas_row_sse2(image, sampler, y, c0, c1, b.data());
+      mismatches += a != b;
+#endif
+#if defined(__AVX2__)
+      std::fill(b.begin(), b.end(), 0);
+      affine_orb::detail::sample_canvas_row_avx2(image, sampler, y, c0, c1, b.data());
+      mismatches += a != b;
+#endif
+      affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, first, last + 1, row.data());
+      const int x0 = static_cast<int>(rng() % static_cast<unsigned>(view.size.width));
+      const int x1 = x0 + 1 + static_cast<int>(rng() % static_cast<unsigned>(view.size.width - x0));
+      std::vector<std::uint8_t> out_a(static_cast<std::size_t>(view.size.width), 0);
+      std::vector<std::uint8_t> out_b(out_a.size(), 0);
+      affine_orb::detail::resample_row_scalar(resampler, row.data(), first, x0, x1, out_a.data());
+      affine_orb::detail::resample_row(resampler, row.data(), first, x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#if defined(__SSE2__)
+      std::fill(out_b.begin(), out_b.end(), 0);
+      affine_orb::detail::resample_row_sse2(resampler, row.data(), first, x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+#if defined(__AVX2__)
+      std::fill(out_b.begin(), out_b.end(), 0);
+      affine_orb::detail::resample_row_avx2(resampler, row.data(), first, x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+      ++checked;
+    }
+    CAPTURE(tilt);
+    CAPTURE(phi);
+    CHECK(mismatches == 0);
+  }
+  CHECK(checked > 100);
+}
+
 TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole photos") {
   const cv::Mat graf = affine_orb::test::oxford_image("graf", 1);
   const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(0, 0, 333, 222));
@@ -673,6 +738,60 @@ TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a g
     affine_orb::detail::resize_bilinear_reference(level, next, affine_orb::pyramid_level_size(image.size(), {}, l));
     CHECK(cv::countNonZero(pyramid.level(l) != next) == 0);
     level = next;
+  }
+}
+
+TEST_CASE("every resize row and column blend path gives the scalar references' values") {
+  // Random source rows (extremes included) and column tables of several ratios; column ranges of
+  // every remainder modulo 8.
+  std::mt19937 rng(34);
+  for (const auto& [from, to] : {std::pair<int, int>(640, 533), {533, 444}, {37, 31}, {100, 100}, {90, 200}}) {
+    CAPTURE(from);
+    CAPTURE(to);
+    affine_orb::detail::ResizeWork work;
+    work.prepare(cv::Size(from, 4), cv::Size(to, 3));
+    std::vector<std::uint8_t> top(static_cast<std::size_t>(from));
+    std::vector<std::uint8_t> bottom(top.size());
+    int mismatches = 0;
+    for (int trial = 0; trial < 40; ++trial) {
+      for (std::size_t i = 0; i < top.size(); ++i) {
+        top[i] = static_cast<std::uint8_t>(trial % 3 == 0 ? 255 * (rng() % 2) : rng() % 256);
+        bottom[i] = static_cast<std::uint8_t>(rng() % 256);
+      }
+      const int b = trial % 5 == 0 ? 128 * (trial % 2) : static_cast<int>(rng() % 129);
+      const int c0 = static_cast<int>(rng() % static_cast<unsigned>(from));
+      const int c1 = c0 + static_cast<int>(rng() % static_cast<unsigned>(from - c0 + 1));
+      std::vector<std::int16_t> rows_a(static_cast<std::size_t>(from) + 1, 0);
+      std::vector<std::int16_t> rows_b(rows_a.size(), 0);
+      affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, c0, c1, rows_a.data());
+#if defined(__SSE2__)
+      affine_orb::detail::blend_rows_sse2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+      mismatches += rows_a != rows_b;
+#endif
+#if defined(__AVX2__)
+      std::fill(rows_b.begin(), rows_b.end(), 0);
+      affine_orb::detail::blend_rows_avx2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+      mismatches += rows_a != rows_b;
+#endif
+      // The column blend reads the whole blended row (plus the repeated last column).
+      affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, 0, from, rows_a.data());
+      rows_a[static_cast<std::size_t>(from)] = rows_a[static_cast<std::size_t>(from) - 1];
+      const int x0 = static_cast<int>(rng() % static_cast<unsigned>(to));
+      const int x1 = x0 + 1 + static_cast<int>(rng() % static_cast<unsigned>(to - x0));
+      std::vector<std::uint8_t> out_a(static_cast<std::size_t>(to), 0);
+      std::vector<std::uint8_t> out_b(out_a.size(), 0);
+      affine_orb::detail::blend_columns_scalar(work, rows_a.data(), x0, x1, out_a.data());
+#if defined(__SSE2__)
+      affine_orb::detail::blend_columns_sse2(work, rows_a.data(), x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+#if defined(__AVX2__)
+      std::fill(out_b.begin(), out_b.end(), 0);
+      affine_orb::detail::blend_columns_avx2(work, rows_a.data(), x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+    }
+    CHECK(mismatches == 0);
   }
 }
 

@@ -16,8 +16,8 @@
 /// (radius max(1, ⌈3σ⌉), none for σ = 0) followed by the bilinear resampling from the canvas width
 /// to the view width (pixel centres: x_c = (x + 0.5)·W_c/W_v − 0.5).
 ///
-/// Each stage has a scalar reference and an SSE2 path (where the target has SSE2) that gives the
-/// same bytes.
+/// Each stage has a scalar reference, an SSE2 path (where the target has SSE2) and an AVX2 path
+/// (where it has AVX2) that give the same bytes.
 
 #include <algorithm>
 #include <cmath>

@@ -161,3 +161,166 @@ TEST_CASE("rBRIEF options are checked") {
   CHECK_THROWS_AS(rbrief.prepare(cv::Mat(40, 40, CV_8UC3), data), std::invalid_argument);
   CHECK_THROWS_AS(rbrief.prepare(cv::Mat(40, 40, CV_32F), data), std::invalid_argument);
 }
+
+namespace {
+
+// The bytes of the union of `squares` in `a` and `b` that differ.
+int union_mismatches(const cv::Mat& a, const cv::Mat& b, const std::vector<cv::Rect>& squares) {
+  cv::Mat mask(a.size(), CV_8UC1, cv::Scalar(0));
+  for (const cv::Rect& s : squares) mask(s).setTo(255);
+  cv::Mat differ = a != b;
+  differ &= mask;
+  return cv::countNonZero(differ);
+}
+
+// Random points in [−margin, size + margin), some in tight clusters so that squares overlap heavily.
+std::vector<cv::Point2f> random_points(cv::Size size, int count, int margin, std::mt19937& rng) {
+  std::uniform_real_distribution<float> px(static_cast<float>(-margin), static_cast<float>(size.width + margin - 1));
+  std::uniform_real_distribution<float> py(static_cast<float>(-margin), static_cast<float>(size.height + margin - 1));
+  std::uniform_real_distribution<float> jitter(-4.0f, 4.0f);
+  std::vector<cv::Point2f> points;
+  for (int i = 0; i < count; ++i) {
+    if (i % 3 == 2) {
+      points.emplace_back(points.back().x + jitter(rng), points.back().y + jitter(rng));
+    } else {
+      points.emplace_back(px(rng), py(rng));
+    }
+  }
+  return points;
+}
+
+}  // namespace
+
+TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on every pixel of the union") {
+  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1);
+  std::mt19937 rng(7);
+  affine_orb::RbriefOptions wide_kernel;
+  wide_kernel.blur_kernel = 11;
+  wide_kernel.blur_sigma = 2.5;
+  for (const affine_orb::Rbrief& rbrief : {affine_orb::Rbrief(), affine_orb::Rbrief(wide_kernel)}) {
+    const int border = rbrief.border();
+    const int side = 2 * border + 1;
+    const int size = rbrief.options().blur_kernel;
+    const double sigma = rbrief.options().blur_sigma;
+    // Levels of several sizes, including ones smaller than a square and a ROI of a larger image.
+    for (const cv::Rect roi : {cv::Rect(0, 0, 640, 480), cv::Rect(13, 7, 301, 203), cv::Rect(100, 100, 90, 40),
+                               cv::Rect(5, 5, 20, 33), cv::Rect(50, 60, 7, 9)}) {
+      const cv::Mat level = boat(roi);
+      cv::Mat expected;
+      cv::GaussianBlur(level, expected, cv::Size(size, size), sigma, sigma,
+                       cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+      for (const int count : {1, 3, 10, 40, 120}) {
+        CAPTURE(roi);
+        CAPTURE(count);
+        const std::vector<cv::Point2f> points = random_points(level.size(), count, border / 2, rng);
+        std::vector<cv::Rect> squares;
+        for (const cv::Point2f& p : points) {
+          const cv::Rect s = cv::Rect(cvRound(p.x) - border, cvRound(p.y) - border, side, side) &
+                             cv::Rect(0, 0, level.cols, level.rows);
+          if (!s.empty()) squares.push_back(s);
+        }
+        affine_orb::Rbrief::LevelData data;
+        data.smoothed = cv::Mat(level.size(), CV_8UC1, cv::Scalar(0));
+        rbrief.prepare(level, points, data);
+        CHECK(union_mismatches(data.smoothed, expected, squares) == 0);
+        // The union itself, whatever its area (prepare() smooths the whole level above half).
+        const std::vector<std::uint16_t> kernel = affine_orb::detail::gaussian_kernel_q8(size, sigma);
+        affine_orb::detail::GaussianQ8Work work;
+        cv::Mat ours(level.size(), CV_8UC1, cv::Scalar(0));
+        affine_orb::detail::smooth_squares_q8(level, squares, kernel, work, ours);
+        CHECK(union_mismatches(ours, expected, squares) == 0);
+        // Each pixel once: the runs are disjoint and cover the union and gaps of fewer than 8
+        // columns between its pixels in a row, nothing else.
+        cv::Mat covered(level.size(), CV_8UC1, cv::Scalar(0));
+        for (const affine_orb::detail::RunBand& band : work.out.bands) {
+          for (int i = band.begin; i < band.end; ++i) {
+            const cv::Vec2i run = work.out.runs[static_cast<std::size_t>(i)];
+            covered(cv::Range(band.y0, band.y1), cv::Range(run[0], run[1])) += 1;
+          }
+        }
+        cv::Mat mask(level.size(), CV_8UC1, cv::Scalar(0));
+        for (const cv::Rect& s : squares) mask(s).setTo(1);
+        int bad = 0;
+        for (int y = 0; y < level.rows; ++y) {
+          for (int x = 0; x < level.cols; ++x) {
+            const int c = covered.at<uchar>(y, x);
+            if (c > 1 || (c == 0 && mask.at<uchar>(y, x) == 1)) ++bad;
+            if (c == 0 || mask.at<uchar>(y, x) == 1) continue;
+            int left = x;
+            while (left >= 0 && mask.at<uchar>(y, left) == 0) --left;
+            int right = x;
+            while (right < level.cols && mask.at<uchar>(y, right) == 0) ++right;
+            if (left < 0 || right == level.cols || right - left - 1 >= 8) ++bad;
+          }
+        }
+        CHECK(bad == 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("rBRIEF smoothing: the SSE2 and AVX2 passes equal the scalar reference and the formula") {
+  namespace d = affine_orb::detail;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (const auto& [size, sigma] :
+       {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}, {31, 8.0}}) {
+    CAPTURE(size);
+    const std::vector<std::uint16_t> kernel = d::gaussian_kernel_q8(size, sigma);
+    REQUIRE(static_cast<int>(kernel.size()) == size);
+    const std::uint16_t* k = kernel.data();
+    for (int width = 1; width <= 70; ++width) {
+      CAPTURE(width);
+      // Rows of random bytes, and all 0 or all 255 (the ends of the 16-bit range) for some widths.
+      auto value = [&] { return static_cast<std::uint8_t>(width % 7 == 0 ? 255 : width % 7 == 1 ? 0 : byte(rng)); };
+      const int x0 = width % 5;
+      std::vector<std::vector<std::uint8_t>> image(static_cast<std::size_t>(size),
+                                                   std::vector<std::uint8_t>(static_cast<std::size_t>(x0 + width)));
+      std::vector<const std::uint8_t*> rows;
+      for (auto& row : image) {
+        for (std::uint8_t& b : row) b = value();
+        rows.push_back(row.data());
+      }
+      std::vector<std::int16_t> v_reference(static_cast<std::size_t>(width));
+      d::gaussian_q8_v_scalar<0>(rows.data(), x0, width, k, size, v_reference.data());
+      // The x pass input: width + size − 1 values and one more that the vector paths read.
+      std::vector<std::int16_t> column(static_cast<std::size_t>(width + size));
+      for (std::int16_t& c : column)
+        c = static_cast<std::int16_t>(width % 7 == 0 ? 32512 : width % 7 == 1 ? -32768 : byte(rng) * 255 - 32768);
+      std::vector<std::uint8_t> h_reference(static_cast<std::size_t>(width));
+      d::gaussian_q8_h_scalar<0>(column.data(), width, k, size, h_reference.data());
+      // The scalar passes are the formulas of detail/gaussian_q8.hpp.
+      int formula_mismatches = 0;
+      for (int x = 0; x < width; ++x) {
+        std::uint32_t sum = 0;
+        for (int j = 0; j < size; ++j)
+          sum += k[j] * static_cast<std::uint32_t>(rows[static_cast<std::size_t>(j)][x0 + x]);
+        formula_mismatches += v_reference[static_cast<std::size_t>(x)] + 32768 != static_cast<int>(sum);
+        std::uint32_t out = 1u << 15;
+        for (int i = 0; i < size; ++i)
+          out += k[i] * static_cast<std::uint32_t>(column[static_cast<std::size_t>(x + i)] + 32768);
+        formula_mismatches += h_reference[static_cast<std::size_t>(x)] != (out >> 16);
+      }
+      CHECK(formula_mismatches == 0);
+      std::vector<std::int16_t> v(static_cast<std::size_t>(width));
+      std::vector<std::uint8_t> h(static_cast<std::size_t>(width));
+      auto check = [&](auto v_pass, auto h_pass) {
+        std::fill(v.begin(), v.end(), std::int16_t{0});
+        std::fill(h.begin(), h.end(), std::uint8_t{0});
+        v_pass(rows.data(), x0, width, k, size, v.data());
+        h_pass(column.data(), width, k, size, h.data());
+        CHECK(v == v_reference);
+        CHECK(h == h_reference);
+      };
+      if (size == 7) check(d::gaussian_q8_v_scalar<7>, d::gaussian_q8_h_scalar<7>);
+#if defined(__SSE2__)
+      check(d::gaussian_q8_v_sse2<0>, d::gaussian_q8_h_sse2<0>);
+      if (size == 7) check(d::gaussian_q8_v_sse2<7>, d::gaussian_q8_h_sse2<7>);
+#endif
+#if defined(__AVX2__)
+      check(d::gaussian_q8_v_avx2<0>, d::gaussian_q8_h_avx2<0>);
+      if (size == 7) check(d::gaussian_q8_v_avx2<7>, d::gaussian_q8_h_avx2<7>);
+#endif
+    }
+  }
+}

@@ -105,27 +105,33 @@ class Rbrief {
     detail::smooth_square_q8(level, cv::Rect(0, 0, level.cols, level.rows), kernel_q8_, data.squares, data.smoothed);
   }
 
-  /// Smooths only the squares of side 2·border()+1 around `points` (level pixels, rounded) when
-  /// they cover less than half of the level, else the whole level. The squares are smoothed one by
-  /// one with cv::GaussianBlur's own integer arithmetic (detail/gaussian_q8.hpp, reflecting about
-  /// the level edges), so their pixels equal those of the full smoothing; when that arithmetic could
-  /// not be confirmed at construction, the whole level is smoothed. Pixels outside the squares are
-  /// left undefined.
+  /// Smooths only the union of the squares of side 2·border()+1 around `points` (level pixels,
+  /// rounded) when it covers less than half of the level, else the whole level. The union is
+  /// smoothed row run by row run, each pixel once, with cv::GaussianBlur's own integer arithmetic
+  /// (detail/gaussian_q8.hpp, reflecting about the level edges), so its pixels equal those of the
+  /// full smoothing; when that arithmetic could not be confirmed at construction, the whole level is
+  /// smoothed. Pixels outside the squares are left undefined.
   void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& points, LevelData& data) const {
     detail::require_gray8(level, "Rbrief::prepare");
+    if (kernel_q8_.empty()) {
+      prepare(level, data);
+      return;
+    }
     const int side = 2 * border_ + 1;
-    if (kernel_q8_.empty() ||
-        2.0 * static_cast<double>(points.size()) * side * side >= static_cast<double>(level.total())) {
+    const cv::Rect bounds(0, 0, level.cols, level.rows);
+    data.squares.squares.clear();
+    for (const cv::Point2f& p : points) {
+      const cv::Rect square = cv::Rect(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side) & bounds;
+      if (!square.empty()) data.squares.squares.push_back(square);
+    }
+    const std::int64_t area = detail::union_runs_q8(data.squares);
+    if (2 * area >= static_cast<std::int64_t>(level.total())) {
       prepare(level, data);
       return;
     }
     data.image = level;
     data.smoothed.create(level.size(), CV_8UC1);
-    const cv::Rect bounds(0, 0, level.cols, level.rows);
-    for (const cv::Point2f& p : points) {
-      const cv::Rect square = cv::Rect(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side) & bounds;
-      if (!square.empty()) detail::smooth_square_q8(level, square, kernel_q8_, data.squares, data.smoothed);
-    }
+    detail::smooth_runs_q8(level, kernel_q8_, data.squares, data.smoothed);
   }
 
   /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it:

@@ -71,7 +71,7 @@ struct Candidates {
 struct DetectorWorkspace {
   cv::Mat scores;  ///< grown to the largest image seen, never shrunk; its top-left part is used
   std::vector<char> strong;
-  std::vector<Corner> corners;
+  std::vector<Corner> corners;  ///< merge buffer
   RowSpans cell;
   RowSpans margin;
 };
@@ -136,7 +136,10 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
     const auto raster = [](const Corner& a, const Corner& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); };
     const auto middle = corners.begin() + static_cast<std::ptrdiff_t>(strong_count);
     std::sort(middle, corners.end(), raster);
-    std::inplace_merge(corners.begin(), middle, corners.end(), raster);
+    // Merged through the workspace's buffer (std::inplace_merge would allocate one on every call).
+    work.corners.resize(corners.size());
+    std::merge(corners.begin(), middle, middle, corners.end(), work.corners.begin(), raster);
+    std::copy(work.corners.begin(), work.corners.end(), corners.begin());
   }
 
   out.responses.reserve(corners.size());

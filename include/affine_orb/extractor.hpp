@@ -156,42 +156,44 @@ class Extractor {
     });
     if (options_.duplicates == DuplicatePolicy::kMerge && n_views > 1) merge_duplicates(image.size());
 
-    // Budget: views in proportion to their area 1/t, levels geometric within a view.
-    std::vector<int> budgets;
-    std::vector<int> available;
-    const std::vector<int> per_view = view_budgets();
+    // Budget (fixed per view set, see prepare_views()), then what each (view, level) offers.
+    available_.clear();
     for (int v = 0; v < n_views; ++v) {
-      const std::vector<int> per_level =
-          level_budgets(per_view[static_cast<std::size_t>(v)], options_.pyramid.scale_factor, levels);
-      for (int l = 0; l < levels; ++l) {
-        budgets.push_back(per_level[static_cast<std::size_t>(l)]);
-        available.push_back(static_cast<int>(level_of(v, l).alive.size()));
-      }
+      for (int l = 0; l < levels; ++l) available_.push_back(static_cast<int>(level_of(v, l).alive.size()));
     }
-    const std::vector<int> take = allocate_with_carry(budgets, available);
+    allocate_with_carry(budgets_, available_, take_);
     const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(image.cols), static_cast<float>(image.rows));
-    for_each(n_views, [&](int v, int) {
-      std::vector<cv::Point2f> points;
-      std::vector<float> responses;
+    spread_.resize(static_cast<std::size_t>(options_.threads));
+    for_each(n_views, [&](int v, int w) {
+      SpreadWork& spread = spread_[static_cast<std::size_t>(w)];
       for (int l = 0; l < levels; ++l) {
         LevelWork& work = level_of(v, l);
-        points.clear();
-        responses.clear();
+        spread.points.clear();
+        spread.responses.clear();
         for (int i : work.alive) {
-          points.push_back(work.original_points[static_cast<std::size_t>(i)]);
-          responses.push_back(work.responses[static_cast<std::size_t>(i)]);
+          spread.points.push_back(work.original_points[static_cast<std::size_t>(i)]);
+          spread.responses.push_back(work.responses[static_cast<std::size_t>(i)]);
+        }
+        const int target = take_[static_cast<std::size_t>(v * levels + l)];
+        if (options_.spreading == Spreading::kQuadtree) {
+          distribute_quadtree(spread.points, spread.responses, region, target, spread.quadtree, spread.kept);
+        } else {
+          select_strongest(spread.responses, target, spread.kept);
         }
         work.kept.clear();
-        const int target = take[static_cast<std::size_t>(v * levels + l)];
-        for (int k : options_.spreading == Spreading::kQuadtree ? distribute_quadtree(points, responses, region, target)
-                                                                  : select_strongest(responses, target)) {
-          work.kept.push_back(work.alive[static_cast<std::size_t>(k)]);
-        }
+        for (int k : spread.kept) work.kept.push_back(work.alive[static_cast<std::size_t>(k)]);
       }
       describe_view(view_work_[static_cast<std::size_t>(v)]);
     });
 
     Features<kBits> features;
+    std::size_t total = 0;
+    for (const ViewWork& w : view_work_) {
+      for (const LevelWork& level : w.levels) total += level.keypoints.size();
+    }
+    features.keypoints.reserve(total);
+    features.descriptors.reserve(total);
+    features.views.reserve(total);
     for (int l = 0; l < levels; ++l) {
       for (int v = 0; v < n_views; ++v) {
         const LevelWork& work = level_of(v, l);
@@ -275,6 +277,13 @@ class Extractor {
         work.regions[static_cast<std::size_t>(l)] = detail::region_near_image(
             detail::level_to_original(work.view, level_size), level_size, size, kRenderMargin);
       }
+    }
+    budgets_.clear();
+    const std::vector<int> per_view = view_budgets();
+    for (std::size_t v = 0; v < views.size(); ++v) {
+      const std::vector<int> per_level =
+          level_budgets(per_view[v], options_.pyramid.scale_factor, options_.pyramid.levels);
+      budgets_.insert(budgets_.end(), per_level.begin(), per_level.end());
     }
     views_size_ = size;
   }
@@ -510,7 +519,23 @@ class Extractor {
     }
   }
 
+  /// Buffers of the budget step of one thread, reused across frames.
+  struct SpreadWork {
+    std::vector<cv::Point2f> points;
+    std::vector<float> responses;
+    std::vector<int> kept;
+    QuadtreeWorkspace quadtree;
+  };
+
   ExtractorOptions options_;
+  /// Budget of each (view, level), index v·levels + l: views in proportion to their area 1/t,
+  /// levels geometric within a view (fixed for a view set, computed by prepare_views()).
+  std::vector<int> budgets_;
+  /// Per frame: candidates each (view, level) offers, and what it takes (allocate_with_carry()).
+  std::vector<int> available_;
+  std::vector<int> take_;
+  /// Per worker thread: the buffers of the budget step.
+  std::vector<SpreadWork> spread_;
   /// Per worker thread: the buffers of merge_level().
   std::vector<MergeWork> merge_;
   /// Per worker thread: the detection buffers (one score map reused by every level of every view).

@@ -16,6 +16,12 @@ inline void require(bool condition, const std::string& what) {
   if (!condition) throw std::invalid_argument("affine_orb: " + what);
 }
 
+/// require() for a fixed message: nothing is built or allocated when `condition` holds, so hot
+/// paths can check their arguments on every frame.
+inline void require(bool condition, const char* what) {
+  if (!condition) throw std::invalid_argument(std::string("affine_orb: ") + what);
+}
+
 /// True for a finite value strictly greater than zero (rejects NaN and infinity).
 inline bool positive_finite(double value) { return std::isfinite(value) && value > 0.0; }
 
@@ -23,20 +29,24 @@ inline bool positive_finite(double value) { return std::isfinite(value) && value
 inline std::string type_name(int type) { return cv::typeToString(type); }
 
 /// Checks that `image` is a non-empty single-channel 8-bit image (CV_8UC1); `who` names the caller.
+/// The message is built only on failure (no allocation otherwise).
 inline void require_gray8(const cv::Mat& image, const char* who) {
-  require(!image.empty(), std::string(who) + ": the image is empty");
-  require(image.type() == CV_8UC1, std::string(who) + ": the image must be CV_8UC1 (grey, 8-bit), got " +
-                                       type_name(image.type()) + "; convert colour images with cv::cvtColor");
+  if (image.empty()) require(false, std::string(who) + ": the image is empty");
+  if (image.type() != CV_8UC1) {
+    require(false, std::string(who) + ": the image must be CV_8UC1 (grey, 8-bit), got " + type_name(image.type()) +
+                       "; convert colour images with cv::cvtColor");
+  }
 }
 
-/// Checks that `mask` is empty (no mask) or a CV_8UC1 matrix of exactly `size`.
+/// Checks that `mask` is empty (no mask) or a CV_8UC1 matrix of exactly `size`. The message is
+/// built only on failure.
 inline void require_mask(const cv::Mat& mask, cv::Size size, const char* who) {
   if (mask.empty()) return;
-  require(mask.type() == CV_8UC1,
-          std::string(who) + ": the mask must be CV_8UC1, got " + type_name(mask.type()));
-  require(mask.size() == size, std::string(who) + ": the mask is " + std::to_string(mask.cols) + "x" +
-                                   std::to_string(mask.rows) + " but the image is " +
-                                   std::to_string(size.width) + "x" + std::to_string(size.height));
+  if (mask.type() != CV_8UC1) require(false, std::string(who) + ": the mask must be CV_8UC1, got " + type_name(mask.type()));
+  if (mask.size() != size) {
+    require(false, std::string(who) + ": the mask is " + std::to_string(mask.cols) + "x" + std::to_string(mask.rows) +
+                       " but the image is " + std::to_string(size.width) + "x" + std::to_string(size.height));
+  }
 }
 
 }  // namespace affine_orb::detail

@@ -421,10 +421,12 @@ inline void smooth_squares_q8(const cv::Mat& level, const std::vector<cv::Rect>&
   smooth_runs_q8(level, kernel, work, out);
 }
 
-/// smooth_squares_q8() of one square.
+/// smooth_squares_q8() of one square (work.squares reused: no allocation once it has grown).
 inline void smooth_square_q8(const cv::Mat& level, cv::Rect square, const std::vector<std::uint16_t>& kernel,
                              GaussianQ8Work& work, cv::Mat& out) {
-  smooth_squares_q8(level, {square}, kernel, work, out);
+  work.squares.assign(1, square);
+  union_runs_q8(work);
+  smooth_runs_q8(level, kernel, work, out);
 }
 
 }  // namespace affine_orb::detail

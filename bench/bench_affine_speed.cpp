@@ -1,27 +1,36 @@
-// bench_affine_speed [--rounds N] [--profile MODE N]: affine (18 views, max tilt 2√2)
-// and plain extraction speed, side by side with the peers in one run, on two 640x480 images (the
-// graf1 photo resized, KITTI 06 frame 10 scaled to cover 640x480 and centre-cropped):
+// bench_affine_speed [--rounds N] [--no-instructions] [--profile MODE N [--image graf|kitti]]:
+// affine (18 views, max tilt 2√2) and plain extraction speed, side by side with the peers in one
+// run, on two 640x480 images (the graf1 photo resized, KITTI 06 frame 10 scaled to cover 640x480
+// and centre-cropped):
 //   ours affine rBRIEF, 2000 features, 1 and 2 threads
 //   cv::AffineFeature(cv::ORB(2000/18 + 1)) with the same 18 views (maxTilt 3, tiltStep √2,
 //     rotateStepBase 72), OpenCV on one thread
 //   ours plain rBRIEF (max_tilt 1), 1000 features  vs  cv::ORB (1000, 1.2, 8 levels, FAST score)
-// Methods run interleaved, round after round; medians and ratios are printed. Then the accuracy
-// figure of the task: distinct correct matches graf 1 -> 3 (full resolution, 2000 features per
-// image, DuplicatePolicy::kKeepAll, ratio 0.8; correct = ‖H x1 − x2‖ < 3 px; matches whose image-1
-// points fall in the same 2-px cell count once).
+// Methods run interleaved, round after round; medians and ratios are printed, with each method's
+// operator-new calls per frame after warm-up and, when valgrind is on the PATH, its instructions
+// per frame: the program runs itself under callgrind (--profile, collecting only inside the
+// frames after a warm-up frame). Then the accuracy figure of the issue: distinct correct matches
+// graf 1 -> 3 (full resolution, 2000 features per image, DuplicatePolicy::kKeepAll, ratio 0.8;
+// correct = ‖H x1 − x2‖ < 3 px; matches whose image-1 points fall in the same 2-px cell count once).
 //
-// --profile affine|plain|orb|affine_feature N [--image graf|kitti]: runs only that extraction N
-// times on one of the images (for instruction counts under callgrind).
+// --profile affine|affine2|plain|orb|affine_feature N [--image graf|kitti]: runs one warm-up frame,
+// then that extraction N times inside profiled_frames() (for callgrind --toggle-collect).
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <new>
 #include <set>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
@@ -30,6 +39,22 @@
 
 #include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
+
+// Counts operator-new calls of the whole process (ours and OpenCV's C++ allocations).
+std::atomic<long> g_new_calls{0};
+
+// The replacement's own malloc/free pair; GCC 12 flags free() in a replacement operator delete as
+// mismatched (-Wmismatched-new-delete), a false positive here.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+void* operator new(std::size_t size) {
+  ++g_new_calls;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -108,69 +133,143 @@ int distinct_correct(const affine_orb::Features<256>& a, const affine_orb::Featu
   return static_cast<int>(cells.size());
 }
 
-void bench_image(const char* name, const cv::Mat& image, int rounds) {
-  affine_orb::Extractor<affine_orb::Rbrief> affine1(affine_options(1));
-  affine_orb::Extractor<affine_orb::Rbrief> affine2(affine_options(2));
-  affine_orb::Extractor<affine_orb::Rbrief> plain(plain_options());
-  const int views = static_cast<int>(affine_orb::view_parameters(affine_orb::AffineViewOptions{}).size());
-  const cv::Ptr<cv::Feature2D> peer = affine_feature_peer(views);
-  const cv::Ptr<cv::ORB> orb = cv::ORB::create(kPlainFeatures, 1.2f, 8, 31, 0, 2, cv::ORB::FAST_SCORE);
+/// The five extractions of the bench on one image, each with its --profile mode name.
+struct Extractions {
+  explicit Extractions(const cv::Mat& frame)
+      : image(frame),
+        affine1(affine_options(1)),
+        affine2(affine_options(2)),
+        plain(plain_options()),
+        views(static_cast<int>(affine_orb::view_parameters(affine_orb::AffineViewOptions{}).size())),
+        peer(affine_feature_peer(views)),
+        orb(cv::ORB::create(kPlainFeatures, 1.2f, 8, 31, 0, 2, cv::ORB::FAST_SCORE)) {}
 
-  std::size_t counts[5] = {};
+  /// Mode name, table label and the extraction (returning the number of keypoints).
+  struct Entry {
+    std::string mode;
+    std::string label;
+    std::function<std::size_t()> run;
+  };
+
+  std::vector<Entry> entries() {
+    auto opencv = [this](cv::Feature2D& f) {
+      f.detectAndCompute(image, cv::noArray(), keypoints, descriptors);
+      return keypoints.size();
+    };
+    return {{"affine", "ours affine, 1 thread", [this] { return affine1.extract(image).size(); }},
+            {"affine_feature", "cv::AffineFeature(ORB), 1 thread", [this, opencv] { return opencv(*peer); }},
+            {"affine2", "ours affine, 2 threads", [this] { return affine2.extract(image).size(); }},
+            {"plain", "ours plain (1000)", [this] { return plain.extract(image).size(); }},
+            {"orb", "cv::ORB (1000)", [this, opencv] { return opencv(*orb); }}};
+  }
+
+  const cv::Mat& image;
+  affine_orb::Extractor<affine_orb::Rbrief> affine1;
+  affine_orb::Extractor<affine_orb::Rbrief> affine2;
+  affine_orb::Extractor<affine_orb::Rbrief> plain;
+  int views;
+  cv::Ptr<cv::Feature2D> peer;
+  cv::Ptr<cv::ORB> orb;
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  std::vector<affine_orb::bench::Method> methods = {
-      {"ours affine, 1 thread", [&] { counts[0] = affine1.extract(image).size(); }, {}},
-      {"cv::AffineFeature(ORB), 1 thread",
-       [&] {
-         peer->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
-         counts[1] = keypoints.size();
-       },
-       {}},
-      {"ours affine, 2 threads", [&] { counts[2] = affine2.extract(image).size(); }, {}},
-      {"ours plain (1000)", [&] { counts[3] = plain.extract(image).size(); }, {}},
-      {"cv::ORB (1000)",
-       [&] {
-         orb->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
-         counts[4] = keypoints.size();
-       },
-       {}},
-  };
+};
+
+/// The frames measured under callgrind (--toggle-collect=*profiled_frames*).
+__attribute__((noinline)) std::size_t profiled_frames(const std::function<std::size_t()>& run, int frames) {
+  std::size_t total = 0;
+  for (int r = 0; r < frames; ++r) total += run();
+  return total;
+}
+
+/// Instructions per frame of `mode` on `image_name`, by running this program under callgrind
+/// (collecting inside profiled_frames() only, after a warm-up frame); 0 when valgrind fails.
+double instructions_per_frame(const std::string& mode, const std::string& image_name) {
+  constexpr int kFrames = 3;
+  char self[4096] = {};
+  const ssize_t length = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (length <= 0) return 0.0;
+  const std::string command = "valgrind --tool=callgrind --callgrind-out-file=/dev/null "
+                              "--toggle-collect='*profiled_frames*' '" +
+                              std::string(self, static_cast<std::size_t>(length)) + "' --profile " + mode + " " +
+                              std::to_string(kFrames) + " --image " + image_name + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return 0.0;
+  char line[1024];
+  double collected = 0.0;
+  while (std::fgets(line, sizeof(line), pipe) != nullptr) {
+    const std::string text(line);
+    const std::size_t at = text.find("Collected :");
+    if (at == std::string::npos) continue;
+    std::string digits;
+    for (char c : text.substr(at + 11)) {
+      if (c >= '0' && c <= '9') digits += c;
+    }
+    if (!digits.empty()) collected = std::stod(digits);
+  }
+  return pclose(pipe) == 0 ? collected / kFrames : 0.0;
+}
+
+void bench_image(const char* name, const std::string& image_name, const cv::Mat& image, int rounds,
+                 bool instructions) {
+  Extractions extractions(image);
+  const std::vector<Extractions::Entry> entries = extractions.entries();
+  const std::size_t n = entries.size();
+  std::vector<std::size_t> counts(n, 0);
+  std::vector<long> news(n, 0);
+  std::vector<std::vector<double>> wall(n);
+  std::vector<std::vector<double>> cpu(n);
+  for (std::size_t i = 0; i < n; ++i) entries[i].run();
   // Wall time for every method, and the calling thread's CPU time, which a loaded machine disturbs
   // less, for the single-threaded ones.
-  std::vector<std::vector<double>> cpu(methods.size());
-  for (affine_orb::bench::Method& m : methods) m.run();
   for (int r = 0; r < rounds; ++r) {
-    for (std::size_t i = 0; i < methods.size(); ++i) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const long news_before = g_new_calls;
       const double cpu_start = thread_cpu_ms();
       const auto start = std::chrono::steady_clock::now();
-      methods[i].run();
-      methods[i].ms.push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      counts[i] = entries[i].run();
+      wall[i].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
       cpu[i].push_back(thread_cpu_ms() - cpu_start);
+      news[i] = g_new_calls - news_before;
     }
   }
-  auto med = [&](int i) { return affine_orb::bench::median(methods[static_cast<std::size_t>(i)].ms); };
-  auto med_cpu = [&](int i) { return affine_orb::bench::median(cpu[static_cast<std::size_t>(i)]); };
-  std::printf("## %s (%dx%d), %d views, medians of %d interleaved rounds\n\n", name, image.cols, image.rows, views,
-              rounds);
-  std::printf("| method | keypoints | median wall ms | median thread CPU ms |\n|---|---:|---:|---:|\n");
-  for (std::size_t i = 0; i < methods.size(); ++i) {
-    std::printf("| %s | %zu | %.2f | %.2f |\n", methods[i].name.c_str(), counts[i], med(static_cast<int>(i)),
-                med_cpu(static_cast<int>(i)));
+  std::vector<double> instr(n, 0.0);
+  if (instructions) {
+    // Not for 2 threads: callgrind would count only the calling thread's share.
+    for (std::size_t i = 0; i < n; ++i) {
+      if (entries[i].mode != "affine2") instr[i] = instructions_per_frame(entries[i].mode, image_name);
+    }
   }
-  std::printf("\n| ratio | wall | CPU | goal |\n|---|---:|---:|---|\n");
-  std::printf("| ours affine / cv::AffineFeature(ORB) | %.3f | %.3f | <= 0.5, then 0.2 |\n", med(0) / med(1),
-              med_cpu(0) / med_cpu(1));
-  std::printf("| ours affine / cv::ORB(1000) | %.2f | %.2f | <= 5 |\n", med(0) / med(4), med_cpu(0) / med_cpu(4));
-  std::printf("| ours plain / cv::ORB(1000) | %.3f | %.3f | <= 1.0 |\n", med(3) / med(4), med_cpu(3) / med_cpu(4));
-  std::printf("| ours affine 2 threads (wall) / cv::ORB(1000) | %.2f | | <= 3 |\n\n", med(2) / med(4));
+  auto med = [&](std::size_t i) { return affine_orb::bench::median(wall[i]); };
+  auto med_cpu = [&](std::size_t i) { return affine_orb::bench::median(cpu[i]); };
+  std::printf("## %s (%dx%d), %d views, medians of %d interleaved rounds\n\n", name, image.cols, image.rows,
+              extractions.views, rounds);
+  std::printf(
+      "| method | keypoints | median wall ms | median thread CPU ms | instructions per frame (M) | operator new "
+      "per frame |\n|---|---:|---:|---:|---:|---:|\n");
+  for (std::size_t i = 0; i < n; ++i) {
+    std::printf("| %s | %zu | %.2f | %.2f | %s | %ld |\n", entries[i].label.c_str(), counts[i], med(i), med_cpu(i),
+                instr[i] > 0.0 ? std::to_string(static_cast<long>(std::lround(instr[i] / 1e6))).c_str() : "-",
+                news[i]);
+  }
+  auto ratio = [&](std::size_t a, std::size_t b) {
+    return instr[a] > 0.0 && instr[b] > 0.0 ? std::to_string(instr[a] / instr[b]).substr(0, 5) : std::string("-");
+  };
+  // Indices in entries(): 0 affine, 1 AffineFeature, 2 affine 2 threads, 3 plain, 4 ORB.
+  std::printf("\n| ratio | wall | CPU | instructions | goal |\n|---|---:|---:|---:|---|\n");
+  std::printf("| ours affine / cv::AffineFeature(ORB) | %.3f | %.3f | %s | <= 0.2 |\n", med(0) / med(1),
+              med_cpu(0) / med_cpu(1), ratio(0, 1).c_str());
+  std::printf("| ours affine / cv::ORB(1000) | %.2f | %.2f | %s | <= 5 |\n", med(0) / med(4), med_cpu(0) / med_cpu(4),
+              ratio(0, 4).c_str());
+  std::printf("| ours affine, 2 threads (wall) / cv::ORB(1000) | %.2f | | | <= 3 |\n", med(2) / med(4));
+  std::printf("| ours plain / cv::ORB(1000) | %.3f | %.3f | %s | <= 0.8 |\n\n", med(3) / med(4),
+              med_cpu(3) / med_cpu(4), ratio(3, 4).c_str());
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   int rounds = 21;
+  bool instructions = true;
   std::string profile;
   std::string profile_image = "graf";
   int profile_runs = 0;
@@ -178,6 +277,8 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg == "--rounds" && i + 1 < argc) {
       rounds = std::max(1, std::atoi(argv[++i]));
+    } else if (arg == "--no-instructions") {
+      instructions = false;
     } else if (arg == "--image" && i + 1 < argc) {
       profile_image = argv[++i];
     } else if (arg == "--profile" && i + 2 < argc) {
@@ -185,7 +286,8 @@ int main(int argc, char** argv) {
       profile_runs = std::max(0, std::atoi(argv[++i]));
     } else {
       std::fprintf(stderr,
-                   "usage: %s [--rounds N] [--profile affine|plain|orb|affine_feature N [--image graf|kitti]]\n",
+                   "usage: %s [--rounds N] [--no-instructions] [--profile affine|affine2|plain|orb|affine_feature N "
+                   "[--image graf|kitti]]\n",
                    argv[0]);
       return 2;
     }
@@ -196,30 +298,23 @@ int main(int argc, char** argv) {
   const cv::Mat kitti = to_640x480(load(data + "/kitti06/image_0/000010.png"));
 
   if (!profile.empty()) {
-    const cv::Mat& profiled = profile_image == "kitti" ? kitti : graf;
-    std::size_t total = 0;
-    if (profile == "orb" || profile == "affine_feature") {
-      const int views = static_cast<int>(affine_orb::view_parameters(affine_orb::AffineViewOptions{}).size());
-      const cv::Ptr<cv::Feature2D> peer =
-          profile == "orb"
-              ? cv::Ptr<cv::Feature2D>(cv::ORB::create(kPlainFeatures, 1.2f, 8, 31, 0, 2, cv::ORB::FAST_SCORE))
-              : affine_feature_peer(views);
-      std::vector<cv::KeyPoint> keypoints;
-      cv::Mat descriptors;
-      for (int r = 0; r < profile_runs; ++r) {
-        peer->detectAndCompute(profiled, cv::noArray(), keypoints, descriptors);
-        total += keypoints.size();
-      }
-    } else {
-      affine_orb::Extractor<affine_orb::Rbrief> extractor(profile == "plain" ? plain_options() : affine_options(1));
-      for (int r = 0; r < profile_runs; ++r) total += extractor.extract(profiled).size();
+    Extractions extractions(profile_image == "kitti" ? kitti : graf);
+    for (const Extractions::Entry& entry : extractions.entries()) {
+      if (entry.mode != profile) continue;
+      entry.run();
+      std::printf("%s: %d runs, %zu keypoints\n", profile.c_str(), profile_runs, profiled_frames(entry.run, profile_runs));
+      return 0;
     }
-    std::printf("%s: %d runs, %zu keypoints\n", profile.c_str(), profile_runs, total);
-    return 0;
+    std::fprintf(stderr, "unknown profile mode %s\n", profile.c_str());
+    return 2;
+  }
+  if (instructions && std::system("valgrind --version > /dev/null 2>&1") != 0) {
+    std::printf("(valgrind not found: no instruction counts)\n\n");
+    instructions = false;
   }
 
-  bench_image("graf1", graf, rounds);
-  bench_image("KITTI 06 frame 10", kitti, rounds);
+  bench_image("graf1", "graf", graf, rounds, instructions);
+  bench_image("KITTI 06 frame 10", "kitti", kitti, rounds, instructions);
 
   affine_orb::ExtractorOptions options = affine_options(1);
   options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;

@@ -280,24 +280,36 @@ TEST_CASE("suppression on row spans keeps the rectangle's maxima that lie on the
   }
 }
 
-TEST_CASE("the SSE2 suppression row equals the scalar reference, ties included") {
+TEST_CASE("every compiled suppression row path equals the scalar reference, ties included") {
+  using Row = void (*)(const cv::Mat&, int, int, int, int, std::vector<affine_orb::Corner>&);
+  std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::non_max_row}};
+#if defined(__SSE2__)
+  paths.emplace_back("sse2", &affine_orb::detail::non_max_row_sse2);
+#endif
+#if defined(__AVX2__)
+  paths.emplace_back("avx2", &affine_orb::detail::non_max_row_avx2);
+#endif
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     // Score maps with few distinct values (many ties) and with mostly zeros.
     cv::Mat scores = random_image(101, 23, seed, seed % 2 ? 3 : 9);
     if (seed > 3) scores.setTo(0, random_image(101, 23, seed + 7, 2) == 0);
     for (int threshold : {1, 40, 200}) {
       for (int y = 1; y < scores.rows - 1; ++y) {
-        // Runs of 99, 33, 16, 17 (the last chunk overlaps the previous one), 47, 15 and 1 pixels.
+        // Runs of 99, 33, 16, 17, 47, 32, 15 and 1 pixels: every path's last chunk overlapping the
+        // previous one, and runs shorter than a chunk.
         for (const auto& [x0, x1] :
-             {std::pair<int, int>(1, 100), {5, 38}, {17, 33}, {3, 20}, {2, 49}, {60, 75}, {40, 41}}) {
+             {std::pair<int, int>(1, 100), {5, 38}, {17, 33}, {3, 20}, {2, 49}, {60, 92}, {60, 75}, {40, 41}}) {
           std::vector<affine_orb::Corner> expected;
-          std::vector<affine_orb::Corner> got;
           affine_orb::detail::non_max_row_scalar(scores, y, x0, x1, threshold, expected);
-          affine_orb::detail::non_max_row(scores, y, x0, x1, threshold, got);
-          REQUIRE(got.size() == expected.size());
-          for (std::size_t i = 0; i < got.size(); ++i) {
-            CHECK(got[i].x == expected[i].x);
-            CHECK(got[i].score == expected[i].score);
+          for (const auto& [name, row] : paths) {
+            CAPTURE(name);
+            std::vector<affine_orb::Corner> got;
+            row(scores, y, x0, x1, threshold, got);
+            REQUIRE(got.size() == expected.size());
+            for (std::size_t i = 0; i < got.size(); ++i) {
+              CHECK(got[i].x == expected[i].x);
+              CHECK(got[i].score == expected[i].score);
+            }
           }
         }
       }

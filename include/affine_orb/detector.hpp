@@ -70,9 +70,7 @@ struct Candidates {
 /// Buffers of detect_candidates() reused across calls (the FAST score map and the grid).
 struct DetectorWorkspace {
   cv::Mat scores;  ///< grown to the largest image seen, never shrunk; its top-left part is used
-  std::vector<char> strong;
-  std::vector<Corner> corners;  ///< merge buffer
-  RowSpans cell;
+  std::vector<char> strong;  ///< per grid cell: has a corner at the initial threshold
   RowSpans margin;
 };
 
@@ -96,14 +94,15 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
   cv::Mat scores = work.scores(cv::Rect(0, 0, image.cols, image.rows));
   std::vector<Corner>& corners = out.corners;
   // One score map at min_threshold over the region grown by one pixel, so that suppression at its
-  // edge sees the true neighbours. Pass 1 suppresses at initial_threshold: a neighbour scoring
-  // below it is also below the pixel, so these are exactly the corners of a map scored at
-  // initial_threshold.
+  // edge sees the true neighbours, and one suppression pass at min_threshold. Whether a pixel is a
+  // local maximum does not depend on the threshold, so the corners at initial_threshold are
+  // exactly those of these scoring at least initial_threshold.
   all.dilate_into(work.margin);
   detail::score_spans(image, work.margin, options.min_threshold, scores);
-  detail::non_max_spans(scores, all, options.initial_threshold, corners);
+  detail::non_max_spans(scores, all, options.min_threshold, corners);
 
-  // Pass 2: cells without a corner keep their corners at min_threshold, from the same map.
+  // A cell is strong when it has a corner at initial_threshold: it keeps only those; the other
+  // cells keep their corners at min_threshold. Filtering keeps the raster order.
   if (options.min_threshold < options.initial_threshold) {
     const int size = options.cell_size;
     auto cell_index = [&](int v, int origin) {
@@ -113,33 +112,19 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
     const int row0 = cell_index(bounds.y, grid_origin.y);
     const int cols = cell_index(bounds.x + bounds.width - 1, grid_origin.x) - col0 + 1;
     const int rows = cell_index(bounds.y + bounds.height - 1, grid_origin.y) - row0 + 1;
+    auto cell_of = [&](const Corner& c) {
+      return static_cast<std::size_t>(cell_index(c.y, grid_origin.y) - row0) * static_cast<std::size_t>(cols) +
+             static_cast<std::size_t>(cell_index(c.x, grid_origin.x) - col0);
+    };
     work.strong.assign(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows), 0);
     for (const Corner& c : corners) {
-      const int col = cell_index(c.x, grid_origin.x) - col0;
-      const int row = cell_index(c.y, grid_origin.y) - row0;
-      work.strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(col)] = 1;
+      if (c.score >= options.initial_threshold) work.strong[cell_of(c)] = 1;
     }
-    const std::size_t strong_count = corners.size();
-    for (int row = 0; row < rows; ++row) {
-      for (int col = 0; col < cols; ++col) {
-        if (work.strong[static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
-                        static_cast<std::size_t>(col)]) {
-          continue;
-        }
-        const cv::Rect cell(grid_origin.x + (col0 + col) * size, grid_origin.y + (row0 + row) * size, size, size);
-        all.intersect_into(cell, work.cell);
-        if (work.cell.area() == 0) continue;
-        detail::non_max_spans(scores, work.cell, options.min_threshold, corners);
-      }
-    }
-    // The strong corners are in raster order already: sort the weak ones and merge.
-    const auto raster = [](const Corner& a, const Corner& b) { return a.y < b.y || (a.y == b.y && a.x < b.x); };
-    const auto middle = corners.begin() + static_cast<std::ptrdiff_t>(strong_count);
-    std::sort(middle, corners.end(), raster);
-    // Merged through the workspace's buffer (std::inplace_merge would allocate one on every call).
-    work.corners.resize(corners.size());
-    std::merge(corners.begin(), middle, middle, corners.end(), work.corners.begin(), raster);
-    std::copy(work.corners.begin(), work.corners.end(), corners.begin());
+    corners.erase(std::remove_if(corners.begin(), corners.end(),
+                                 [&](const Corner& c) {
+                                   return c.score < options.initial_threshold && work.strong[cell_of(c)];
+                                 }),
+                  corners.end());
   }
 
   out.responses.reserve(corners.size());

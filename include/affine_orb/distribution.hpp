@@ -24,7 +24,8 @@ inline std::vector<int> level_budgets(int total, double scale_factor, int levels
   detail::require(total >= 0, "level_budgets: total must be >= 0");
   detail::require(levels >= 1, "level_budgets: levels must be >= 1");
   detail::require(std::isfinite(scale_factor) && scale_factor > 1.0, "level_budgets: scale_factor must be > 1");
-  std::vector<int> budgets(static_cast<std::size_t>(levels), 0);
+  // max(): GCC 12 does not see that require() threw for levels < 1 and warns about back().
+  std::vector<int> budgets(static_cast<std::size_t>(std::max(levels, 1)), 0);
   const double f = 1.0 / scale_factor;
   double per_level = total * (1.0 - f) / (1.0 - std::pow(f, levels));
   int assigned = 0;

@@ -131,6 +131,8 @@ struct Lanes128 {
   static V or_(V a, V b) { return _mm_or_si128(a, b); }
   static V andnot(V a, V b) { return _mm_andnot_si128(a, b); }
   static bool none(V v) { return _mm_movemask_epi8(v) == 0; }
+  /// Bit i set where lane i has its top bit set.
+  static unsigned mask(V v) { return static_cast<unsigned>(_mm_movemask_epi8(v)); }
 };
 
 #if defined(__AVX2__)
@@ -150,6 +152,8 @@ struct Lanes256 {
   static V or_(V a, V b) { return _mm256_or_si256(a, b); }
   static V andnot(V a, V b) { return _mm256_andnot_si256(a, b); }
   static bool none(V v) { return _mm256_movemask_epi8(v) == 0; }
+  /// Bit i set where lane i has its top bit set.
+  static unsigned mask(V v) { return static_cast<unsigned>(_mm256_movemask_epi8(v)); }
 };
 #endif
 
@@ -426,23 +430,25 @@ inline void non_max_row_scalar(const cv::Mat& scores, int y, int x0, int x1, int
 }
 
 #if defined(__SSE2__)
-/// Bit i of the result is set when pixel p[i] (i < 16) of the rows above/row/below is a local
-/// maximum at `t` per non_max_row_scalar(): in saturated arithmetic a > b iff (a − b) != 0 and
-/// a >= b iff (b − a) == 0, so a pixel is a maximum iff the minimum of its four strict differences
-/// is non-zero and the maximum of its four others (and of threshold − s) is zero.
-inline int non_max_chunk_sse2(const std::uint8_t* above, const std::uint8_t* row, const std::uint8_t* below,
-                              __m128i t) {
-  auto load = [](const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); };
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i s = load(row);
-  __m128i strict = _mm_min_epu8(_mm_subs_epu8(s, load(above - 1)), _mm_subs_epu8(s, load(above)));
-  strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(above + 1)));
-  strict = _mm_min_epu8(strict, _mm_subs_epu8(s, load(row - 1)));
-  __m128i loose = _mm_max_epu8(_mm_subs_epu8(load(row + 1), s), _mm_subs_epu8(load(below - 1), s));
-  loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below), s));
-  loose = _mm_max_epu8(loose, _mm_subs_epu8(load(below + 1), s));
-  loose = _mm_max_epu8(loose, _mm_subs_epu8(t, s));
-  return _mm_movemask_epi8(_mm_andnot_si128(_mm_cmpeq_epi8(strict, zero), _mm_cmpeq_epi8(loose, zero)));
+/// Bit i of the result is set when pixel row[i] (i < S::kLanes) is a local maximum at `t` per
+/// non_max_row_scalar(), `above` and `below` pointing at the same columns of the rows around: in
+/// saturated arithmetic a > b iff (a − b) != 0 and a >= b iff (b − a) == 0, so a pixel is a
+/// maximum iff the minimum of its four strict differences is non-zero and the maximum of its four
+/// others (and of threshold − s) is zero.
+template <class S>
+inline unsigned non_max_chunk(const std::uint8_t* above, const std::uint8_t* row, const std::uint8_t* below,
+                              typename S::V t) {
+  using V = typename S::V;
+  const V zero = S::zero();
+  const V s = S::load(row);
+  V strict = S::min(S::subs(s, S::load(above - 1)), S::subs(s, S::load(above)));
+  strict = S::min(strict, S::subs(s, S::load(above + 1)));
+  strict = S::min(strict, S::subs(s, S::load(row - 1)));
+  V loose = S::max(S::subs(S::load(row + 1), s), S::subs(S::load(below - 1), s));
+  loose = S::max(loose, S::subs(S::load(below), s));
+  loose = S::max(loose, S::subs(S::load(below + 1), s));
+  loose = S::max(loose, S::subs(t, s));
+  return S::mask(S::andnot(S::eq(strict, zero), S::eq(loose, zero)));
 }
 
 /// Appends the corners of the set bits of `mask` (bit i: column x + i of row y).
@@ -454,33 +460,55 @@ inline void append_corners(unsigned mask, int x, int y, const std::uint8_t* row,
   }
 }
 
-/// non_max_row_scalar() 16 pixels at a time, the same corners in the same order. Every chunk is
-/// tested without a branch on its content (skipping empty chunks mispredicted too often on score
-/// maps at low thresholds); a run of at least 16 pixels ends with a chunk that overlaps the
-/// previous one, its already visited lanes masked off.
-inline void non_max_row_sse2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+/// non_max_row_scalar() S::kLanes pixels at a time, the same corners in the same order, for runs
+/// of at least S::kLanes pixels. Every chunk is tested without a branch on its content (skipping
+/// empty chunks mispredicted too often on score maps at low thresholds); the last chunk overlaps
+/// the previous one, its already visited lanes masked off.
+template <class S>
+inline void non_max_run_simd(const cv::Mat& scores, int y, int x0, int x1, int threshold,
                              std::vector<Corner>& corners) {
-  if (x1 - x0 < 16) {
-    non_max_row_scalar(scores, y, x0, x1, threshold, corners);
-    return;
-  }
   const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
   const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
   const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
-  const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
-  for (int x = x0, done = x0;; done = x + 16, x = std::min(x + 16, x1 - 16)) {
+  const typename S::V t = S::set1(threshold);
+  constexpr int kLanes = S::kLanes;
+  for (int x = x0, done = x0;; done = x + kLanes, x = std::min(x + kLanes, x1 - kLanes)) {
     // Lanes below `done` were visited by the previous chunk.
-    const unsigned fresh = 0xFFFFu << (done - x);
-    append_corners(static_cast<unsigned>(non_max_chunk_sse2(above + x, row + x, below + x, t)) & fresh, x, y, row,
-                   corners);
-    if (x + 16 >= x1) break;
+    const unsigned fresh = ~0u << (done - x);
+    append_corners(non_max_chunk<S>(above + x, row + x, below + x, t) & fresh, x, y, row, corners);
+    if (x + kLanes >= x1) break;
+  }
+}
+
+/// non_max_row_scalar() 16 pixels at a time (runs shorter than 16: the scalar reference).
+inline void non_max_row_sse2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                             std::vector<Corner>& corners) {
+  if (x1 - x0 < Lanes128::kLanes) {
+    non_max_row_scalar(scores, y, x0, x1, threshold, corners);
+  } else {
+    non_max_run_simd<Lanes128>(scores, y, x0, x1, threshold, corners);
+  }
+}
+
+#if defined(__AVX2__)
+/// non_max_row_scalar() 32 pixels at a time (runs shorter than 32: non_max_row_sse2()).
+inline void non_max_row_avx2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                             std::vector<Corner>& corners) {
+  if (x1 - x0 < Lanes256::kLanes) {
+    non_max_row_sse2(scores, y, x0, x1, threshold, corners);
+  } else {
+    non_max_run_simd<Lanes256>(scores, y, x0, x1, threshold, corners);
   }
 }
 #endif
+#endif
 
-/// non_max_row_sse2() where the target has SSE2, else the scalar reference.
+/// non_max_row_avx2() where the target has AVX2, non_max_row_sse2() where it has SSE2, else the
+/// scalar reference.
 inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
-#if defined(__SSE2__)
+#if defined(__AVX2__)
+  non_max_row_avx2(scores, y, x0, x1, threshold, corners);
+#elif defined(__SSE2__)
   non_max_row_sse2(scores, y, x0, x1, threshold, corners);
 #else
   non_max_row_scalar(scores, y, x0, x1, threshold, corners);

@@ -4,6 +4,8 @@
 // owns a workspace); separate instances share nothing. Also run under ThreadSanitizer.
 #include <doctest/doctest.h>
 
+#include <atomic>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -11,6 +13,7 @@
 
 #include "affine_orb/affine_matching.hpp"
 #include "affine_orb/brisk.hpp"
+#include "affine_orb/detail/worker_pool.hpp"
 #include "affine_orb/extractor.hpp"
 #include "affine_orb/rbrief.hpp"
 #include "test_data.hpp"
@@ -98,4 +101,31 @@ TEST_CASE("a const descriptor policy may be shared by threads that have their ow
   }
   for (std::thread& t : threads) t.join();
   for (int m : mismatches) CHECK(m == 0);
+}
+
+TEST_CASE("the worker pool runs every index exactly once, reports worker numbers in range and rethrows") {
+  for (int threads : {1, 2, 3, 8}) {
+    affine_orb::detail::WorkerPool pool(threads);
+    CHECK(pool.threads() == threads);
+    for (int n : {0, 1, 2, 7, 100, 1000}) {
+      std::vector<std::atomic<int>> calls(static_cast<std::size_t>(n));
+      std::atomic<int> bad_worker{0};
+      auto fn = [&](int i, int w) {
+        ++calls[static_cast<std::size_t>(i)];
+        if (w < 0 || w >= threads) ++bad_worker;
+      };
+      pool.run(n, fn);
+      for (const std::atomic<int>& c : calls) CHECK(c == 1);
+      CHECK(bad_worker == 0);
+    }
+    // An exception in any call reaches the caller; the pool stays usable.
+    auto throwing = [](int i, int) {
+      if (i == 37) throw std::runtime_error("call 37");
+    };
+    CHECK_THROWS_WITH_AS(pool.run(100, throwing), "call 37", std::runtime_error);
+    std::atomic<int> total{0};
+    auto count = [&](int, int) { ++total; };
+    pool.run(50, count);
+    CHECK(total == 50);
+  }
 }

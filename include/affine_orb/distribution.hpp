@@ -250,7 +250,8 @@ inline void distribute_quadtree(const std::vector<cv::Point2f>& points, const st
       if (!work.split[i]) work.next.push_back(work.cells[i]);
     }
     work.next.insert(work.next.end(), work.children.begin(), work.children.end());
-    work.cells.swap(work.next);
+    // Copied, not swapped, so that each buffer keeps its own capacity from call to call.
+    work.cells.assign(work.next.begin(), work.next.end());
   }
 
   work.taken.assign(size, 0);

@@ -7,13 +7,11 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <exception>
+#include <memory>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -23,6 +21,7 @@
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/row_spans.hpp"
 #include "affine_orb/detail/view_regions.hpp"
+#include "affine_orb/detail/worker_pool.hpp"
 #include "affine_orb/detector.hpp"
 #include "affine_orb/distribution.hpp"
 #include "affine_orb/features.hpp"
@@ -61,7 +60,9 @@ struct ExtractorOptions {
   /// Selection within each (view, level); kQuadtree for SLAM, kStrongest for matching two images
   /// (bench/eval_viewpoint measures both).
   Spreading spreading = Spreading::kQuadtree;
-  /// Worker threads for the views (1 = the calling thread only). The output does not depend on it.
+  /// Threads for the views (1 = the calling thread only); an Extractor starts the other
+  /// threads − 1 on its first extract() and keeps them until it is destroyed. The output does not
+  /// depend on it.
   int threads = 1;
 
   void check() const {
@@ -106,8 +107,9 @@ struct ExtractorOptions {
 ///
 /// Output order: by level (level 0 first), then by view, then raster order in the view.
 ///
-/// An Extractor holds a workspace reused across calls. One instance must not be used by two
-/// threads at once; separate instances share nothing.
+/// An Extractor holds a workspace reused across calls (and, with ExtractorOptions::threads > 1, its
+/// worker threads): it can be moved, not copied. One instance must not be used by two threads at
+/// once; separate instances share nothing.
 template <class Descriptor>
 class Extractor {
  public:
@@ -297,31 +299,16 @@ class Extractor {
   int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }
 
   /// Runs fn(i, w) for every i in [0, n), on options_.threads threads (the calling thread
-  /// included); w in [0, threads) numbers the thread, for per-thread scratch buffers.
+  /// included, the others kept in pool_ from the first call on); w in [0, threads) numbers the
+  /// thread, for per-thread scratch buffers.
   template <class Fn>
   void for_each(int n, Fn fn) {
-    const int workers = std::min(options_.threads, n);
-    if (workers <= 1) {
+    if (options_.threads <= 1 || n <= 1) {
       for (int v = 0; v < n; ++v) fn(v, 0);
       return;
     }
-    std::atomic<int> next{0};
-    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
-    auto work = [&](int w) {
-      try {
-        for (int v = next++; v < n; v = next++) fn(v, w);
-      } catch (...) {
-        errors[static_cast<std::size_t>(w)] = std::current_exception();
-        next = n;
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
-    work(0);
-    for (std::thread& t : pool) t.join();
-    for (const std::exception_ptr& e : errors) {
-      if (e) std::rethrow_exception(e);
-    }
+    if (!pool_) pool_ = std::make_unique<detail::WorkerPool>(options_.threads);
+    pool_->run(n, fn);
   }
 
   /// Budget of each view, proportional to its area W·H/t, summing to options_.features (largest
@@ -543,6 +530,8 @@ class Extractor {
   Descriptor descriptor_;
   cv::Size views_size_;
   std::vector<ViewWork> view_work_;
+  /// The worker threads when options_.threads > 1, started by the first extract().
+  std::unique_ptr<detail::WorkerPool> pool_;
 };
 
 }  // namespace affine_orb

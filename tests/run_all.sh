@@ -7,8 +7,11 @@
 #      memory-flatness test, which ASan's quarantine would defeat);
 #   4. the threaded tests under ThreadSanitizer (clang);
 #   5. the libFuzzer target for a bounded time (AFFINE_ORB_FUZZ_SECONDS, default 60) from the
-#      checked-in seed corpus (clang, ASan + UBSan).
-# Build trees go to ${AFFINE_ORB_BUILD_ROOT:-build}/{release,asan,tsan,fuzz}.
+#      checked-in seed corpus (clang, ASan + UBSan);
+#   6. on a CPU with AVX2, the tests of the SIMD code again with -march=native
+#      (AFFINE_ORB_NATIVE), so that the AVX2 paths, which the default build does not compile, are
+#      checked against their scalar references too.
+# Build trees go to ${AFFINE_ORB_BUILD_ROOT:-build}/{release,asan,tsan,fuzz,native}.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -56,5 +59,16 @@ if [[ $status -ne 0 ]]; then
   tail -n 80 "$root/fuzz/fuzz.log"
   echo "the fuzzer found a problem (exit $status); the input is in $root/fuzz/" >&2
   exit 1
+fi
+
+if grep -qw avx2 /proc/cpuinfo; then
+  echo "== -march=native (AVX2 paths)"
+  simd_tests="test_fast|test_distribution|test_rbrief|test_extractor|test_matcher|test_brisk"
+  cmake -S . -B "$root/native" -G Ninja -DCMAKE_BUILD_TYPE=Release -DAFFINE_ORB_NATIVE=ON \
+    -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF
+  cmake --build "$root/native" -j "$jobs" --target ${simd_tests//|/ }
+  ctest --test-dir "$root/native" --output-on-failure -j "$jobs" -R "$simd_tests"
+else
+  echo "== -march=native skipped: this CPU has no AVX2"
 fi
 echo "all stages passed"

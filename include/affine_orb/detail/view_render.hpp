@@ -429,6 +429,24 @@ inline void resample_row_scalar(const ViewResampler& r, const std::uint8_t* row,
   }
 }
 
+/// Calls fn(std::integral_constant<int, R>{}) with R the number of 16-tap rounds of a resampler of
+/// `stride` (a multiple of 16) as a compile-time constant for strides 16 and 32, else R = 0 (the
+/// resampler's own count at run time): the resamplers' loops unrolled for the common strides.
+template <class Fn>
+inline void with_rounds(int stride, Fn fn) {
+  switch (stride) {
+    case 16:
+      fn(std::integral_constant<int, 1>{});
+      break;
+    case 32:
+      fn(std::integral_constant<int, 2>{});
+      break;
+    default:
+      fn(std::integral_constant<int, 0>{});
+      break;
+  }
+}
+
 #if defined(__SSE2__)
 /// Rounds four columns' partial dot products (s_i holds column i's four 32-bit partial sums) to
 /// bytes, Q kWeightBits fixed point, and stores them at out[0..3].
@@ -495,20 +513,13 @@ inline void resample_row_sse2_8(const ViewResampler& r, const std::uint8_t* row,
 /// weights are zero, so reading `stride` canvas columns adds nothing).
 inline void resample_row_sse2(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                               std::uint8_t* out) {
-  switch (r.stride) {
-    case 8:
-      resample_row_sse2_8(r, row, row_first, x0, x1, out);
-      break;
-    case 16:
-      resample_row_sse2_rounds<1>(r, row, row_first, x0, x1, out);
-      break;
-    case 32:
-      resample_row_sse2_rounds<2>(r, row, row_first, x0, x1, out);
-      break;
-    default:
-      resample_row_sse2_rounds<0>(r, row, row_first, x0, x1, out);
-      break;
+  if (r.stride == 8) {
+    resample_row_sse2_8(r, row, row_first, x0, x1, out);
+    return;
   }
+  with_rounds(r.stride, [&](auto rounds) {
+    resample_row_sse2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out);
+  });
 }
 #if defined(__AVX2__)
 /// Rounds eight columns' dot products (lane i of `sum` holds column i's) to bytes, Q kWeightBits
@@ -582,20 +593,13 @@ inline void resample_row_avx2_8(const ViewResampler& r, const std::uint8_t* row,
 /// columns at a time, identical bytes; the last columns through resample_row_sse2().
 inline void resample_row_avx2(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                               std::uint8_t* out) {
-  switch (r.stride) {
-    case 8:
-      resample_row_avx2_8(r, row, row_first, x0, x1, out);
-      break;
-    case 16:
-      resample_row_avx2_rounds<1>(r, row, row_first, x0, x1, out);
-      break;
-    case 32:
-      resample_row_avx2_rounds<2>(r, row, row_first, x0, x1, out);
-      break;
-    default:
-      resample_row_avx2_rounds<0>(r, row, row_first, x0, x1, out);
-      break;
+  if (r.stride == 8) {
+    resample_row_avx2_8(r, row, row_first, x0, x1, out);
+    return;
   }
+  with_rounds(r.stride, [&](auto rounds) {
+    resample_row_avx2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out);
+  });
 }
 #endif
 #endif

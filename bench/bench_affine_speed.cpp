@@ -188,10 +188,11 @@ double instructions_per_frame(const std::string& mode, const std::string& image_
   char self[4096] = {};
   const ssize_t length = readlink("/proc/self/exe", self, sizeof(self) - 1);
   if (length <= 0) return 0.0;
-  const std::string command = "valgrind --tool=callgrind --callgrind-out-file=/dev/null "
-                              "--toggle-collect='*profiled_frames*' '" +
-                              std::string(self, static_cast<std::size_t>(length)) + "' --profile " + mode + " " +
-                              std::to_string(kFrames) + " --image " + image_name + " 2>&1";
+  const std::string command =
+      "valgrind --tool=callgrind --callgrind-out-file=/dev/null "
+      "--toggle-collect='*profiled_frames*' '" +
+      std::string(self, static_cast<std::size_t>(length)) + "' --profile " + mode + " " + std::to_string(kFrames) +
+      " --image " + image_name + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return 0.0;
   char line[1024];
@@ -209,8 +210,7 @@ double instructions_per_frame(const std::string& mode, const std::string& image_
   return pclose(pipe) == 0 ? collected / kFrames : 0.0;
 }
 
-void bench_image(const char* name, const std::string& image_name, const cv::Mat& image, int rounds,
-                 bool instructions) {
+void bench_image(const char* name, const std::string& image_name, const cv::Mat& image, int rounds, bool instructions) {
   Extractions extractions(image);
   const std::vector<Extractions::Entry> entries = extractions.entries();
   const std::size_t n = entries.size();
@@ -248,8 +248,7 @@ void bench_image(const char* name, const std::string& image_name, const cv::Mat&
       "per frame |\n|---|---:|---:|---:|---:|---:|\n");
   for (std::size_t i = 0; i < n; ++i) {
     std::printf("| %s | %zu | %.2f | %.2f | %s | %ld |\n", entries[i].label.c_str(), counts[i], med(i), med_cpu(i),
-                instr[i] > 0.0 ? std::to_string(static_cast<long>(std::lround(instr[i] / 1e6))).c_str() : "-",
-                news[i]);
+                instr[i] > 0.0 ? std::to_string(static_cast<long>(std::lround(instr[i] / 1e6))).c_str() : "-", news[i]);
   }
   auto ratio = [&](std::size_t a, std::size_t b) {
     return instr[a] > 0.0 && instr[b] > 0.0 ? std::to_string(instr[a] / instr[b]).substr(0, 5) : std::string("-");
@@ -302,7 +301,8 @@ int main(int argc, char** argv) {
     for (const Extractions::Entry& entry : extractions.entries()) {
       if (entry.mode != profile) continue;
       entry.run();
-      std::printf("%s: %d runs, %zu keypoints\n", profile.c_str(), profile_runs, profiled_frames(entry.run, profile_runs));
+      std::printf("%s: %d runs, %zu keypoints\n", profile.c_str(), profile_runs,
+                  profiled_frames(entry.run, profile_runs));
       return 0;
     }
     std::fprintf(stderr, "unknown profile mode %s\n", profile.c_str());

@@ -25,7 +25,8 @@ bool same(const affine_orb::Features<Bits>& a, const affine_orb::Features<Bits>&
   if (a.size() != b.size()) return false;
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (a.keypoints[i].pt != b.keypoints[i].pt || a.keypoints[i].angle != b.keypoints[i].angle ||
-        a.keypoints[i].octave != b.keypoints[i].octave || a.descriptors[i] != b.descriptors[i] || a.views[i] != b.views[i]) {
+        a.keypoints[i].octave != b.keypoints[i].octave || a.descriptors[i] != b.descriptors[i] ||
+        a.views[i] != b.views[i]) {
       return false;
     }
   }
@@ -45,13 +46,15 @@ affine_orb::ExtractorOptions options_for(int index) {
 TEST_CASE("extractor instances in several threads at once equal the serial results") {
   // Small crops of real frames keep the run short, also under ThreadSanitizer.
   std::vector<cv::Mat> images;
-  for (int i = 0; i < 4; ++i) images.push_back(affine_orb::test::kitti_frame(i * 10)(cv::Rect(300, 40, 400, 300)).clone());
+  for (int i = 0; i < 4; ++i)
+    images.push_back(affine_orb::test::kitti_frame(i * 10)(cv::Rect(300, 40, 400, 300)).clone());
   const int workers = 4;
   const int rounds = 3;
   std::vector<std::vector<affine_orb::Features<256>>> serial(workers);
   for (int w = 0; w < workers; ++w) {
     affine_orb::Extractor<affine_orb::Rbrief> extractor(options_for(w));
-    for (int r = 0; r < rounds; ++r) serial[static_cast<std::size_t>(w)].push_back(extractor.extract(images[static_cast<std::size_t>((w + r) % 4)]));
+    for (int r = 0; r < rounds; ++r)
+      serial[static_cast<std::size_t>(w)].push_back(extractor.extract(images[static_cast<std::size_t>((w + r) % 4)]));
   }
   std::vector<std::vector<affine_orb::Features<256>>> parallel(workers);
   std::vector<std::thread> threads;
@@ -59,7 +62,8 @@ TEST_CASE("extractor instances in several threads at once equal the serial resul
     threads.emplace_back([&, w] {
       affine_orb::Extractor<affine_orb::Rbrief> extractor(options_for(w));
       for (int r = 0; r < rounds; ++r) {
-        parallel[static_cast<std::size_t>(w)].push_back(extractor.extract(images[static_cast<std::size_t>((w + r) % 4)]));
+        parallel[static_cast<std::size_t>(w)].push_back(
+            extractor.extract(images[static_cast<std::size_t>((w + r) % 4)]));
       }
     });
   }

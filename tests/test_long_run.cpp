@@ -4,13 +4,13 @@
 // Not run under AddressSanitizer, whose quarantine holds freed memory on purpose.
 #include <doctest/doctest.h>
 
+#include <unistd.h>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <new>
-#include <unistd.h>
 
 #include <opencv2/core.hpp>
 

@@ -69,7 +69,7 @@ struct Candidates {
 
 /// Buffers of detect_candidates() reused across calls (the FAST score map and the grid).
 struct DetectorWorkspace {
-  cv::Mat scores;  ///< grown to the largest image seen, never shrunk; its top-left part is used
+  cv::Mat scores;            ///< grown to the largest image seen, never shrunk; its top-left part is used
   std::vector<char> strong;  ///< per grid cell: has a corner at the initial threshold
   RowSpans margin;
 };
@@ -120,11 +120,10 @@ inline void detect_candidates(const cv::Mat& image, const RowSpans& region, cv::
     for (const Corner& c : corners) {
       if (c.score >= options.initial_threshold) work.strong[cell_of(c)] = 1;
     }
-    corners.erase(std::remove_if(corners.begin(), corners.end(),
-                                 [&](const Corner& c) {
-                                   return c.score < options.initial_threshold && work.strong[cell_of(c)];
-                                 }),
-                  corners.end());
+    corners.erase(
+        std::remove_if(corners.begin(), corners.end(),
+                       [&](const Corner& c) { return c.score < options.initial_threshold && work.strong[cell_of(c)]; }),
+        corners.end());
   }
 
   out.responses.reserve(corners.size());

@@ -108,9 +108,9 @@ struct QuadCell {
 /// Buffers of distribute_quadtree(), reused across calls so that the extractor does not allocate
 /// once they have grown to the largest level seen.
 struct QuadtreeWorkspace {
-  std::vector<int> index;               ///< candidate indices grouped by cell
-  std::vector<cv::Point2f> position;    ///< their positions, in the same order (read sequentially)
-  std::vector<int> index_scratch;       ///< the same two during a split
+  std::vector<int> index;             ///< candidate indices grouped by cell
+  std::vector<cv::Point2f> position;  ///< their positions, in the same order (read sequentially)
+  std::vector<int> index_scratch;     ///< the same two during a split
   std::vector<cv::Point2f> position_scratch;
   std::vector<unsigned char> quadrant;  ///< per member of the cell being split: its quadrant
   std::vector<detail::QuadCell> cells;
@@ -188,7 +188,8 @@ inline void distribute_quadtree(const std::vector<cv::Point2f>& points, const st
       root_of[static_cast<std::size_t>(i)] = r;
       ++work.order[static_cast<std::size_t>(r) + 1];
     }
-    for (int r = 0; r < roots; ++r) work.order[static_cast<std::size_t>(r) + 1] += work.order[static_cast<std::size_t>(r)];
+    for (int r = 0; r < roots; ++r)
+      work.order[static_cast<std::size_t>(r) + 1] += work.order[static_cast<std::size_t>(r)];
     for (int r = 0; r < roots; ++r) {
       const int begin = work.order[static_cast<std::size_t>(r)];
       const int end = work.order[static_cast<std::size_t>(r) + 1];
@@ -196,13 +197,16 @@ inline void distribute_quadtree(const std::vector<cv::Point2f>& points, const st
       work.cells.push_back({{region.x + r * root_width, region.y, root_width, region.height}, begin, end});
     }
     for (int i = 0; i < n; ++i) {
-      const std::size_t to = static_cast<std::size_t>(work.order[static_cast<std::size_t>(root_of[static_cast<std::size_t>(i)])]++);
+      const std::size_t to =
+          static_cast<std::size_t>(work.order[static_cast<std::size_t>(root_of[static_cast<std::size_t>(i)])]++);
       work.index[to] = i;
       work.position[to] = points[static_cast<std::size_t>(i)];
     }
   }
 
-  auto splittable = [](const detail::QuadCell& c) { return c.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f; };
+  auto splittable = [](const detail::QuadCell& c) {
+    return c.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f;
+  };
   while (static_cast<int>(work.cells.size()) < target) {
     work.order.clear();
     for (std::size_t i = 0; i < work.cells.size(); ++i) {

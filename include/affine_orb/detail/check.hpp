@@ -42,7 +42,8 @@ inline void require_gray8(const cv::Mat& image, const char* who) {
 /// built only on failure.
 inline void require_mask(const cv::Mat& mask, cv::Size size, const char* who) {
   if (mask.empty()) return;
-  if (mask.type() != CV_8UC1) require(false, std::string(who) + ": the mask must be CV_8UC1, got " + type_name(mask.type()));
+  if (mask.type() != CV_8UC1)
+    require(false, std::string(who) + ": the mask must be CV_8UC1, got " + type_name(mask.type()));
   if (mask.size() != size) {
     require(false, std::string(who) + ": the mask is " + std::to_string(mask.cols) + "x" + std::to_string(mask.rows) +
                        " but the image is " + std::to_string(size.width) + "x" + std::to_string(size.height));

@@ -517,9 +517,8 @@ inline void resample_row_sse2(const ViewResampler& r, const std::uint8_t* row, i
     resample_row_sse2_8(r, row, row_first, x0, x1, out);
     return;
   }
-  with_rounds(r.stride, [&](auto rounds) {
-    resample_row_sse2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out);
-  });
+  with_rounds(r.stride,
+              [&](auto rounds) { resample_row_sse2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out); });
 }
 #if defined(__AVX2__)
 /// Rounds eight columns' dot products (lane i of `sum` holds column i's) to bytes, Q kWeightBits
@@ -597,9 +596,8 @@ inline void resample_row_avx2(const ViewResampler& r, const std::uint8_t* row, i
     resample_row_avx2_8(r, row, row_first, x0, x1, out);
     return;
   }
-  with_rounds(r.stride, [&](auto rounds) {
-    resample_row_avx2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out);
-  });
+  with_rounds(r.stride,
+              [&](auto rounds) { resample_row_avx2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out); });
 }
 #endif
 #endif

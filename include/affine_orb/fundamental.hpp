@@ -130,14 +130,7 @@ class FundamentalEstimator {
   /// one point give an estimator that generates no model.
   FundamentalEstimator(const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
                        const TruncatedChi2Score& scoring = {1.0, 3.841, 5.991})
-      : data_(detail::normalize_correspondences(points1, points2, "FundamentalEstimator")) {
-    scoring.check();
-    inv_sigma_squared_ = 1.0 / (scoring.sigma * scoring.sigma);
-    threshold_ = scoring.chi2_threshold;
-    score_constant_ = scoring.score_constant;
-    t1_inverse_ = detail::similarity_inverse(data_.t1);
-    t2_inverse_ = detail::similarity_inverse(data_.t2);
-  }
+      : data_(detail::normalize_correspondences(points1, points2, "FundamentalEstimator")), scorer_(scoring) {}
 
   std::size_t size() const { return data_.pixels1.size(); }
 
@@ -165,19 +158,12 @@ class FundamentalEstimator {
     const std::array<double, 2> d = epipolar_squared_distances(model, data_.pixels1[index], data_.pixels2[index]);
     PointScore s;
     s.inlier = true;
-    for (const double squared : d) {
-      const double chi2 = squared * inv_sigma_squared_;
-      if (chi2 < threshold_) {
-        s.value += score_constant_ - chi2;
-      } else {
-        s.inlier = false;  // also for NaN: an undefined epipolar line
-      }
-    }
+    for (const double squared : d) scorer_.add(squared, s);  // NaN for an undefined epipolar line
     return s;
   }
 
   /// Both directions at zero distance.
-  double max_point_score() const { return 2.0 * score_constant_; }
+  double max_point_score() const { return scorer_.max_score(2); }
 
   /// One step of the Sampson-reweighted 8-point least squares over the inliers (normalised
   /// coordinates): every equation is divided by the gradient norm of its residual under `model`,
@@ -192,7 +178,7 @@ class FundamentalEstimator {
     }
     if (used.size() < static_cast<std::size_t>(kSampleSize)) return std::nullopt;
     // The model in normalised coordinates: x2ᵀ F x1 = (T2 x2)ᵀ T2⁻ᵀ F T1⁻¹ (T1 x1).
-    const Eigen::Matrix3d previous = t2_inverse_.transpose() * model * t1_inverse_;
+    const Eigen::Matrix3d previous = data_.t2_inverse.transpose() * model * data_.t1_inverse;
     const std::optional<detail::Vector9d> f =
         detail::fundamental_least_squares(data_.normalized1, data_.normalized2, used, &previous);
     if (!f) return std::nullopt;
@@ -201,11 +187,7 @@ class FundamentalEstimator {
 
  private:
   detail::NormalizedCorrespondences data_;
-  Eigen::Matrix3d t1_inverse_ = Eigen::Matrix3d::Identity();
-  Eigen::Matrix3d t2_inverse_ = Eigen::Matrix3d::Identity();
-  double inv_sigma_squared_ = 1.0;
-  double threshold_ = 0.0;
-  double score_constant_ = 0.0;
+  detail::Chi2Scorer scorer_;
 };
 
 }  // namespace affine_orb

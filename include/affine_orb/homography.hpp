@@ -150,14 +150,7 @@ class HomographyEstimator {
   /// estimator that generates no model.
   HomographyEstimator(const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
                       const TruncatedChi2Score& scoring = {})
-      : data_(detail::normalize_correspondences(points1, points2, "HomographyEstimator")) {
-    scoring.check();
-    inv_sigma_squared_ = 1.0 / (scoring.sigma * scoring.sigma);
-    threshold_ = scoring.chi2_threshold;
-    score_constant_ = scoring.score_constant;
-    t1_inverse_ = detail::similarity_inverse(data_.t1);
-    t2_inverse_ = detail::similarity_inverse(data_.t2);
-  }
+      : data_(detail::normalize_correspondences(points1, points2, "HomographyEstimator")), scorer_(scoring) {}
 
   std::size_t size() const { return data_.pixels1.size(); }
 
@@ -172,7 +165,7 @@ class HomographyEstimator {
     }
     const std::optional<Eigen::Matrix3d> hn = detail::homography_4_point_normalized(n1, n2);
     if (!hn) return set;
-    const std::optional<Model> model = detail::make_homography_model(t2_inverse_ * *hn * data_.t1);
+    const std::optional<Model> model = detail::make_homography_model(data_.t2_inverse * *hn * data_.t1);
     if (model) set.push(*model);
     return set;
   }
@@ -183,13 +176,14 @@ class HomographyEstimator {
     const Eigen::Vector2d& b = data_.pixels2[index];
     PointScore s;
     s.inlier = true;
-    add_direction(transfer_squared(model.h, a, b), s);
-    add_direction(transfer_squared(model.inverse, b, a), s);
+    // NaN for a point mapped to infinity: an outlier.
+    scorer_.add(transfer_squared(model.h, a, b), s);
+    scorer_.add(transfer_squared(model.inverse, b, a), s);
     return s;
   }
 
   /// Both directions at zero error.
-  double max_point_score() const { return 2.0 * score_constant_; }
+  double max_point_score() const { return scorer_.max_score(2); }
 
   /// One step of the reweighted least-squares DLT over the inliers (normalised coordinates):
   /// every equation is divided by the third homogeneous coordinate of H x1 under `model`, which
@@ -201,7 +195,7 @@ class HomographyEstimator {
     std::size_t count = 0;
     for (const std::uint8_t inlier : inliers) count += inlier != 0 ? 1 : 0;
     if (count < static_cast<std::size_t>(kSampleSize)) return std::nullopt;
-    const Eigen::Matrix3d hn = data_.t2 * model.h * t1_inverse_;
+    const Eigen::Matrix3d hn = data_.t2 * model.h * data_.t1_inverse;
     Eigen::Matrix<double, Eigen::Dynamic, 9> a(2 * static_cast<Eigen::Index>(count), 9);
     Eigen::Index r = 0;
     for (std::size_t i = 0; i < inliers.size(); ++i) {
@@ -220,7 +214,7 @@ class HomographyEstimator {
     const detail::Matrix9d normal = a.transpose() * a;
     const std::optional<detail::Vector9d> h = detail::smallest_eigenvector(normal);
     if (!h) return std::nullopt;
-    return detail::make_homography_model(t2_inverse_ * detail::reshape_row_major(*h) * data_.t1);
+    return detail::make_homography_model(data_.t2_inverse * detail::reshape_row_major(*h) * data_.t1);
   }
 
  private:
@@ -232,21 +226,8 @@ class HomographyEstimator {
     return u * u + v * v;
   }
 
-  void add_direction(double squared, PointScore& s) const {
-    const double chi2 = squared * inv_sigma_squared_;
-    if (chi2 < threshold_) {
-      s.value += score_constant_ - chi2;
-    } else {
-      s.inlier = false;  // also for NaN: a point mapped to infinity
-    }
-  }
-
-  detail::NormalizedCorrespondences data_;
-  Eigen::Matrix3d t1_inverse_ = Eigen::Matrix3d::Identity();  // pixel H to normalised: T2 H T1⁻¹
-  Eigen::Matrix3d t2_inverse_ = Eigen::Matrix3d::Identity();  // normalised H to pixels: T2⁻¹ Hn T1
-  double inv_sigma_squared_ = 1.0;
-  double threshold_ = 0.0;
-  double score_constant_ = 0.0;
+  detail::NormalizedCorrespondences data_;  // pixel H to normalised: T2 H T1⁻¹; back: T2⁻¹ Hn T1
+  detail::Chi2Scorer scorer_;
 };
 
 }  // namespace affine_orb

@@ -122,6 +122,40 @@ struct PointScore {
   bool inlier = false;  ///< whether the correspondence supports the model
 };
 
+namespace detail {
+
+/// A checked TruncatedChi2Score with 1/σ² computed once, as the estimators apply it to every
+/// squared residual of every model.
+class Chi2Scorer {
+ public:
+  /// Throws std::invalid_argument when `scoring` fails its check().
+  explicit Chi2Scorer(const TruncatedChi2Score& scoring)
+      : inv_sigma_squared_((scoring.check(), 1.0 / (scoring.sigma * scoring.sigma))),
+        threshold_(scoring.chi2_threshold),
+        constant_(scoring.score_constant) {}
+
+  /// Adds the term of one squared residual (pixels²) to `s`: T − d²/σ² when d²/σ² < T_m, else
+  /// marks the correspondence an outlier (also for NaN, an undefined residual).
+  void add(double squared, PointScore& s) const {
+    const double chi2 = squared * inv_sigma_squared_;
+    if (chi2 < threshold_) {
+      s.value += constant_ - chi2;
+    } else {
+      s.inlier = false;
+    }
+  }
+
+  /// Score of a correspondence with `residuals` residuals at zero.
+  double max_score(int residuals) const { return residuals * constant_; }
+
+ private:
+  double inv_sigma_squared_;
+  double threshold_;
+  double constant_;
+};
+
+}  // namespace detail
+
 /// Up to `Capacity` models from one minimal sample, stored inline (no allocation).
 template <class Model, int Capacity>
 struct ModelSet {

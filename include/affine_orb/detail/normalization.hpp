@@ -63,6 +63,8 @@ struct NormalizedCorrespondences {
   std::vector<Eigen::Vector2d> normalized2;  ///< t2 · pixels2
   Eigen::Matrix3d t1 = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d t2 = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d t1_inverse = Eigen::Matrix3d::Identity();  ///< similarity_inverse(t1)
+  Eigen::Matrix3d t2_inverse = Eigen::Matrix3d::Identity();  ///< similarity_inverse(t2)
   /// False when all points of one image coincide (or there are none): no model can be estimated,
   /// the normalised coordinates are then left empty.
   bool normalizable = false;
@@ -95,6 +97,8 @@ inline NormalizedCorrespondences normalize_correspondences(const std::vector<cv:
   if (!t1 || !t2) return c;
   c.t1 = *t1;
   c.t2 = *t2;
+  c.t1_inverse = similarity_inverse(c.t1);
+  c.t2_inverse = similarity_inverse(c.t2);
   c.normalized1.resize(n);
   c.normalized2.resize(n);
   for (std::size_t i = 0; i < n; ++i) {

@@ -97,25 +97,6 @@ struct RowSpans {
       }
     }
   }
-
-  /// Into `out` (buffers reused): the pixels of the region that also lie in `rect`.
-  void intersect_into(cv::Rect rect, RowSpans& out) const {
-    const int top = std::max(y0, rect.y);
-    const int bottom = std::min(y0 + rows(), rect.y + rect.height);
-    out.reset(top, std::max(bottom - top, 0));
-    for (int y = top; y < bottom; ++y) {
-      const auto [b, e] = run(y);
-      out.begin[static_cast<std::size_t>(y - top)] = std::max(b, rect.x);
-      out.end[static_cast<std::size_t>(y - top)] = std::min(e, rect.x + rect.width);
-    }
-  }
-
-  /// The pixels of the region that also lie in `rect`.
-  RowSpans intersect(cv::Rect rect) const {
-    RowSpans out;
-    intersect_into(rect, out);
-    return out;
-  }
 };
 
 }  // namespace affine_orb::detail

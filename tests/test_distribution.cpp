@@ -635,9 +635,9 @@ TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianB
   }
 }
 
-TEST_CASE("merging duplicates keeps exactly what a brute-force greedy merge keeps") {
+TEST_CASE("the area split's merge keeps exactly what a brute-force greedy merge keeps") {
   // With an unbounded budget every candidate is returned, so kKeepAll lists all of them (by
-  // level, then view, then raster order in the view) and kMerge the ones the merge kept.
+  // octave, view, level, then raster order in the view) and kMerge the ones the merge kept.
   cv::Mat image;
   cv::resize(affine_orb::test::oxford_image("graf", 1), image, cv::Size(320, 256), 0, 0, cv::INTER_AREA);
   for (const auto score : {affine_orb::ScoreType::kFast, affine_orb::ScoreType::kHarris}) {
@@ -646,15 +646,24 @@ TEST_CASE("merging duplicates keeps exactly what a brute-force greedy merge keep
     options.pyramid.levels = 3;
     options.detector.score = score;
     options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
-    const auto all = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
+    options.view_budget = affine_orb::ViewBudget::kAreaSplit;
+    affine_orb::Extractor<affine_orb::Rbrief> keep_all(options);
+    const auto all = keep_all.extract(image);
+    const std::vector<affine_orb::AffineView> views = keep_all.views();
     options.duplicates = affine_orb::DuplicatePolicy::kMerge;
     const auto merged = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
+    // The level a keypoint was detected at in its view, from its size 31·s^l·√t.
+    auto level_of = [&](std::size_t i) {
+      const double tilt = views[static_cast<std::size_t>(all.views[i])].tilt;
+      return static_cast<int>(std::lround(std::log(all.keypoints[i].size / (31.0 * std::sqrt(tilt))) /
+                                          std::log(options.pyramid.scale_factor)));
+    };
 
     std::vector<std::size_t> expected;
     for (int level = 0; level < options.pyramid.levels; ++level) {
       std::vector<std::size_t> order;
       for (std::size_t i = 0; i < all.size(); ++i) {
-        if (all.keypoints[i].octave == level) order.push_back(i);
+        if (level_of(i) == level) order.push_back(i);
       }
       // Strongest first; ties to the lower view, then to the earlier position in that view.
       std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -662,18 +671,18 @@ TEST_CASE("merging duplicates keeps exactly what a brute-force greedy merge keep
                (all.keypoints[a].response == all.keypoints[b].response && all.views[a] < all.views[b]);
       });
       const double radius = options.merge_radius * std::pow(options.pyramid.scale_factor, level);
-      std::vector<std::size_t> kept;
       for (std::size_t i : order) {
         bool duplicate = false;
-        for (std::size_t k : kept) {
+        for (std::size_t k : expected) {
+          if (level_of(k) != level) continue;
           const cv::Point2f d = all.keypoints[k].pt - all.keypoints[i].pt;
           duplicate = duplicate || (all.views[k] != all.views[i] && std::hypot(d.x, d.y) < radius);
         }
-        if (!duplicate) kept.push_back(i);
+        if (!duplicate) expected.push_back(i);
       }
-      std::sort(kept.begin(), kept.end());
-      expected.insert(expected.end(), kept.begin(), kept.end());
     }
+    // The merged output is the kept subset in the output order of all candidates.
+    std::sort(expected.begin(), expected.end());
     CAPTURE(static_cast<int>(score));
     REQUIRE(merged.size() == expected.size());
     CHECK(merged.size() < all.size());

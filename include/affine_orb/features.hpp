@@ -25,9 +25,12 @@ using BinaryDescriptor = std::array<std::uint64_t, static_cast<std::size_t>(Bits
 /// Keypoint fields (cv::KeyPoint):
 /// - `pt`: position in pixels of the original (level-0) image, pixel centres at integer coordinates;
 /// - `angle`: orientation in degrees in [0, 360), measured in the original image (x right, y down);
-/// - `octave`: pyramid level l the keypoint was detected at, 0 = full resolution;
-/// - `size`: diameter of the descriptor support in original pixels, patch_size · scale, where
-///   scale = s^l for the scale factor s (times √t for a keypoint from a view of tilt t);
+/// - `octave`: the level of the original image's pyramid whose scale is the keypoint's, 0 = full
+///   resolution: for a keypoint of the image, the level l it was detected at; for one of a view of
+///   tilt t detected at its level l, the level nearest (in log scale) to s^l·√t, at most
+///   levels − 1. It also says how precisely the keypoint is located: an image keypoint lies on a
+///   pixel of its level; a view keypoint's mapped position is off by up to t·s^l/2 original pixels
+///   along the tilt and s^l/2 across it, s^l·√t/2 in geometric mean (RefineOptions);
 /// - `response`: detector score (FAST or Harris, see DetectorOptions), larger is stronger.
 ///
 /// `views[i]` is the index of the simulated view keypoint i was detected in (0 = the original,

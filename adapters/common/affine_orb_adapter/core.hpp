@@ -25,7 +25,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -78,14 +77,6 @@ inline ScaleTables make_scale_tables(float scale_factor, int levels) {
     factor *= scale_factor;
   }
   return t;
-}
-
-/// The ORB-SLAM octave of a keypoint found on level `level` of a view of tilt `tilt`: the level
-/// whose scale s^o is nearest (in log scale) to the keypoint scale s^level·√tilt, clamped to
-/// [0, levels).
-inline int octave_for(int level, double tilt, double scale_factor, int levels) {
-  const double o = level + 0.5 * std::log(tilt) / std::log(scale_factor);
-  return std::clamp(static_cast<int>(std::lround(o)), 0, levels - 1);
 }
 
 /// Parsing of environment-variable values; a failure throws std::invalid_argument naming the variable.
@@ -184,26 +175,16 @@ struct AdapterFrame {
   std::vector<cv::Mat> pyramid;  ///< the original image at each level, owned (not shared)
 };
 
-/// Features to ask of an extractor over all views of `views` so that the views other than the
-/// identity get about `extra` of them: Extractor splits its budget over views in proportion to 1/t
-/// (extractor.hpp), so the identity view takes 1/Σ(1/t) of it. 0 when `views` has no tilted view.
-inline int views_budget(int extra, const AffineViewOptions& views) {
-  double total = 0.0;
-  for (const auto& view : view_parameters(views)) total += 1.0 / view.first;
-  if (extra <= 0 || total <= 1.0) return 0;
-  return static_cast<int>(std::ceil(extra * total / (total - 1.0)));
-}
-
 /// ORB-SLAM's five extractor parameters plus the affine options, checked, and the extractors built
 /// from them. `who` names the adapter class in error messages.
 ///
-/// The image itself is extracted with ORB-SLAM2's budget (nfeatures keypoints, geometric over the
-/// levels): those keypoints are the same with the views on or off, so ORB-SLAM's monocular
-/// initialisation, which matches octave-0 keypoints only, keeps all of its candidates. With the
-/// views on, a second extractor over the views of max_tilt contributes the keypoints of its tilted
-/// views (about view_features · nfeatures of them; its keypoints of the untilted image are dropped),
-/// each mapped to its nearest octave o and, with AdapterDuplicates::kMerge, dropped when a keypoint
-/// of the image of octave o' in {o − 1, o, o + 1} lies within merge_radius · s^o' pixels.
+/// One affine_orb::Extractor with ViewBudget::kAdditive does the work: the image is extracted
+/// with ORB-SLAM2's budget (nfeatures keypoints, geometric over the levels), and those keypoints
+/// are the same with the views on or off, so ORB-SLAM's monocular initialisation, which matches
+/// octave-0 keypoints only, keeps all of its candidates. With the views on, the tilted views add
+/// about view_features · nfeatures keypoints where the image has none (AdapterDuplicates::kMerge:
+/// a view's candidate within merge_radius · s^l of a kept image keypoint or of a stronger view
+/// candidate of the same level l is dropped first), each with the octave nearest to its scale.
 class AdapterCore {
  public:
   AdapterCore(const char* who, int nfeatures, float scale_factor, int nlevels, int ini_th_fast, int min_th_fast,
@@ -224,27 +205,24 @@ class AdapterCore {
     levels_ = nlevels;
     scales_ = make_scale_tables(scale_factor, nlevels);
 
-    ExtractorOptions plain;
-    plain.features = nfeatures;
-    plain.pyramid.scale_factor = static_cast<double>(scale_factor);
-    plain.pyramid.levels = nlevels;
-    plain.detector.initial_threshold = ini_th_fast;
-    plain.detector.min_threshold = min_th_fast;
-    plain.detector.score = ScoreType::kFast;  // ORB-SLAM ranks by the FAST score
-    plain.views.max_tilt = 1.0;
-
-    ExtractorOptions views = plain;
-    views.views.max_tilt = affine.max_tilt;
-    views.duplicates =
+    ExtractorOptions options;
+    options.features = nfeatures;
+    options.pyramid.scale_factor = static_cast<double>(scale_factor);
+    options.pyramid.levels = nlevels;
+    options.detector.initial_threshold = ini_th_fast;
+    options.detector.min_threshold = min_th_fast;
+    options.detector.score = ScoreType::kFast;  // ORB-SLAM ranks by the FAST score
+    options.views.max_tilt = affine.view_features > 0.0 ? affine.max_tilt : 1.0;
+    options.view_budget = ViewBudget::kAdditive;
+    options.view_features = affine.view_features;
+    options.duplicates =
         affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;
-    views.merge_radius = affine.merge_radius;
-    views.threads = affine.threads;
-    const int extra = static_cast<int>(std::lround(affine.view_features * nfeatures));
-    views.features = std::min(views_budget(extra, views.views), 1000000);
+    options.merge_radius = affine.merge_radius;
+    options.threads = affine.threads;
     if (affine.descriptor == AdapterDescriptor::kRbrief) {
-      build(rbrief_, plain, views);
+      rbrief_.emplace(options);
     } else {
-      build(brisk_, plain, views);
+      brisk_.emplace(options);
     }
   }
 
@@ -264,26 +242,6 @@ class AdapterCore {
   }
 
  private:
-  /// The image's extractor and, with the views on, the views' extractor.
-  template <class Descriptor>
-  struct Extractors {
-    Extractor<Descriptor> plain;
-    std::optional<Extractor<Descriptor>> views;
-  };
-
-  /// A keypoint chosen for the output: which extractor (0 = the image's, 1 = the views'), its index.
-  struct Pick {
-    int source;
-    std::size_t index;
-  };
-
-  template <class Descriptor>
-  static void build(std::optional<Extractors<Descriptor>>& out, const ExtractorOptions& plain,
-                    const ExtractorOptions& views) {
-    out.emplace(Extractors<Descriptor>{Extractor<Descriptor>(plain), std::nullopt});
-    if (views.features >= 1) out->views.emplace(views);
-  }
-
   /// Whether the stereo window around keypoint `pt` fits at octave `o` (kBorderMargin).
   bool fits(cv::Point2f pt, int o, const std::vector<cv::Mat>& pyramid) const {
     const cv::Mat& level = pyramid[static_cast<std::size_t>(o)];
@@ -295,99 +253,29 @@ class AdapterCore {
   }
 
   template <class Descriptor>
-  AdapterFrame convert(Extractors<Descriptor>& extractors, const cv::Mat& image, const cv::Mat& mask) const {
-    const Features<Descriptor::kBits> plain = extractors.plain.extract(image, mask);
+  AdapterFrame convert(Extractor<Descriptor>& extractor, const cv::Mat& image, const cv::Mat& mask) const {
+    const Features<Descriptor::kBits> features = extractor.extract(image, mask);
     AdapterFrame frame;
-    for (const cv::Mat& level : extractors.plain.pyramid().images()) frame.pyramid.push_back(level.clone());
-
-    std::vector<std::vector<Pick>> by_octave(static_cast<std::size_t>(levels_));
-    // The image's keypoints keep their level as octave.
-    for (std::size_t i = 0; i < plain.size(); ++i) {
-      const cv::KeyPoint& kp = plain.keypoints[i];
-      if (fits(kp.pt, kp.octave, frame.pyramid)) by_octave[static_cast<std::size_t>(kp.octave)].push_back({0, i});
+    for (const cv::Mat& level : extractor.pyramid().images()) frame.pyramid.push_back(level.clone());
+    // The extractor's octaves are ORB-SLAM's (the nearest scale, grouped, 0 first); the image's
+    // keypoints come first within an octave.
+    std::vector<std::size_t> picks;
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      if (fits(features.keypoints[i].pt, features.keypoints[i].octave, frame.pyramid)) picks.push_back(i);
     }
-    Features<Descriptor::kBits> views;
-    if (extractors.views) {
-      views = extractors.views->extract(image, mask);
-      const std::vector<AffineView> view_set = extractors.views->views();
-      const std::vector<OctaveGrid> grids = octave_grids(plain.keypoints);
-      for (std::size_t i = 0; i < views.size(); ++i) {
-        const AffineView& view = view_set[static_cast<std::size_t>(views.views[i])];
-        if (view.is_identity()) continue;
-        const cv::KeyPoint& kp = views.keypoints[i];
-        const int o = octave_for(kp.octave, view.tilt, static_cast<double>(scale_factor_), levels_);
-        if (!fits(kp.pt, o, frame.pyramid)) continue;
-        if (affine_.duplicates == AdapterDuplicates::kMerge && duplicate(grids, kp.pt, o)) continue;
-        by_octave[static_cast<std::size_t>(o)].push_back({1, i});
-      }
-    }
-
-    const cv::Mat rows[2] = {descriptors_to_mat(plain.descriptors), descriptors_to_mat(views.descriptors)};
-    const std::vector<cv::KeyPoint>* keypoints[2] = {&plain.keypoints, &views.keypoints};
-    std::size_t n = 0;
-    for (const auto& group : by_octave) n += group.size();
-    frame.keypoints.reserve(n);
-    if (n > 0) frame.descriptors.create(static_cast<int>(n), kDescriptorBytes, CV_8U);
-    for (int o = 0; o < levels_; ++o) {
-      for (const Pick& pick : by_octave[static_cast<std::size_t>(o)]) {
-        cv::KeyPoint kp = (*keypoints[pick.source])[pick.index];
-        kp.octave = o;
-        kp.size = kOrbPatchSize * scales_.factors[static_cast<std::size_t>(o)];
-        // BRISK's 512 bits: the first 256 (bytes 0–31) are kept, see AdapterDescriptor::kBrisk.
-        rows[pick.source]
-            .row(static_cast<int>(pick.index))
-            .colRange(0, kDescriptorBytes)
-            .copyTo(frame.descriptors.row(static_cast<int>(frame.keypoints.size())));
-        frame.keypoints.push_back(kp);
-      }
+    const cv::Mat rows = descriptors_to_mat(features.descriptors);
+    frame.keypoints.reserve(picks.size());
+    if (!picks.empty()) frame.descriptors.create(static_cast<int>(picks.size()), kDescriptorBytes, CV_8U);
+    for (std::size_t i : picks) {
+      cv::KeyPoint kp = features.keypoints[i];
+      kp.size = kOrbPatchSize * scales_.factors[static_cast<std::size_t>(kp.octave)];
+      // BRISK's 512 bits: the first 256 (bytes 0–31) are kept, see AdapterDescriptor::kBrisk.
+      rows.row(static_cast<int>(i))
+          .colRange(0, kDescriptorBytes)
+          .copyTo(frame.descriptors.row(static_cast<int>(frame.keypoints.size())));
+      frame.keypoints.push_back(kp);
     }
     return frame;
-  }
-
-  /// The image's keypoints of one octave on a grid of cells of the merge radius, for the duplicate
-  /// test of the views' keypoints.
-  struct OctaveGrid {
-    double radius = 1.0;
-    std::unordered_map<long long, std::vector<cv::Point2f>> cells;
-
-    static long long key(long long cx, long long cy) { return cx * 1000003LL + cy; }
-    long long cell(float v) const { return static_cast<long long>(std::floor(v / radius)); }
-    void add(cv::Point2f p) { cells[key(cell(p.x), cell(p.y))].push_back(p); }
-    /// Whether a point lies within `radius` (strictly) of p.
-    bool near(cv::Point2f p) const {
-      const long long cx = cell(p.x);
-      const long long cy = cell(p.y);
-      for (long long dy = -1; dy <= 1; ++dy) {
-        for (long long dx = -1; dx <= 1; ++dx) {
-          const auto it = cells.find(key(cx + dx, cy + dy));
-          if (it == cells.end()) continue;
-          for (const cv::Point2f& q : it->second) {
-            if (std::hypot(q.x - p.x, q.y - p.y) < radius) return true;
-          }
-        }
-      }
-      return false;
-    }
-  };
-
-  /// Whether an image keypoint of octave o − 1, o or o + 1 lies within merge_radius · s^o' of p
-  /// (o' its octave): ORB-SLAM's matchers search a keypoint's octave and its neighbours, and its
-  /// ratio tests (SearchByBoW across all octaves) reject a match when two keypoints of one corner
-  /// compete.
-  bool duplicate(const std::vector<OctaveGrid>& grids, cv::Point2f p, int o) const {
-    for (int q = std::max(o - 1, 0); q <= std::min(o + 1, levels_ - 1); ++q) {
-      if (grids[static_cast<std::size_t>(q)].near(p)) return true;
-    }
-    return false;
-  }
-
-  std::vector<OctaveGrid> octave_grids(const std::vector<cv::KeyPoint>& keypoints) const {
-    std::vector<OctaveGrid> grids(static_cast<std::size_t>(levels_));
-    for (int o = 0; o < levels_; ++o) {
-      grids[static_cast<std::size_t>(o)].radius = affine_.merge_radius * scales_.factors[static_cast<std::size_t>(o)];
-    }
-    for (const cv::KeyPoint& kp : keypoints) grids[static_cast<std::size_t>(kp.octave)].add(kp.pt);
-    return grids;
   }
 
   const char* who_;
@@ -395,8 +283,8 @@ class AdapterCore {
   float scale_factor_ = 1.2f;
   int levels_ = 8;
   ScaleTables scales_;
-  std::optional<Extractors<Rbrief>> rbrief_;
-  std::optional<Extractors<Brisk>> brisk_;
+  std::optional<Extractor<Rbrief>> rbrief_;
+  std::optional<Extractor<Brisk>> brisk_;
 };
 
 /// Writes descriptors to an ORB-SLAM output array: released when there is no keypoint (ORB-SLAM's

@@ -71,7 +71,8 @@ struct AdapterOptions {
   /// the SPEC §7 duplicate cell.
   double merge_radius = 2.0;
   /// Keypoints the tilted views add to ORB-SLAM's nfeatures keypoints of the image, as a fraction
-  /// of nfeatures (about view_features · nfeatures, fewer after the duplicate merge); 0 adds none.
+  /// of nfeatures (affine_orb::ExtractorOptions::view_features: view_features · nfeatures when the
+  /// views have enough corners, fewer where keypoints near the border are dropped); 0 adds none.
   /// The image's own keypoints never change, so that monocular initialisation keeps them.
   double view_features = 1.0;
 

@@ -1,23 +1,33 @@
-// eval_viewpoint [--out DIR] [--features N] [--threads K] [--sequences a,b,...]
+// eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] [--sequences a,b,...]
+//                [--methods SUBSTRING] [--asift-sequences a,b,...|all]
 //
 // The SPEC §7 evaluation on image pairs with ground-truth homographies: every pair 1->2 ... 1->6 of
 // every sequence in ../shared/data/oxford, and Debian opencv-doc's graf1/graf3 pair, for every
 // method, in one run:
-//   ours plain rBRIEF, ours plain BRISK, ours affine rBRIEF, ours affine BRISK (N features, 18 views),
-//   with the quadtree spreading (the SLAM default) and, for three of them, the strongest-N selection,
-//   cv::ORB 1000, cv::ORB 2000, cv::BRISK, cv::AffineFeature(cv::ORB) with the same 18 views.
-// All methods are matched the same way (affine_orb::match_features: ratio 0.8, location-aware ratio
-// test, duplicate removal) and verified with the same estimator (cv::findHomography, RANSAC, 3 px).
+//   ours plain rBRIEF at the image budget N (what the affine default keeps of the image) and at the
+//   affine default's total N·(1 + F), ours plain BRISK, ours affine rBRIEF/BRISK (the default:
+//   additive budget, N image keypoints plus N·F from the 18 views), ours affine rBRIEF with the
+//   former area split (2N in total), the strongest-N selection for some of them, cv::ORB 1000 and
+//   2000, cv::BRISK, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) and cv::AffineFeature(cv::SIFT)
+//   (ASIFT itself) with the same 18 views. ASIFT gives ~29 000 128-float descriptors per image; its
+//   brute-force matching takes tens of seconds a pair, so it runs on the graf pairs only unless
+//   --asift-sequences says otherwise.
+// Binary descriptors are matched with affine_orb::match_features (ratio 0.8, location-aware ratio
+// test, duplicate removal), float ones (SIFT, ASIFT) with the same rules on L2 distances
+// (cv::BFMatcher k-nearest), and all are verified with the same estimator (cv::findHomography,
+// RANSAC, 3 px).
 // Per pair and method: keypoints, matches, correct (‖H x1 − x2‖ < 3 px), distinct correct (image-1
 // points collapsed to 2-px cells), precision, RANSAC inliers and the fraction of them that are
 // correct, repeatability (image-1 keypoints in the common region with an image-2 keypoint within
-// 3 px after mapping) and extraction time per image (single thread unless --threads).
+// 3 px after mapping), distinct correct per 1000 keypoints (of the mean of the two images' counts)
+// and extraction time per image (single thread unless --threads).
 // Writes DIR/eval_viewpoint.md, DIR/eval_viewpoint.csv and DIR/eval_viewpoint.png (distinct
 // correct matches against the graf viewpoint angle per method).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -59,16 +69,22 @@ struct Row {
   std::string method;
   std::size_t keypoints1 = 0, keypoints2 = 0, matches = 0, correct = 0, distinct = 0, inliers = 0, inliers_correct = 0;
   double precision = 0.0, repeatability = 0.0, ms = 0.0;
+  /// Distinct correct matches per 1000 keypoints (of the mean of the two images' counts).
+  double per_1000() const {
+    const double mean = 0.5 * static_cast<double>(keypoints1 + keypoints2);
+    return mean > 0.0 ? 1000.0 * static_cast<double>(distinct) / mean : 0.0;
+  }
 };
 
+/// Our extractor with the defaults but for `features`, `max_tilt` and what `configure` changes.
 template <class Descriptor>
 Method ours(const std::string& name, int features, double max_tilt, int threads,
-            affine_orb::Spreading spreading = affine_orb::Spreading::kQuadtree) {
+            const std::function<void(affine_orb::ExtractorOptions&)>& configure = {}) {
   affine_orb::ExtractorOptions options;
   options.features = features;
   options.views.max_tilt = max_tilt;
   options.threads = threads;
-  options.spreading = spreading;
+  if (configure) configure(options);
   auto extractor = std::make_shared<affine_orb::Extractor<Descriptor>>(options);
   return {name, [extractor](const cv::Mat& image) {
             const auto start = Clock::now();
@@ -102,8 +118,39 @@ affine_orb::Features<Bits> as_features(const Extracted& e) {
   return f;
 }
 
+/// Float descriptors matched by the rules of affine_orb::match_features with its default
+/// AffineMatchOptions, on L2 distances: ratio 0.8 against the nearest train descriptor farther
+/// than 4 px from the best one's keypoint (none among the k nearest: accepted), then duplicate
+/// correspondences (both points within 2 px) removed, the smaller distance kept.
+std::vector<affine_orb::Match> match_float(const Extracted& a, const Extracted& b) {
+  const affine_orb::AffineMatchOptions rules;
+  const int k = std::min(32, b.descriptors.rows);
+  std::vector<std::vector<cv::DMatch>> knn;
+  cv::BFMatcher(cv::NORM_L2).knnMatch(a.descriptors, b.descriptors, knn, k);
+  std::vector<affine_orb::Match> matches;
+  for (const auto& neighbours : knn) {
+    if (neighbours.empty()) continue;
+    const cv::DMatch& best = neighbours.front();
+    const cv::Point2f at = b.keypoints[static_cast<std::size_t>(best.trainIdx)].pt;
+    bool accepted = true;
+    for (std::size_t j = 1; j < neighbours.size(); ++j) {
+      const cv::Point2f other = b.keypoints[static_cast<std::size_t>(neighbours[j].trainIdx)].pt;
+      if (std::hypot(other.x - at.x, other.y - at.y) <= rules.ratio_exclusion_radius) continue;
+      accepted = best.distance < rules.matcher.ratio * neighbours[j].distance;
+      break;
+    }
+    // Distances scaled to integers for affine_orb::Match; only their order matters below.
+    if (accepted) matches.push_back({best.queryIdx, best.trainIdx, static_cast<int>(std::lround(best.distance * 1000.0f))});
+  }
+  std::vector<cv::Point2f> p1, p2;
+  for (const auto& kp : a.keypoints) p1.push_back(kp.pt);
+  for (const auto& kp : b.keypoints) p2.push_back(kp.pt);
+  return affine_orb::remove_duplicate_matches(matches, p1, p2, rules.duplicate_radius);
+}
+
 std::vector<affine_orb::Match> match(const Extracted& a, const Extracted& b) {
   if (a.keypoints.empty() || b.keypoints.empty()) return {};
+  if (a.descriptors.type() == CV_32F) return match_float(a, b);
   if (a.descriptors.cols == 32) return affine_orb::match_features(as_features<256>(a), as_features<256>(b));
   return affine_orb::match_features(as_features<512>(a), as_features<512>(b));
 }
@@ -205,7 +252,8 @@ void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, cons
               cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0));
   cv::putText(canvas, "distinct correct matches", cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0));
   const cv::Scalar colours[] = {{200, 120, 0}, {120, 60, 0}, {0, 160, 0}, {0, 90, 0},     {230, 180, 90}, {90, 220, 90},
-                                {0, 60, 0},    {0, 0, 220},  {0, 0, 130}, {150, 0, 150}, {0, 140, 255}};
+                                {0, 60, 0},    {0, 0, 220},  {0, 0, 130}, {150, 0, 150}, {0, 140, 255}, {120, 120, 120},
+                                {255, 0, 255}, {0, 200, 200}, {60, 60, 200}};
   for (std::size_t m = 0; m < methods.size(); ++m) {
     const cv::Scalar colour = colours[m % (sizeof(colours) / sizeof(colours[0]))];
     cv::Point previous(-1, -1);
@@ -229,37 +277,74 @@ void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, cons
 
 int main(int argc, char** argv) {
   std::string out_dir = ".";
-  int features = 2000;
+  int features = 1000;
+  double view_features = affine_orb::ExtractorOptions{}.view_features;
   int threads = 1;
   std::string only;
+  std::string method_filter;
+  std::string asift_only = ",graf,opencv-doc graf,";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--out") out_dir = argv[i + 1];
     else if (flag == "--features") features = std::atoi(argv[i + 1]);
+    else if (flag == "--view-features") view_features = std::atof(argv[i + 1]);
     else if (flag == "--threads") threads = std::atoi(argv[i + 1]);
     else if (flag == "--sequences") only = std::string(",") + argv[i + 1] + ",";
+    else if (flag == "--methods") method_filter = argv[i + 1];
+    else if (flag == "--asift-sequences") asift_only = std::string(argv[i + 1]) == "all" ? "" : std::string(",") + argv[i + 1] + ",";
     else {
-      std::fprintf(stderr, "usage: eval_viewpoint [--out DIR] [--features N] [--threads K] [--sequences a,b]\n");
+      std::fprintf(stderr,
+                   "usage: eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] "
+                   "[--sequences a,b] [--methods SUBSTRING] [--asift-sequences a,b|all]\n");
       return 2;
     }
   }
+  if (features < 1 || threads < 1 || !(view_features >= 0.0)) {
+    std::fprintf(stderr, "eval_viewpoint: --features and --threads must be >= 1, --view-features >= 0\n");
+    return 2;
+  }
   cv::setNumThreads(threads);
   const double max_tilt = 2.0 * std::sqrt(2.0);
-  const int per_view = (features + 17) / 18;
+  const int total = features + static_cast<int>(std::lround(view_features * features));
+  const int per_view = (total + 17) / 18;
+  const std::string n_image = std::to_string(features);
+  const std::string n_total = std::to_string(total);
+  // Matching two images: the strongest corners (Spreading::kStrongest, the choice of
+  // affine_orb_match); the quadtree rows show the SLAM spreading.
+  auto strongest = [view_features](affine_orb::ExtractorOptions& o) {
+    o.view_features = view_features;
+    o.spreading = affine_orb::Spreading::kStrongest;
+  };
+  auto area_split = [](affine_orb::ExtractorOptions& o) {
+    o.view_budget = affine_orb::ViewBudget::kAreaSplit;
+    o.spreading = affine_orb::Spreading::kStrongest;
+  };
+  auto quadtree = [view_features](affine_orb::ExtractorOptions& o) { o.view_features = view_features; };
   std::vector<Method> methods = {
-      ours<affine_orb::Rbrief>("ours plain rBRIEF", features, 1.0, threads),
-      ours<affine_orb::Brisk>("ours plain BRISK", features, 1.0, threads),
-      ours<affine_orb::Rbrief>("ours affine rBRIEF", features, max_tilt, threads),
-      ours<affine_orb::Brisk>("ours affine BRISK", features, max_tilt, threads),
-      ours<affine_orb::Rbrief>("ours plain rBRIEF strongest", features, 1.0, threads, affine_orb::Spreading::kStrongest),
-      ours<affine_orb::Rbrief>("ours affine rBRIEF strongest", features, max_tilt, threads,
-                               affine_orb::Spreading::kStrongest),
-      ours<affine_orb::Brisk>("ours affine BRISK strongest", features, max_tilt, threads,
-                              affine_orb::Spreading::kStrongest),
+      ours<affine_orb::Rbrief>("ours plain rBRIEF " + n_image, features, 1.0, threads, strongest),
+      ours<affine_orb::Rbrief>("ours plain rBRIEF " + n_total, total, 1.0, threads, strongest),
+      ours<affine_orb::Rbrief>("ours affine rBRIEF", features, max_tilt, threads, strongest),
+      ours<affine_orb::Rbrief>("ours affine rBRIEF area split " + n_total, total, max_tilt, threads, area_split),
+      ours<affine_orb::Brisk>("ours plain BRISK " + n_total, total, 1.0, threads, strongest),
+      ours<affine_orb::Brisk>("ours affine BRISK", features, max_tilt, threads, strongest),
+      ours<affine_orb::Rbrief>("ours plain rBRIEF quadtree " + n_total, total, 1.0, threads, quadtree),
+      ours<affine_orb::Rbrief>("ours affine rBRIEF quadtree", features, max_tilt, threads, quadtree),
       peer("cv::ORB 1000", cv::ORB::create(1000)),
       peer("cv::ORB 2000", cv::ORB::create(2000)),
       peer("cv::BRISK", cv::BRISK::create()),
+      peer("cv::AKAZE", cv::AKAZE::create()),
+      peer("cv::SIFT", cv::SIFT::create()),
       peer("cv::AffineFeature(ORB)", cv::AffineFeature::create(cv::ORB::create(per_view), 3, 0, std::sqrt(2.0), 72)),
+      peer("cv::AffineFeature(SIFT)", cv::AffineFeature::create(cv::SIFT::create(), 3, 0, std::sqrt(2.0), 72)),
+  };
+  if (!method_filter.empty()) {
+    methods.erase(std::remove_if(methods.begin(), methods.end(),
+                                 [&](const Method& m) { return m.name.find(method_filter) == std::string::npos; }),
+                  methods.end());
+  }
+  auto runs_on = [&](const Method& m, const std::string& sequence) {
+    return m.name != "cv::AffineFeature(SIFT)" || asift_only.empty() ||
+           asift_only.find("," + sequence + ",") != std::string::npos;
   };
 
   struct Pair {
@@ -292,6 +377,7 @@ int main(int argc, char** argv) {
     const cv::Mat a = read_gray(pair.path1);
     const cv::Mat b = read_gray(pair.path2);
     for (const Method& method : methods) {
+      if (!runs_on(method, pair.sequence)) continue;
       const std::string key = pair.path1 + "|" + method.name;
       if (!first.count(key)) first[key] = method.extract(a);
       const Extracted eb = method.extract(b);
@@ -300,31 +386,34 @@ int main(int argc, char** argv) {
       row.image = pair.image;
       row.method = method.name;
       rows.push_back(row);
-      std::fprintf(stderr, "%s 1->%d %-24s kp %zu/%zu matches %zu correct %zu distinct %zu inliers %zu (%zu correct)\n",
+      std::fprintf(stderr,
+                   "%s 1->%d %-36s kp %zu/%zu matches %zu correct %zu distinct %zu (%.0f per 1000) inliers %zu (%zu "
+                   "correct) %.0f ms\n",
                    pair.sequence.c_str(), pair.image, method.name.c_str(), row.keypoints1, row.keypoints2, row.matches,
-                   row.correct, row.distinct, row.inliers, row.inliers_correct);
+                   row.correct, row.distinct, row.per_1000(), row.inliers, row.inliers_correct, row.ms);
     }
   }
 
   std::ofstream csv(out_dir + "/eval_viewpoint.csv");
   csv << "sequence,pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,precision,inliers,"
-         "inliers_correct,repeatability,ms_extract\n";
+         "inliers_correct,repeatability,distinct_per_1000,ms_extract\n";
   std::ostringstream md;
-  md << "# Viewpoint evaluation (SPEC §7)\n\n" << features << " features for ours (18 views = tilts up to 2√2 for "
-     << "the affine rows), " << threads << " thread(s); correct = ‖H x1 − x2‖ < 3 px; distinct = image-1 points in "
-     << "distinct 2-px cells; inliers = cv::findHomography RANSAC 3 px on the matches (share correct); "
+  md << "# Viewpoint evaluation (SPEC §7)\n\n" << features << " image features for ours, plus " << view_features
+     << " x as many from the 18 views (tilts up to 2√2) for the affine rows; " << threads
+     << " thread(s); correct = ‖H x1 − x2‖ < 3 px; distinct = image-1 points in distinct 2-px cells; /1000 = "
+     << "distinct per 1000 keypoints; inliers = cv::findHomography RANSAC 3 px on the matches (share correct); "
      << "ms = mean extraction time per image of the pair.\n\n"
-     << "| pair | method | kp1 | kp2 | matches | correct | distinct | precision | inliers (correct) | repeat. | ms |\n"
-     << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+     << "| pair | method | kp1 | kp2 | matches | correct | distinct | /1000 | precision | inliers (correct) | repeat. | ms |\n"
+     << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
     char line[512];
-    std::snprintf(line, sizeof(line), "%s,1-%d,%s,%zu,%zu,%zu,%zu,%zu,%.4f,%zu,%zu,%.4f,%.2f\n", r.sequence.c_str(), r.image,
-                  r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct, r.distinct, r.precision, r.inliers,
-                  r.inliers_correct, r.repeatability, r.ms);
+    std::snprintf(line, sizeof(line), "%s,1-%d,%s,%zu,%zu,%zu,%zu,%zu,%.4f,%zu,%zu,%.4f,%.1f,%.2f\n", r.sequence.c_str(),
+                  r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct, r.distinct, r.precision,
+                  r.inliers, r.inliers_correct, r.repeatability, r.per_1000(), r.ms);
     csv << line;
-    std::snprintf(line, sizeof(line), "| %s 1→%d | %s | %zu | %zu | %zu | %zu | %zu | %.2f | %zu (%.0f%%) | %.2f | %.1f |\n",
+    std::snprintf(line, sizeof(line), "| %s 1→%d | %s | %zu | %zu | %zu | %zu | %zu | %.0f | %.2f | %zu (%.0f%%) | %.2f | %.1f |\n",
                   r.sequence.c_str(), r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct,
-                  r.distinct, r.precision, r.inliers, r.inliers ? 100.0 * r.inliers_correct / r.inliers : 0.0,
+                  r.distinct, r.per_1000(), r.precision, r.inliers, r.inliers ? 100.0 * r.inliers_correct / r.inliers : 0.0,
                   r.repeatability, r.ms);
     md << line;
   }

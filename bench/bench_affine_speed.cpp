@@ -82,7 +82,9 @@ cv::Mat to_640x480(const cv::Mat& image) {
 
 affine_orb::ExtractorOptions affine_options(int threads) {
   affine_orb::ExtractorOptions options;
-  options.features = kAffineFeatures;
+  // The additive budget: half from the image, as many again from the views (view_features 1),
+  // kAffineFeatures in all like the peer.
+  options.features = kAffineFeatures / 2;
   options.threads = threads;
   return options;
 }

@@ -301,6 +301,7 @@ class Extractor {
   /// Accepted keypoints of one level l on a grid of cells merge_radius · s^(l + repeat_levels)
   /// wide: the largest radius a point of l is compared with, so a 3x3 block of cells holds them all.
   struct RepeatGrid {
+    double radius_squared = 1.0;  ///< (merge_radius · s^l)², the repeat radius of level l squared
     double cell = 1.0;
     int columns = 0;
     std::vector<int> head;  ///< per cell, the last accepted keypoint in it (−1: none)
@@ -615,6 +616,8 @@ class Extractor {
     repeat_grids_.resize(static_cast<std::size_t>(levels));
     for (int l = 0; l < levels; ++l) {
       RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(l)];
+      const double radius = options_.merge_radius * options_.pyramid.scale(l);
+      grid.radius_squared = radius * radius;
       grid.cell = options_.merge_radius * options_.pyramid.scale(std::min(l + reach, levels - 1));
       // Points lie in [−0.5, W − 0.5) x [−0.5, H − 0.5): cells floor(x / cell) + 2 ± 1 stay inside.
       grid.columns = static_cast<int>(std::floor(size.width / grid.cell)) + 5;
@@ -643,8 +646,7 @@ class Extractor {
       bool repeat = false;
       for (int q = std::max(r.level - reach, 0); q <= std::min(r.level + reach, levels - 1) && !repeat; ++q) {
         const RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(q)];
-        const double radius = options_.merge_radius * options_.pyramid.scale(std::max(r.level, q));
-        const double radius_squared = radius * radius;
+        const double radius_squared = repeat_grids_[static_cast<std::size_t>(std::max(r.level, q))].radius_squared;
         for (int dy = -1; dy <= 1 && !repeat; ++dy) {
           for (int dx = -1; dx <= 1 && !repeat; ++dx) {
             for (int k = grid.head[grid.index(r.point, dx, dy)]; k >= 0;

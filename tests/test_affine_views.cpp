@@ -125,9 +125,13 @@ TEST_CASE("a rendered view samples the original image where to_view says") {
 }
 
 TEST_CASE("keypoints from a tilted view map back onto the true original positions and angles") {
-  // Ground truth: J = the view (t = 2, φ = 36°) of a real photo rendered independently with one
-  // cv::warpAffine of the known matrix. Plain keypoints of J, mapped back through the known matrix,
-  // must coincide with the keypoints the extractor found in that view of the original photo.
+  // Ground truth: J = the view (t = 2, φ = 36°) of a real photo rendered independently of the
+  // extractor, (a) by the view's definition in OpenCV calls (render_view_reference():
+  // cv::warpAffine into the canvas, cv::GaussianBlur along x, cv::resize), (b) by one cv::warpAffine
+  // of the known matrix after an isotropic blur (a different anti-aliasing, so some corners peak a
+  // pixel apart). Every corner of J (all candidates of a plain extractor with an unbounded budget),
+  // mapped back through the known matrix, is a true position: each level-0 keypoint the extractor
+  // found in that view of the original photo must lie on one, with J's angle.
   const cv::Mat photo = affine_orb::test::oxford_image("graf", 1);
   affine_orb::ExtractorOptions options = affine_options(3000, affine_orb::DuplicatePolicy::kKeepAll);
   options.views.max_tilt = 2.0;
@@ -141,50 +145,62 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
   const int view_index = static_cast<int>(it - views.begin());
   const affine_orb::AffineView& view = *it;
 
+  cv::Mat canvas;
+  cv::Mat by_definition;
+  affine_orb::detail::render_view_reference(photo, view, options.views.antialias, canvas, by_definition);
   cv::Mat blurred;
   cv::GaussianBlur(photo, blurred, cv::Size(0, 0), 0.8, 0.8);
-  cv::Mat warped;
-  cv::warpAffine(blurred, warped, view.to_view, view.size, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-  affine_orb::ExtractorOptions plain = affine_options(4000, affine_orb::DuplicatePolicy::kKeepAll);
+  cv::Mat by_warp;
+  cv::warpAffine(blurred, by_warp, view.to_view, view.size, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  affine_orb::ExtractorOptions plain = affine_options(1000000, affine_orb::DuplicatePolicy::kKeepAll);
   plain.views.max_tilt = 1.0;
   plain.pyramid.levels = 1;
-  const auto truth = affine_orb::Extractor<affine_orb::Rbrief>(plain).extract(warped);
-  REQUIRE(truth.size() > 500);
-
-  int compared = 0;
-  int close = 0;
-  std::vector<double> angle_errors;
   // Level-0 keypoints of the view: size = 31·s^0·√t.
   const float level0_size = affine_orb::Rbrief::kPatchSize * static_cast<float>(std::sqrt(view.tilt));
-  for (std::size_t i = 0; i < features.size(); ++i) {
-    if (features.views[i] != view_index || features.keypoints[i].size != level0_size) continue;
-    ++compared;
-    const cv::Point2d in_view = affine_orb::apply_affine(view.to_view, features.keypoints[i].pt);
-    // The nearest ground-truth keypoint in J.
-    double best = 1e9;
-    std::size_t best_j = 0;
-    for (std::size_t j = 0; j < truth.size(); ++j) {
-      const double d = std::hypot(truth.keypoints[j].pt.x - in_view.x, truth.keypoints[j].pt.y - in_view.y);
-      if (d < best) {
-        best = d;
-        best_j = j;
+
+  for (const bool definition : {true, false}) {
+    CAPTURE(definition);
+    const auto truth = affine_orb::Extractor<affine_orb::Rbrief>(plain).extract(definition ? by_definition : by_warp);
+    REQUIRE(truth.size() > 1000);
+    int compared = 0;
+    int close = 0;
+    std::vector<double> angle_errors;
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      if (features.views[i] != view_index || features.keypoints[i].size != level0_size) continue;
+      ++compared;
+      const cv::Point2d in_view = affine_orb::apply_affine(view.to_view, features.keypoints[i].pt);
+      // The nearest ground-truth keypoint in J.
+      double best = 1e9;
+      std::size_t best_j = 0;
+      for (std::size_t j = 0; j < truth.size(); ++j) {
+        const double d = std::hypot(truth.keypoints[j].pt.x - in_view.x, truth.keypoints[j].pt.y - in_view.y);
+        if (d < best) {
+          best = d;
+          best_j = j;
+        }
       }
+      if (best > 1.0) continue;
+      ++close;
+      // The reported original angle, carried into J by the known matrix, against J's own angle.
+      const double a = features.keypoints[i].angle * CV_PI / 180.0;
+      const double dx = view.to_view(0, 0) * std::cos(a) + view.to_view(0, 1) * std::sin(a);
+      const double dy = view.to_view(1, 0) * std::cos(a) + view.to_view(1, 1) * std::sin(a);
+      angle_errors.push_back(
+          angle_difference_degrees(std::atan2(dy, dx) * 180.0 / CV_PI, truth.keypoints[best_j].angle));
     }
-    if (best > 1.0) continue;
-    ++close;
-    // The reported original angle, carried into J by the known matrix, against J's own angle.
-    const double a = features.keypoints[i].angle * CV_PI / 180.0;
-    const double dx = view.to_view(0, 0) * std::cos(a) + view.to_view(0, 1) * std::sin(a);
-    const double dy = view.to_view(1, 0) * std::cos(a) + view.to_view(1, 1) * std::sin(a);
-    angle_errors.push_back(angle_difference_degrees(std::atan2(dy, dx) * 180.0 / CV_PI, truth.keypoints[best_j].angle));
+    REQUIRE(compared > 50);
+    std::sort(angle_errors.begin(), angle_errors.end());
+    const double median = angle_errors[angle_errors.size() / 2];
+    MESSAGE((definition ? "J by the view's definition" : "J by blur + one warpAffine") << ": view keypoints within 1 px "
+            << "of a true position: " << close << " of " << compared << ", median angle error " << median << " degrees");
+    if (definition) {
+      CHECK(close >= compared * 95 / 100);
+      CHECK(median <= 0.3);
+    } else {
+      CHECK(close >= compared * 8 / 10);
+      CHECK(median <= 1.0);
+    }
   }
-  REQUIRE(compared > 50);
-  MESSAGE("view keypoints within 1 px of the ground truth: " << close << " of " << compared);
-  CHECK(close >= compared * 7 / 10);
-  std::sort(angle_errors.begin(), angle_errors.end());
-  const double median = angle_errors[angle_errors.size() / 2];
-  MESSAGE("median angle error " << median << " degrees");
-  CHECK(median < 3.0);
 }
 
 TEST_CASE("affine extraction: exact budget, view records, identical output for every thread count") {

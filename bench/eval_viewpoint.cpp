@@ -342,6 +342,12 @@ int main(int argc, char** argv) {
       ours<affine_orb::Rbrief>("ours plain rBRIEF " + n_total, total, 1.0, threads, strongest),
       ours<affine_orb::Rbrief>("ours affine rBRIEF", features, max_tilt, threads, strongest),
       ours<affine_orb::Rbrief>("ours affine rBRIEF area split " + n_total, total, max_tilt, threads, area_split),
+      ours<affine_orb::Rbrief>("ours affine rBRIEF repeats +-1 level", features, max_tilt, threads,
+                               [view_features](affine_orb::ExtractorOptions& o) {
+                                 o.view_features = view_features;
+                                 o.spreading = affine_orb::Spreading::kStrongest;
+                                 o.repeat_levels = 1;
+                               }),
       ours<affine_orb::Brisk>("ours plain BRISK " + n_total, total, 1.0, threads, strongest),
       ours<affine_orb::Brisk>("ours affine BRISK", features, max_tilt, threads, strongest),
       ours<affine_orb::Rbrief>("ours plain rBRIEF quadtree " + n_total, total, 1.0, threads, quadtree),

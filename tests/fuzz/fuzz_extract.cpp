@@ -4,6 +4,7 @@
 // ones in a result that keeps every documented invariant; anything else (a crash, a sanitizer
 // report, another exception, a broken invariant) is a finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -41,7 +42,13 @@ template <class Descriptor>
 void run(const cv::Mat& image, const cv::Mat& mask, const affine_orb::ExtractorOptions& options) {
   affine_orb::Extractor<Descriptor> extractor(options);
   const auto a = extractor.extract(image, mask);
-  require(a.size() <= static_cast<std::size_t>(options.features));
+  // The additive budget: features from the image plus round(view_features · features) from the
+  // tilted views; the area split: features in all.
+  const long budget = options.view_budget == affine_orb::ViewBudget::kAdditive
+                          ? options.features + std::lround(options.view_features * options.features)
+                          : options.features;
+  require(static_cast<long>(a.size()) <= budget);
+  require(std::count(a.views.begin(), a.views.end(), 0) <= options.features);
   require(a.descriptors.size() == a.size() && a.views.size() == a.size());
   for (const cv::KeyPoint& k : a.keypoints) {
     require(std::isfinite(k.pt.x) && std::isfinite(k.pt.y));
@@ -77,6 +84,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.detector.score = (flags & 2) ? affine_orb::ScoreType::kHarris : affine_orb::ScoreType::kFast;
   options.duplicates = (flags & 4) ? affine_orb::DuplicatePolicy::kKeepAll : affine_orb::DuplicatePolicy::kMerge;
   options.threads = 1 + ((flags >> 3) & 1);
+  if (flags & 32) options.view_budget = affine_orb::ViewBudget::kAreaSplit;
+  options.refine.enabled = (flags & 64) != 0;
+  options.repeat_levels = (flags >> 7) & 1;
 
   cv::Mat image(height, width, CV_8UC1);
   for (int y = 0; y < height; ++y) {

@@ -6,8 +6,8 @@
 #   3. the test suite again under AddressSanitizer + UndefinedBehaviorSanitizer (all but the
 #      memory-flatness test, which ASan's quarantine would defeat);
 #   4. the threaded tests under ThreadSanitizer (clang);
-#   5. the libFuzzer target for a bounded time (AFFINE_ORB_FUZZ_SECONDS, default 60) from the
-#      checked-in seed corpus (clang, ASan + UBSan);
+#   5. the libFuzzer targets, each for a bounded time from its checked-in seed corpus (clang, ASan +
+#      UBSan), with their executions per second;
 #   6. on a CPU with AVX2, the tests of the SIMD code again with -march=native
 #      (AFFINE_ORB_NATIVE), so that the AVX2 paths, which the default build does not compile, are
 #      checked against their scalar references too.
@@ -42,24 +42,36 @@ cmake --build "$root/tsan" -j "$jobs" --target test_concurrency test_affine_view
 TSAN_OPTIONS="suppressions=$PWD/tests/tsan.supp halt_on_error=1" \
   ctest --test-dir "$root/tsan" --output-on-failure -R "test_concurrency|test_affine_views"
 
-echo "== libFuzzer (${AFFINE_ORB_FUZZ_SECONDS:-60} s)"
+echo "== libFuzzer"
 CC=clang CXX=clang++ cmake -S . -B "$root/fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
   -DAFFINE_ORB_BUILD_FUZZERS=ON
-cmake --build "$root/fuzz" -j "$jobs" --target fuzz_extract
-corpus="$root/fuzz/corpus"
-rm -rf "$corpus" && mkdir -p "$corpus"
-set +e
-"$root/fuzz/tests/fuzz_extract" -max_total_time="${AFFINE_ORB_FUZZ_SECONDS:-60}" -timeout=30 -rss_limit_mb=4096 \
-  -print_final_stats=1 -artifact_prefix="$root/fuzz/" "$corpus" tests/fuzz/corpus > "$root/fuzz/fuzz.log" 2>&1
-status=$?
-set -e
-grep -E "^(Done|stat::number_of_executed_units|stat::new_units_added)" "$root/fuzz/fuzz.log" || true
-if [[ $status -ne 0 ]]; then
-  tail -n 80 "$root/fuzz/fuzz.log"
-  echo "the fuzzer found a problem (exit $status); the input is in $root/fuzz/" >&2
-  exit 1
-fi
+fuzzers="fuzz_extract fuzz_fast fuzz_matcher fuzz_model_selection"
+cmake --build "$root/fuzz" -j "$jobs" --target $fuzzers
+# Each target runs from its checked-in seed corpus for a bounded time (the whole extraction
+# AFFINE_ORB_FUZZ_SECONDS, default 60; the stage targets AFFINE_ORB_FUZZ_STAGE_SECONDS, default
+# 30) and reports its executions per second. A finding stops CI; its input is kept in
+# $root/fuzz/ and becomes a regression test.
+for fuzzer in $fuzzers; do
+  seconds=${AFFINE_ORB_FUZZ_STAGE_SECONDS:-30}
+  [[ $fuzzer == fuzz_extract ]] && seconds=${AFFINE_ORB_FUZZ_SECONDS:-60}
+  corpus="$root/fuzz/corpus/$fuzzer"
+  rm -rf "$corpus" && mkdir -p "$corpus"
+  log="$root/fuzz/$fuzzer.log"
+  set +e
+  "$root/fuzz/tests/$fuzzer" -max_total_time="$seconds" -timeout=30 -rss_limit_mb=4096 -print_final_stats=1 \
+    -artifact_prefix="$root/fuzz/$fuzzer-" "$corpus" "tests/fuzz/corpus/$fuzzer" > "$log" 2>&1
+  status=$?
+  set -e
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
+  time=$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1/p' "$log")
+  echo "$fuzzer: ${runs:-0} inputs in ${time:-?} s ($(( ${runs:-0} / ${time:-1} )) per second), $(sed -n 's/^stat::new_units_added: *//p' "$log") new coverage units"
+  if [[ $status -ne 0 ]]; then
+    tail -n 80 "$log"
+    echo "$fuzzer found a problem (exit $status); the input is in $root/fuzz/" >&2
+    exit 1
+  fi
+done
 
 if grep -qw avx2 /proc/cpuinfo; then
   echo "== -march=native (AVX2 paths)"

@@ -1,0 +1,79 @@
+// libFuzzer target (issue 16): RANSAC and H/F model selection on arbitrary correspondences. The
+// bytes give up to 32 point pairs (coordinates from a 16-bit grid, plus NaN, infinities and
+// duplicates), σ, the iteration cap and the seed. select_model() must end in
+// std::invalid_argument exactly for non-finite coordinates, and otherwise in a result that keeps
+// its documented invariants: one inlier flag per correspondence, counts that agree with the flags,
+// finite unit-norm models when found, a model chosen only with success.
+//   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/model_selection.hpp"
+
+namespace {
+
+void require(bool condition) {
+  if (!condition) std::abort();
+}
+
+/// A coordinate from two bytes: mostly a grid value in [−64, 960), sometimes a special value.
+float coordinate(std::uint8_t hi, std::uint8_t lo) {
+  switch (hi) {
+    case 255: return std::numeric_limits<float>::quiet_NaN();
+    case 254: return std::numeric_limits<float>::infinity();
+    case 253: return -std::numeric_limits<float>::infinity();
+    case 252: return 1e30f;
+    default: return static_cast<float>(hi * 4 + lo / 64.0) - 64.0f;
+  }
+}
+
+bool finite_unit(const Eigen::Matrix3d& m) { return m.allFinite() && std::abs(m.norm() - 1.0) < 1e-6; }
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 4) return 0;
+  affine_orb::ModelSelectionOptions options;
+  options.sigma = 0.25 + data[0] % 16 * 0.25;
+  options.ransac.max_iterations = 1 + data[1] % 16;
+  options.ransac.min_iterations = std::min(options.ransac.max_iterations, static_cast<int>(data[2] % 8));
+  options.ransac.seed = data[3];
+  const std::size_t n = std::min<std::size_t>((size - 4) / 8, 32);
+  std::vector<cv::Point2f> p1, p2;
+  bool finite = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* b = data + 4 + 8 * i;
+    p1.emplace_back(coordinate(b[0], b[1]), coordinate(b[2], b[3]));
+    p2.emplace_back(coordinate(b[4], b[5]), coordinate(b[6], b[7]));
+    for (float v : {p1.back().x, p1.back().y, p2.back().x, p2.back().y}) finite = finite && std::isfinite(v);
+  }
+  affine_orb::ModelSelectionResult result;
+  try {
+    result = affine_orb::select_model(p1, p2, options);
+  } catch (const std::invalid_argument&) {
+    require(!finite);
+    return 0;
+  }
+  require(finite);
+  require(result.homography_inliers.size() == n && result.fundamental_inliers.size() == n);
+  int h = 0, f = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    require(result.homography_inliers[i] <= 1 && result.fundamental_inliers[i] <= 1);
+    h += result.homography_inliers[i];
+    f += result.fundamental_inliers[i];
+  }
+  require(h == result.homography_inlier_count && f == result.fundamental_inlier_count);
+  if (result.homography_found) require(finite_unit(result.homography) && std::isfinite(result.homography_score));
+  if (result.fundamental_found) require(finite_unit(result.fundamental) && std::isfinite(result.fundamental_score));
+  if (!result.success) require(result.model == affine_orb::GeometricModel::kNone);
+  if (result.model == affine_orb::GeometricModel::kHomography) require(result.homography_found);
+  if (result.model == affine_orb::GeometricModel::kFundamental) require(result.fundamental_found);
+  return 0;
+}

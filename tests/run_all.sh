@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it (.ci/run calls exactly this script):
 #   1. installs the Debian 12 packages it needs (when run as root and they are missing);
-#   2. Release build of the library, tests, examples and benchmarks; ctest (which includes the
-#      install + find_package(affine_orb) consumer check);
+#   2. Release build of the library, tests, examples, benchmarks and the Python module; ctest
+#      (which includes the install + find_package(affine_orb) consumer check and the module's
+#      pytest suite);
 #   3. the test suite again under AddressSanitizer + UndefinedBehaviorSanitizer (all but the
 #      memory-flatness test, which ASan's quarantine would defeat);
 #   4. the threaded tests under ThreadSanitizer (clang);
@@ -28,7 +29,7 @@ ctest --test-dir "$root/release" --output-on-failure -j "$jobs"
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
 cmake -S . -B "$root/asan" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF \
+  -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_PYTHON=OFF \
   -DCMAKE_CXX_FLAGS="$sanitize" -DCMAKE_EXE_LINKER_FLAGS="$sanitize"
 cmake --build "$root/asan" -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
@@ -37,7 +38,7 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 echo "== ThreadSanitizer (threaded tests)"
 CC=clang CXX=clang++ cmake -S . -B "$root/tsan" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
-  -DCMAKE_CXX_FLAGS="-fsanitize=thread" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread"
+  -DAFFINE_ORB_BUILD_PYTHON=OFF -DCMAKE_CXX_FLAGS="-fsanitize=thread" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread"
 cmake --build "$root/tsan" -j "$jobs" --target test_concurrency test_affine_views
 TSAN_OPTIONS="suppressions=$PWD/tests/tsan.supp halt_on_error=1" \
   ctest --test-dir "$root/tsan" --output-on-failure -R "test_concurrency|test_affine_views"
@@ -45,7 +46,7 @@ TSAN_OPTIONS="suppressions=$PWD/tests/tsan.supp halt_on_error=1" \
 echo "== libFuzzer"
 CC=clang CXX=clang++ cmake -S . -B "$root/fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
-  -DAFFINE_ORB_BUILD_FUZZERS=ON
+  -DAFFINE_ORB_BUILD_PYTHON=OFF -DAFFINE_ORB_BUILD_FUZZERS=ON
 fuzzers="fuzz_extract fuzz_fast fuzz_matcher fuzz_model_selection"
 cmake --build "$root/fuzz" -j "$jobs" --target $fuzzers
 # Each target runs from its checked-in seed corpus for a bounded time (the whole extraction
@@ -77,7 +78,8 @@ if grep -qw avx2 /proc/cpuinfo; then
   echo "== -march=native (AVX2 paths)"
   simd_tests="test_fast|test_distribution|test_rbrief|test_extractor|test_matcher|test_brisk"
   cmake -S . -B "$root/native" -G Ninja -DCMAKE_BUILD_TYPE=Release -DAFFINE_ORB_NATIVE=ON \
-    -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF
+    -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
+    -DAFFINE_ORB_BUILD_PYTHON=OFF
   cmake --build "$root/native" -j "$jobs" --target ${simd_tests//|/ }
   ctest --test-dir "$root/native" --output-on-failure -j "$jobs" -R "$simd_tests"
 else

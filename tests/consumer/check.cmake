@@ -19,3 +19,18 @@ execute_process(COMMAND "${WORK_DIR}/build/consumer" RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "the consumer found no features")
 endif()
+# The Python module, when the build made one: installed under the prefix's Python directory and
+# importable from there.
+file(GLOB python_modules "${prefix}/lib/python3*/dist-packages/affine_orb*.so")
+if(EXISTS "${BINARY_DIR}/python" AND NOT python_modules)
+  message(FATAL_ERROR "the Python module was built but not installed under ${prefix}/lib/python3*/dist-packages")
+endif()
+if(python_modules AND EXISTS /usr/bin/python3)
+  list(GET python_modules 0 module)
+  get_filename_component(module_dir "${module}" DIRECTORY)
+  execute_process(COMMAND "${CMAKE_COMMAND}" -E env "PYTHONPATH=${module_dir}" /usr/bin/python3 -c
+                          "import affine_orb; affine_orb.Extractor()" RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "the installed Python module does not import")
+  endif()
+endif()

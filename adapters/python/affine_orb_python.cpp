@@ -1,0 +1,308 @@
+// The Python module `affine_orb` (pybind11): Extractor, match and select_model over the C++
+// library, with numpy arrays and cv2 objects at the boundary. No second implementation: every call
+// forwards to the headers, so the bytes are the C++ extractor's.
+//
+// Conventions: images and masks are 2-D uint8 numpy arrays (any strides: a non-contiguous array is
+// read in place when its rows are contiguous, copied otherwise); keypoints are cv2.KeyPoint;
+// descriptors an N x 32 (rBRIEF) or N x 64 (BRISK) uint8 array, row i for keypoint i. The GIL is
+// released while the library works. std::invalid_argument becomes ValueError (pybind11's
+// translation); a wrong Python type TypeError.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/affine_matching.hpp"
+#include "affine_orb/brisk.hpp"
+#include "affine_orb/extractor.hpp"
+#include "affine_orb/matcher.hpp"
+#include "affine_orb/model_selection.hpp"
+#include "affine_orb/rbrief.hpp"
+
+namespace py = pybind11;
+
+namespace {
+
+/// A cv::Mat header over a 2-D uint8 numpy array (no copy when each row is contiguous; a copy
+/// otherwise, kept alive by `storage`).
+cv::Mat as_gray(const py::handle& object, const char* what, py::array_t<std::uint8_t>& storage) {
+  if (!py::isinstance<py::array>(object)) throw py::type_error(std::string(what) + " must be a numpy array");
+  const py::array array = py::reinterpret_borrow<py::array>(object);
+  if (!array.dtype().is(py::dtype::of<std::uint8_t>()))
+    throw py::type_error(std::string(what) + " must have dtype uint8, got " + py::str(array.dtype()).cast<std::string>());
+  if (array.ndim() != 2)
+    throw py::value_error(std::string(what) + " must be 2-D (a grey image), got " + std::to_string(array.ndim()) +
+                          " dimensions");
+  if (array.strides(1) == 1 && array.strides(0) >= array.shape(1)) {
+    storage = py::reinterpret_borrow<py::array_t<std::uint8_t>>(array);
+  } else {
+    storage = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(array);
+  }
+  if (storage.shape(0) == 0 || storage.shape(1) == 0) return cv::Mat();
+  return cv::Mat(static_cast<int>(storage.shape(0)), static_cast<int>(storage.shape(1)), CV_8UC1,
+                 const_cast<std::uint8_t*>(storage.data()), static_cast<std::size_t>(storage.strides(0)));
+}
+
+template <std::size_t Words>
+py::array_t<std::uint8_t> descriptor_array(const std::vector<std::array<std::uint64_t, Words>>& rows) {
+  py::array_t<std::uint8_t> out({static_cast<py::ssize_t>(rows.size()), static_cast<py::ssize_t>(8 * Words)});
+  if (!rows.empty()) std::memcpy(out.mutable_data(), rows.data(), rows.size() * 8 * Words);
+  return out;
+}
+
+py::list keypoint_list(const std::vector<cv::KeyPoint>& keypoints) {
+  const py::object make = py::module_::import("cv2").attr("KeyPoint");
+  py::list out(keypoints.size());
+  for (std::size_t i = 0; i < keypoints.size(); ++i) {
+    const cv::KeyPoint& k = keypoints[i];
+    out[i] = make(k.pt.x, k.pt.y, k.size, k.angle, k.response, k.octave);
+  }
+  return out;
+}
+
+/// Descriptors from an N x (8k) uint8 array, as 64-bit words (Words per row).
+template <std::size_t Words>
+std::vector<std::array<std::uint64_t, Words>> descriptor_rows(const py::handle& object, const char* what) {
+  py::array_t<std::uint8_t> storage;
+  const cv::Mat mat = as_gray(object, what, storage);
+  if (mat.empty()) return {};
+  if (mat.cols != static_cast<int>(8 * Words))
+    throw py::value_error(std::string(what) + " must have " + std::to_string(8 * Words) + " columns, got " +
+                          std::to_string(mat.cols));
+  std::vector<std::array<std::uint64_t, Words>> rows(static_cast<std::size_t>(mat.rows));
+  for (int r = 0; r < mat.rows; ++r) std::memcpy(rows[static_cast<std::size_t>(r)].data(), mat.ptr(r), 8 * Words);
+  return rows;
+}
+
+std::vector<cv::Point2f> point_list(const py::handle& object, const char* what) {
+  const py::array_t<double, py::array::c_style | py::array::forcecast> array =
+      py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(object);
+  if (!array || array.ndim() != 2 || array.shape(1) != 2)
+    throw py::value_error(std::string(what) + " must be an N x 2 array of pixel coordinates");
+  std::vector<cv::Point2f> points;
+  for (py::ssize_t i = 0; i < array.shape(0); ++i)
+    points.emplace_back(static_cast<float>(array.at(i, 0)), static_cast<float>(array.at(i, 1)));
+  return points;
+}
+
+/// The Python Extractor: an affine_orb::Extractor of either descriptor.
+class PyExtractor {
+ public:
+  PyExtractor(const affine_orb::ExtractorOptions& options, const std::string& descriptor) {
+    if (descriptor == "rbrief") {
+      extractor_.emplace<affine_orb::Extractor<affine_orb::Rbrief>>(options);
+    } else if (descriptor == "brisk") {
+      extractor_.emplace<affine_orb::Extractor<affine_orb::Brisk>>(options);
+    } else {
+      throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
+    }
+    options_ = options;
+  }
+
+  /// (keypoints, descriptors, views).
+  py::tuple extract(const py::handle& image, const py::handle& mask) {
+    py::array_t<std::uint8_t> image_storage;
+    py::array_t<std::uint8_t> mask_storage;
+    const cv::Mat frame = as_gray(image, "image", image_storage);
+    cv::Mat mask_mat;
+    if (!mask.is_none()) {
+      mask_mat = as_gray(mask, "mask", mask_storage);
+      if (mask_mat.empty()) throw py::value_error("mask must not be empty (pass None for no mask)");
+    }
+    return std::visit(
+        [&](auto& extractor) {
+          using Result = decltype(extractor.extract(frame, mask_mat));
+          Result features;
+          {
+            py::gil_scoped_release release;
+            features = extractor.extract(frame, mask_mat);
+          }
+          py::array_t<int> views(static_cast<py::ssize_t>(features.views.size()));
+          if (!features.views.empty())
+            std::memcpy(views.mutable_data(), features.views.data(), features.views.size() * sizeof(int));
+          return py::make_tuple(keypoint_list(features.keypoints), descriptor_array(features.descriptors), views);
+        },
+        extractor_);
+  }
+
+  py::tuple detect_and_compute(const py::handle& image, const py::handle& mask) {
+    const py::tuple all = extract(image, mask);
+    return py::make_tuple(all[0], all[1]);
+  }
+
+  int descriptor_size() const {
+    return std::holds_alternative<affine_orb::Extractor<affine_orb::Rbrief>>(extractor_) ? 32 : 64;
+  }
+  const affine_orb::ExtractorOptions& options() const { return options_; }
+
+ private:
+  std::variant<affine_orb::Extractor<affine_orb::Rbrief>, affine_orb::Extractor<affine_orb::Brisk>> extractor_{
+      std::in_place_index<0>};
+  affine_orb::ExtractorOptions options_;
+};
+
+affine_orb::ExtractorOptions make_options(int features, double max_tilt, int threads, double view_features,
+                                          const std::string& view_budget, const std::string& spreading,
+                                          const std::string& duplicates, int levels, double scale_factor,
+                                          int initial_threshold, int min_threshold) {
+  affine_orb::ExtractorOptions o;
+  o.features = features;
+  o.views.max_tilt = max_tilt;
+  o.threads = threads;
+  o.view_features = view_features;
+  if (view_budget == "additive") {
+    o.view_budget = affine_orb::ViewBudget::kAdditive;
+  } else if (view_budget == "area_split") {
+    o.view_budget = affine_orb::ViewBudget::kAreaSplit;
+  } else {
+    throw py::value_error("view_budget must be \"additive\" or \"area_split\", got \"" + view_budget + "\"");
+  }
+  if (spreading == "quadtree") {
+    o.spreading = affine_orb::Spreading::kQuadtree;
+  } else if (spreading == "strongest") {
+    o.spreading = affine_orb::Spreading::kStrongest;
+  } else {
+    throw py::value_error("spreading must be \"quadtree\" or \"strongest\", got \"" + spreading + "\"");
+  }
+  if (duplicates == "merge") {
+    o.duplicates = affine_orb::DuplicatePolicy::kMerge;
+  } else if (duplicates == "keep") {
+    o.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
+  } else {
+    throw py::value_error("duplicates must be \"merge\" or \"keep\", got \"" + duplicates + "\"");
+  }
+  o.pyramid.levels = levels;
+  o.pyramid.scale_factor = scale_factor;
+  o.detector.initial_threshold = initial_threshold;
+  o.detector.min_threshold = min_threshold;
+  o.check();
+  return o;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(affine_orb, m) {
+  m.doc() = "Affine-ORB feature extraction, Hamming matching and H/F model selection (C++ library affine_orb).";
+  const affine_orb::ExtractorOptions defaults;
+
+  py::class_<PyExtractor>(m, "Extractor",
+                          "Extracts keypoints and binary descriptors from grey images (affine_orb::Extractor).")
+      .def(py::init([](int features, double max_tilt, const std::string& descriptor, int threads, double view_features,
+                       const std::string& view_budget, const std::string& spreading, const std::string& duplicates,
+                       int levels, double scale_factor, int initial_threshold, int min_threshold) {
+             return std::make_unique<PyExtractor>(
+                 make_options(features, max_tilt, threads, view_features, view_budget, spreading, duplicates, levels,
+                              scale_factor, initial_threshold, min_threshold),
+                 descriptor);
+           }),
+           py::arg("features") = defaults.features, py::arg("max_tilt") = defaults.views.max_tilt,
+           py::arg("descriptor") = "rbrief", py::arg("threads") = defaults.threads,
+           py::arg("view_features") = defaults.view_features, py::arg("view_budget") = "additive",
+           py::arg("spreading") = "quadtree", py::arg("duplicates") = "merge",
+           py::arg("levels") = defaults.pyramid.levels, py::arg("scale_factor") = defaults.pyramid.scale_factor,
+           py::arg("initial_threshold") = defaults.detector.initial_threshold,
+           py::arg("min_threshold") = defaults.detector.min_threshold,
+           "Options as in affine_orb::ExtractorOptions (features = keypoints from the image; with max_tilt > 1 "
+           "the 18 default views add view_features x features more). descriptor: \"rbrief\" (32 bytes) or "
+           "\"brisk\" (64 bytes). Invalid values raise ValueError.")
+      .def("detect_and_compute", &PyExtractor::detect_and_compute, py::arg("image"), py::arg("mask") = py::none(),
+           "(keypoints, descriptors) of a 2-D uint8 image: a list of cv2.KeyPoint (original pixels) and an "
+           "N x 32 (or 64) uint8 array, row i for keypoint i. mask: None or a 2-D uint8 array of the image size "
+           "(non-zero = allowed).")
+      .def("extract", &PyExtractor::extract, py::arg("image"), py::arg("mask") = py::none(),
+           "(keypoints, descriptors, views): detect_and_compute() plus the index of the simulated view each "
+           "keypoint was found in (0 = the image itself), an int32 array.")
+      .def_property_readonly("descriptor_size", &PyExtractor::descriptor_size, "Bytes per descriptor row.")
+      .def_property_readonly(
+          "features", [](const PyExtractor& e) { return e.options().features; }, "Keypoints from the image.")
+      .def_property_readonly(
+          "max_tilt", [](const PyExtractor& e) { return e.options().views.max_tilt; }, "Largest simulated tilt.")
+      .def_property_readonly(
+          "threads", [](const PyExtractor& e) { return e.options().threads; }, "Worker threads.");
+
+  m.def(
+      "match",
+      [](const py::handle& descriptors1, const py::handle& descriptors2, float ratio, bool cross_check,
+         std::optional<int> max_distance) {
+        affine_orb::MatcherOptions options;
+        options.ratio = ratio;
+        options.cross_check = cross_check;
+        if (max_distance) options.max_distance = *max_distance;
+        options.check();
+        py::array_t<std::uint8_t> s1, s2;
+        const cv::Mat a = as_gray(descriptors1, "descriptors1", s1);
+        const cv::Mat b = as_gray(descriptors2, "descriptors2", s2);
+        std::vector<affine_orb::Match> matches;
+        {
+          py::gil_scoped_release release;
+          matches = affine_orb::match(a, b, options);
+        }
+        const py::object make = py::module_::import("cv2").attr("DMatch");
+        py::list out(matches.size());
+        for (std::size_t i = 0; i < matches.size(); ++i)
+          out[i] = make(matches[i].query, matches[i].train, static_cast<float>(matches[i].distance));
+        return out;
+      },
+      py::arg("descriptors1"), py::arg("descriptors2"), py::arg("ratio") = affine_orb::MatcherOptions{}.ratio,
+      py::arg("cross_check") = false, py::arg("max_distance") = py::none(),
+      "Nearest-neighbour Hamming matches (affine_orb::match) of two uint8 descriptor arrays with the same number "
+      "of columns, as a list of cv2.DMatch (queryIdx, trainIdx, distance in bits): Lowe's ratio test, optional "
+      "mutual check and maximum distance.");
+
+  m.def(
+      "select_model",
+      [](const py::handle& points1, const py::handle& points2, double sigma, double homography_ratio_threshold,
+         int max_iterations, std::uint64_t seed) {
+        affine_orb::ModelSelectionOptions options;
+        options.sigma = sigma;
+        options.homography_ratio_threshold = homography_ratio_threshold;
+        options.ransac.max_iterations = max_iterations;
+        options.ransac.min_iterations = std::min(options.ransac.min_iterations, max_iterations);
+        options.ransac.seed = seed;
+        const std::vector<cv::Point2f> p1 = point_list(points1, "points1");
+        const std::vector<cv::Point2f> p2 = point_list(points2, "points2");
+        affine_orb::ModelSelectionResult r;
+        {
+          py::gil_scoped_release release;
+          r = affine_orb::select_model(p1, p2, options);
+        }
+        auto matrix = [](const Eigen::Matrix3d& e) {
+          py::array_t<double> out({3, 3});
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) out.mutable_at(i, j) = e(i, j);
+          return out;
+        };
+        auto flags = [](const std::vector<std::uint8_t>& v) {
+          py::array_t<bool> out(static_cast<py::ssize_t>(v.size()));
+          for (std::size_t i = 0; i < v.size(); ++i) out.mutable_at(static_cast<py::ssize_t>(i)) = v[i] != 0;
+          return out;
+        };
+        py::dict out;
+        out["success"] = r.success;
+        out["model"] = r.model == affine_orb::GeometricModel::kHomography    ? "homography"
+                       : r.model == affine_orb::GeometricModel::kFundamental ? "fundamental"
+                                                                             : "none";
+        out["homography_ratio"] = r.homography_ratio;
+        out["homography"] = r.homography_found ? py::object(matrix(r.homography)) : py::none();
+        out["fundamental"] = r.fundamental_found ? py::object(matrix(r.fundamental)) : py::none();
+        out["homography_inliers"] = flags(r.homography_inliers);
+        out["fundamental_inliers"] = flags(r.fundamental_inliers);
+        return out;
+      },
+      py::arg("points1"), py::arg("points2"), py::arg("sigma") = affine_orb::ModelSelectionOptions{}.sigma,
+      py::arg("homography_ratio_threshold") = affine_orb::ModelSelectionOptions{}.homography_ratio_threshold,
+      py::arg("max_iterations") = affine_orb::RansacOptions{}.max_iterations,
+      py::arg("seed") = affine_orb::RansacOptions{}.seed,
+      "Homography or fundamental matrix for N x 2 point arrays (paper eqs. 17-22, affine_orb::select_model): a "
+      "dict with success, model (\"homography\", \"fundamental\" or \"none\"), homography_ratio (R_H), "
+      "homography and fundamental (3 x 3 arrays, x2 ~ H x1 and x2^T F x1 = 0, or None) and the inlier flags.");
+}

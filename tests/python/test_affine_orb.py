@@ -1,0 +1,154 @@
+"""Tests of the Python module affine_orb (adapters/python): the same output as the C++ extractor,
+cv2 interplay, bad input, thread counts. Run by ctest (test_python) with PYTHONPATH set to the
+build's python directory and AFFINE_ORB_TEST_PROBE naming the C++ probe program."""
+import os
+import subprocess
+import threading
+
+import cv2
+import numpy as np
+import pytest
+
+import affine_orb
+
+DATA = os.environ.get("AFFINE_ORB_DATA_DIR", os.path.join(os.path.dirname(__file__), "../../../shared/data"))
+PROBE = os.environ.get("AFFINE_ORB_TEST_PROBE")
+
+
+def oxford(sequence, n):
+    image = cv2.imread(os.path.join(DATA, "oxford", sequence, "img%d.png" % n), cv2.IMREAD_GRAYSCALE)
+    assert image is not None, "missing test image"
+    return image
+
+
+def oxford_homography(sequence, n):
+    return np.loadtxt(os.path.join(DATA, "oxford", sequence, "H1to%dp" % n))
+
+
+def cpp_features(path, features, max_tilt, descriptor, threads):
+    """Keypoints (N x 7: x y size angle response octave view) and descriptors of the C++ extractor."""
+    out = subprocess.run([PROBE, path, str(features), repr(max_tilt), descriptor, str(threads)], check=True,
+                         capture_output=True, text=True).stdout.split("\n")
+    rows = [line.split() for line in out if line]
+    numbers = np.array([[float(v) for v in r[:7]] for r in rows])
+    descriptors = np.array([bytearray.fromhex(r[7]) for r in rows], dtype=np.uint8)
+    return numbers, descriptors
+
+
+@pytest.mark.skipif(PROBE is None, reason="needs the C++ probe (run through ctest)")
+@pytest.mark.parametrize("descriptor,max_tilt,threads", [("rbrief", 1.0, 1), ("rbrief", 2.83, 2), ("brisk", 2.83, 1)])
+def test_equals_the_cpp_extractor(descriptor, max_tilt, threads):
+    path = os.path.join(DATA, "oxford", "boat", "img1.png")
+    numbers, want = cpp_features(path, 700, max_tilt, descriptor, threads)
+    extractor = affine_orb.Extractor(features=700, max_tilt=max_tilt, descriptor=descriptor, threads=threads)
+    keypoints, descriptors, views = extractor.extract(cv2.imread(path, cv2.IMREAD_GRAYSCALE))
+    assert len(keypoints) == len(numbers) > 700 * (1 if max_tilt == 1.0 else 2) - 5
+    got = np.array([[k.pt[0], k.pt[1], k.size, k.angle, k.response, k.octave, v] for k, v in zip(keypoints, views)])
+    # cv2.KeyPoint stores float32, the probe prints 9 significant digits: exact.
+    assert np.array_equal(got.astype(np.float32), numbers.astype(np.float32))
+    assert descriptors.dtype == np.uint8 and descriptors.shape == (len(keypoints), 32 if descriptor == "rbrief" else 64)
+    assert np.array_equal(descriptors, want)
+
+
+def test_views_and_defaults():
+    image = oxford("graf", 1)
+    extractor = affine_orb.Extractor()
+    keypoints, descriptors, views = extractor.extract(image)
+    # The additive budget: 1000 from the image (view 0), 1000 from the 17 tilted views.
+    assert extractor.features == 1000 and len(keypoints) == 2000
+    assert np.count_nonzero(views == 0) == 1000 and len(set(views.tolist())) >= 15
+    plain_keypoints, plain_descriptors = affine_orb.Extractor(max_tilt=1.0).detect_and_compute(image)
+    assert np.array_equal(descriptors[views == 0], plain_descriptors)
+
+
+def test_any_strides_and_roi():
+    image = oxford("bark", 1)
+    extractor = affine_orb.Extractor(features=500, max_tilt=1.0)
+    for view in (image[40:400, 30:500], image[::2, ::2], image[:, ::-1], np.asfortranarray(image)):
+        k1, d1 = extractor.detect_and_compute(view)
+        k2, d2 = extractor.detect_and_compute(np.ascontiguousarray(view))
+        assert [k.pt for k in k1] == [k.pt for k in k2]
+        assert np.array_equal(d1, d2)
+
+
+def test_threads_give_identical_output_and_run_concurrently():
+    image = oxford("boat", 1)
+    reference = affine_orb.Extractor(features=600, threads=1).extract(image)
+    for threads in (2, 3):
+        other = affine_orb.Extractor(features=600, threads=threads).extract(image)
+        assert [k.pt for k in other[0]] == [k.pt for k in reference[0]]
+        assert np.array_equal(other[1], reference[1]) and np.array_equal(other[2], reference[2])
+    # Two Python threads, one Extractor each (the GIL is released while they work).
+    results = [None, None]
+
+    def work(i):
+        results[i] = affine_orb.Extractor(features=600).extract(image)
+
+    workers = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    for r in results:
+        assert np.array_equal(r[1], reference[1])
+
+
+def test_cv2_interop_and_matching_graf():
+    a, b = oxford("graf", 1), oxford("graf", 3)
+    extractor = affine_orb.Extractor(spreading="strongest")
+    ka, da = extractor.detect_and_compute(a)
+    kb, db = extractor.detect_and_compute(b)
+    # cv2.BFMatcher on the descriptors, and our matcher: the same nearest neighbours.
+    knn = cv2.BFMatcher(cv2.NORM_HAMMING).knnMatch(da, db, k=2)
+    ours = affine_orb.match(da, db, ratio=0.8)
+    # The ratio is a float (MatcherOptions::ratio), compared exactly: d1 < float(0.8) * d2.
+    ratio = float(np.float32(0.8))
+    by_cv2 = {m.queryIdx: m for m, n in knn if m.distance < ratio * n.distance}
+    assert {m.queryIdx for m in ours} == set(by_cv2)
+    assert all(by_cv2[m.queryIdx].distance == m.distance for m in ours)
+    drawn = cv2.drawKeypoints(a, ka, None)
+    assert drawn.shape == a.shape + (3,)
+    cv2.drawMatches(a, ka, b, kb, ours[:50], None)
+    # Model selection on the matches: the homography agrees with the ground truth at the corners.
+    p1 = np.array([ka[m.queryIdx].pt for m in ours])
+    p2 = np.array([kb[m.trainIdx].pt for m in ours])
+    result = affine_orb.select_model(p1, p2)
+    assert result["success"] and result["homography"] is not None
+    assert result["homography_inliers"].dtype == bool and len(result["homography_inliers"]) == len(ours)
+    truth = oxford_homography("graf", 3)
+    corners = np.array([[0, 0, 1], [a.shape[1] - 1, 0, 1], [0, a.shape[0] - 1, 1], [a.shape[1] - 1, a.shape[0] - 1, 1]]).T
+    estimated = result["homography"] @ corners
+    expected = truth @ corners
+    error = np.linalg.norm(estimated[:2] / estimated[2] - expected[:2] / expected[2], axis=0)
+    assert error.max() < 10.0  # the image corners: extrapolated beyond most matches (800 x 640 image)
+
+
+def test_bad_input():
+    extractor = affine_orb.Extractor()
+    with pytest.raises(TypeError, match="uint8"):
+        extractor.detect_and_compute(np.zeros((40, 40), np.float32))
+    with pytest.raises(TypeError, match="numpy array"):
+        extractor.detect_and_compute([[1, 2], [3, 4]])
+    with pytest.raises(ValueError, match="2-D"):
+        extractor.detect_and_compute(np.zeros((40, 40, 3), np.uint8))
+    with pytest.raises(ValueError, match="empty"):
+        extractor.detect_and_compute(np.zeros((0, 40), np.uint8))
+    with pytest.raises(ValueError, match="mask"):
+        extractor.detect_and_compute(np.zeros((40, 40), np.uint8), np.zeros((20, 40), np.uint8))
+    with pytest.raises(ValueError, match="descriptor"):
+        affine_orb.Extractor(descriptor="sift")
+    with pytest.raises(ValueError, match="features"):
+        affine_orb.Extractor(features=0)
+    with pytest.raises(ValueError, match="max_tilt"):
+        affine_orb.Extractor(max_tilt=0.5)
+    with pytest.raises(ValueError, match="ratio"):
+        affine_orb.match(np.zeros((3, 32), np.uint8), np.zeros((3, 32), np.uint8), ratio=0.0)
+    with pytest.raises(ValueError):
+        affine_orb.match(np.zeros((3, 32), np.uint8), np.zeros((3, 64), np.uint8))
+    with pytest.raises(ValueError, match="N x 2"):
+        affine_orb.select_model(np.zeros((10, 3)), np.zeros((10, 3)))
+    with pytest.raises(ValueError):
+        affine_orb.select_model(np.full((10, 2), np.nan), np.zeros((10, 2)))
+    # A flat image: nothing found, an empty 0 x 32 array.
+    keypoints, descriptors = extractor.detect_and_compute(np.full((64, 64), 9, np.uint8))
+    assert keypoints == [] and descriptors.shape == (0, 32)

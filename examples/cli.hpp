@@ -1,13 +1,21 @@
 #pragma once
-// Small helpers shared by the command-line examples: argument parsing with clear errors, medians,
-// and JSON number formatting. Not part of the library.
+// Small helpers shared by the command-line examples: argument parsing with clear errors (every
+// numeric value goes through Args::integer()/real(), which name the flag and the value), medians.
+// Not part of the library.
 
 #include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 #include "affine_orb/extractor.hpp"
 
@@ -36,21 +44,42 @@ class Args {
     return v;
   }
 
+  /// The integer after `--name` (consumed), or `fallback` when absent. The whole value must be a
+  /// decimal integer that fits an int: otherwise std::invalid_argument naming the flag and the value
+  /// ("--features: expected an integer, got \"abc\""), which the examples turn into exit code 2.
   int integer(const std::string& name, int fallback) {
     const std::string v = value(name, "");
     if (v.empty()) return fallback;
-    std::size_t used = 0;
-    const int n = std::stoi(v, &used);
-    if (used != v.size()) throw std::invalid_argument(name + ": not an integer: " + v);
-    return n;
+    return parse_integer(name, v);
   }
 
+  /// The number after `--name` (consumed), or `fallback` when absent; the whole value must be a
+  /// finite decimal number, else std::invalid_argument as integer().
   double real(const std::string& name, double fallback) {
     const std::string v = value(name, "");
     if (v.empty()) return fallback;
-    std::size_t used = 0;
-    const double x = std::stod(v, &used);
-    if (used != v.size()) throw std::invalid_argument(name + ": not a number: " + v);
+    return parse_real(name, v);
+  }
+
+  /// `text` as an int, or std::invalid_argument("NAME: expected an integer, got \"TEXT\"").
+  static int parse_integer(const std::string& name, const std::string& text) {
+    errno = 0;
+    char* end = nullptr;
+    const long n = std::strtol(text.c_str(), &end, 10);
+    if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) || end != text.c_str() + text.size() ||
+        errno == ERANGE || n < std::numeric_limits<int>::min() || n > std::numeric_limits<int>::max())
+      throw std::invalid_argument(name + ": expected an integer, got \"" + text + "\"");
+    return static_cast<int>(n);
+  }
+
+  /// `text` as a finite double, or std::invalid_argument("NAME: expected a number, got \"TEXT\"").
+  static double parse_real(const std::string& name, const std::string& text) {
+    errno = 0;
+    char* end = nullptr;
+    const double x = std::strtod(text.c_str(), &end);
+    if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) || end != text.c_str() + text.size() ||
+        errno == ERANGE || !std::isfinite(x))
+      throw std::invalid_argument(name + ": expected a number, got \"" + text + "\"");
     return x;
   }
 
@@ -84,6 +113,21 @@ inline bool parse_common(Args& args, ExtractorOptions& options) {
     throw std::invalid_argument("--spreading must be quadtree or strongest, got " + spreading);
   }
   return help;
+}
+
+/// `text` shortened from the front ("..." + its tail, the informative end of a path) until it is at
+/// most `max_width` pixels wide in the given cv::putText font; unchanged when it already fits.
+inline std::string fit_text(const std::string& text, int max_width, int font, double scale, int thickness = 1) {
+  auto width = [&](const std::string& t) {
+    int baseline = 0;
+    return cv::getTextSize(t, font, scale, thickness, &baseline).width;
+  };
+  if (width(text) <= max_width) return text;
+  for (std::size_t cut = 1; cut < text.size(); ++cut) {
+    const std::string shorter = "..." + text.substr(cut);
+    if (width(shorter) <= max_width) return shorter;
+  }
+  return "...";
 }
 
 inline double median(std::vector<double> values) {

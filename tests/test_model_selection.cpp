@@ -527,3 +527,47 @@ TEST_CASE("image correction: warp a real photo by a known H and correct it back"
   CHECK_THROWS_AS(affine_orb::correct_image(img2, img1.size(), selection, bad_border), std::invalid_argument);
   CHECK_THROWS_AS(affine_orb::correct_image(cv::Mat(), img1.size(), selection), std::invalid_argument);
 }
+
+TEST_CASE("GRIC: the formula against hand-computed values, and the rule on a plane, a rotation and a 3-D scene") {
+  // Three correspondences with e²/σ² = 0, 1 and 100 (capped at λ3·(r − d) = 2·(4 − 2) = 4 for H,
+  // 2·(4 − 3) = 2 for F), n = 3, r = 4: Σρ + ln4·d·n + ln(4n)·k.
+  const double sigma = 2.0;
+  const std::vector<double> e2 = {0.0, 1.0 * sigma * sigma, 100.0 * sigma * sigma};
+  CHECK(affine_orb::detail::gric(e2, sigma, 2, 8) == doctest::Approx(5.0 + std::log(4.0) * 6.0 + std::log(12.0) * 8.0));
+  CHECK(affine_orb::detail::gric(e2, sigma, 3, 7) == doctest::Approx(3.0 + std::log(4.0) * 9.0 + std::log(12.0) * 7.0));
+  // The residuals: an exact homography and an exact epipolar geometry give zero.
+  const Eigen::Matrix3d h = (Eigen::Matrix3d() << 1.1, 0.05, 3.0, -0.02, 0.95, -4.0, 1e-4, 2e-4, 1.0).finished();
+  std::vector<cv::Point2f> p1, p2;
+  for (int i = 0; i < 5; ++i) {
+    const Eigen::Vector3d x(40.0 + 70.0 * i, 300.0 - 45.0 * i, 1.0);
+    p1.emplace_back(static_cast<float>(x.x()), static_cast<float>(x.y()));
+    const Eigen::Vector2d y = (h * x).hnormalized();
+    p2.emplace_back(static_cast<float>(y.x()), static_cast<float>(y.y()));
+  }
+  for (double r : affine_orb::detail::homography_gric_residuals(h, p1, p2)) CHECK(r < 1e-6);
+  // A point 3 px off along x in image 2 only: forward error 9, backward ≈ 9 / 1.1², a quarter of
+  // their sum.
+  p2[0].x += 3.0f;
+  const double off = affine_orb::detail::homography_gric_residuals(h, p1, p2)[0];
+  CHECK(off > 0.25 * (9.0 + 9.0 / 1.3));
+  CHECK(off < 0.25 * (9.0 + 9.0 / 0.8));
+
+  ModelSelectionOptions gric = options_for_noise();
+  gric.rule = affine_orb::SelectionRule::kGric;
+  const PlanarRig rig;
+  const Pair plane = rig.make(600, 0.3, 11);
+  const ModelSelectionResult on_plane = affine_orb::select_model(plane.points1, plane.points2, gric);
+  REQUIRE(on_plane.success);
+  CHECK(on_plane.model == GeometricModel::kHomography);
+  CHECK(on_plane.homography_gric < on_plane.fundamental_gric);
+  const auto depth = [](const Eigen::Vector2d&, std::mt19937_64& rng) {
+    return std::uniform_real_distribution<double>(2.0, 10.0)(rng);
+  };
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.1, Eigen::Vector3d(0.2, 1.0, -0.1).normalized()).toRotationMatrix();
+  const Pair rotation = make_pair(turn, Eigen::Vector3d::Zero(), depth, 500, 0.3, 12);
+  CHECK(affine_orb::select_model(rotation.points1, rotation.points2, gric).model == GeometricModel::kHomography);
+  const Pair scene = make_pair(turn, Eigen::Vector3d(0.6, 0.05, 0.1), depth, 500, 0.3, 13);
+  const ModelSelectionResult in_3d = affine_orb::select_model(scene.points1, scene.points2, gric);
+  CHECK(in_3d.model == GeometricModel::kFundamental);
+  CHECK(in_3d.fundamental_gric < in_3d.homography_gric);
+}

@@ -36,10 +36,10 @@
 #include <fstream>
 #include <map>
 #include <optional>
-#include <stdexcept>
-#include <tuple>
 #include <random>
+#include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
@@ -189,11 +189,20 @@ struct LabelledPair {
   std::optional<affine_orb::PinholeCamera> camera;
 };
 
+/// A pair named `name` of kind `kind` whose first image is `image1`; the rest filled by the caller.
+LabelledPair labelled(const std::string& name, const std::string& kind, const cv::Mat& image1) {
+  LabelledPair p;
+  p.name = name;
+  p.kind = kind;
+  p.size1 = image1.size();
+  return p;
+}
+
 double corner_error(const Eigen::Matrix3d& h, const Eigen::Matrix3d& truth, cv::Size size) {
   double worst = 0.0;
-  for (const Eigen::Vector2d& c : {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(size.width - 1, 0.0),
-                                   Eigen::Vector2d(0.0, size.height - 1),
-                                   Eigen::Vector2d(size.width - 1, size.height - 1)}) {
+  for (const Eigen::Vector2d& c :
+       {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(size.width - 1, 0.0), Eigen::Vector2d(0.0, size.height - 1),
+        Eigen::Vector2d(size.width - 1, size.height - 1)}) {
     worst = std::max(worst, ((h * c.homogeneous()).hnormalized() - (truth * c.homogeneous()).hnormalized()).norm());
   }
   return worst;
@@ -238,7 +247,7 @@ std::vector<LabelledPair> labelled_pairs() {
   for (const std::string sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
     const cv::Mat a = read_gray(data + "/oxford/" + sequence + "/img1.png");
     for (int n = 2; n <= 6; ++n) {
-      LabelledPair p{sequence + " 1->" + std::to_string(n), "planar", {}, {}, a.size(), {}, {}, {}};
+      LabelledPair p = labelled(sequence + " 1->" + std::to_string(n), "planar", a);
       std::tie(p.points1, p.points2) =
           correspondences(extractor, a, read_gray(data + "/oxford/" + sequence + "/img" + std::to_string(n) + ".png"));
       p.homography = read_oxford_homography(data + "/oxford/" + sequence + "/H1to" + std::to_string(n) + "p");
@@ -247,7 +256,7 @@ std::vector<LabelledPair> labelled_pairs() {
   }
   {
     const cv::Mat a = read_gray(doc + "/graf1.png");
-    LabelledPair p{"opencv-doc graf1->graf3", "planar", {}, {}, a.size(), {}, {}, {}};
+    LabelledPair p = labelled("opencv-doc graf1->graf3", "planar", a);
     std::tie(p.points1, p.points2) = correspondences(extractor, a, read_gray(doc + "/graf3.png"));
     cv::FileStorage fs(doc + "/H1to3p.xml", cv::FileStorage::READ);
     cv::Mat h;
@@ -255,7 +264,7 @@ std::vector<LabelledPair> labelled_pairs() {
     if (h.rows == 3 && h.cols == 3) p.homography = to_eigen(h);
     pairs.push_back(p);
     const cv::Mat box = read_gray(doc + "/box.png");
-    LabelledPair q{"opencv-doc box->box_in_scene", "planar", {}, {}, box.size(), {}, {}, {}};
+    LabelledPair q = labelled("opencv-doc box->box_in_scene", "planar", box);
     std::tie(q.points1, q.points2) = correspondences(extractor, box, read_gray(doc + "/box_in_scene.png"));
     pairs.push_back(q);
   }
@@ -275,8 +284,11 @@ std::vector<LabelledPair> labelled_pairs() {
     for (int i = 0; i < 9; ++i) warp.at<double>(i / 3, i % 3) = h(i / 3, i % 3);
     cv::Mat b;
     cv::warpPerspective(a, b, warp, a.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    LabelledPair p{sequence + " turned " + std::to_string(static_cast<int>(degrees)) + " deg", "rotation", {}, {},
-                   a.size(), h, r, camera};
+    LabelledPair p =
+        labelled(sequence + " turned " + std::to_string(static_cast<int>(degrees)) + " deg", "rotation", a);
+    p.homography = h;
+    p.rotation = r;
+    p.camera = camera;
     std::tie(p.points1, p.points2) = correspondences(extractor, a, b);
     pairs.push_back(p);
   }
@@ -287,8 +299,9 @@ std::vector<LabelledPair> labelled_pairs() {
       const auto& f1 = kitti.frames[static_cast<std::size_t>(i)];
       const auto& f2 = kitti.frames[static_cast<std::size_t>(i + gap)];
       const cv::Mat a = affine_orb::examples::load_frame(f1);
-      LabelledPair p{"KITTI 06 " + std::to_string(i) + "->" + std::to_string(i + gap), "3-D", {}, {}, a.size(), {},
-                     affine_orb::examples::relative_rotation(*f1.pose, *f2.pose), kitti.camera};
+      LabelledPair p = labelled("KITTI 06 " + std::to_string(i) + "->" + std::to_string(i + gap), "3-D", a);
+      p.rotation = affine_orb::examples::relative_rotation(*f1.pose, *f2.pose);
+      p.camera = kitti.camera;
       std::tie(p.points1, p.points2) = correspondences(extractor, a, affine_orb::examples::load_frame(f2));
       pairs.push_back(p);
     }
@@ -297,9 +310,11 @@ std::vector<LabelledPair> labelled_pairs() {
   const Eigen::Matrix3d k = intrinsics();
   for (std::uint64_t seed = 1000; seed < 1010; ++seed) {
     const Data d = make_data(false, seed);
-    LabelledPair p{"synthetic 3-D #" + std::to_string(seed - 999), "3-D", d.points1, d.points2, cv::Size(kWidth, kHeight),
-                   {}, Eigen::AngleAxisd(0.1, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix(),
-                   affine_orb::PinholeCamera{k(0, 0), k(1, 1), k(0, 2), k(1, 2)}};
+    LabelledPair p = labelled("synthetic 3-D #" + std::to_string(seed - 999), "3-D", cv::Mat(kHeight, kWidth, CV_8UC1));
+    p.points1 = d.points1;
+    p.points2 = d.points2;
+    p.rotation = Eigen::AngleAxisd(0.1, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix();
+    p.camera = affine_orb::PinholeCamera{k(0, 0), k(1, 1), k(0, 2), k(1, 2)};
     pairs.push_back(p);
   }
   return pairs;
@@ -321,21 +336,23 @@ void labelled_table() {
   rules[3].name = "GRIC, sigma 2 px";
   rules[3].options.rule = affine_orb::SelectionRule::kGric;
   rules[3].options.gric_sigma = 2.0;
-  std::printf("\n## H or F on labelled pairs\n\n%zu pairs; right = H chosen on planar and rotation pairs, F on 3-D "
-              "pairs; corner error = median px of the chosen H on the pairs with a ground-truth H where H was "
-              "chosen; rotation error = median degrees of relative_pose() from the chosen model.\n\n",
-              pairs.size());
-  std::printf("| rule | planar right | rotations right | 3-D right | planar corner error px | rotation error deg, "
-              "rotations / 3-D | wrong pairs |\n|---|---:|---:|---:|---:|---:|---|\n");
+  std::printf(
+      "\n## H or F on labelled pairs\n\n%zu pairs; right = H chosen on planar and rotation pairs, F on 3-D "
+      "pairs; corner error = median px of the chosen H on the pairs with a ground-truth H where H was "
+      "chosen; rotation error = median degrees of relative_pose() from the chosen model.\n\n",
+      pairs.size());
+  std::printf(
+      "| rule | planar right | rotations right | 3-D right | planar corner error px | rotation error deg, "
+      "rotations / 3-D | wrong pairs |\n|---|---:|---:|---:|---:|---:|---|\n");
   std::vector<std::string> ratios;
   for (const Rule& rule : rules) {
     std::map<std::string, std::pair<int, int>> right;  // kind -> (right, total)
     std::vector<double> corner, rotation_error_rot, rotation_error_3d;
     std::string wrong;
     for (const LabelledPair& p : pairs) {
-      const affine_orb::ModelSelectionResult r =
-          p.points1.size() >= 8 ? affine_orb::select_model(p.points1, p.points2, rule.options)
-                                : affine_orb::ModelSelectionResult{};
+      const affine_orb::ModelSelectionResult r = p.points1.size() >= 8
+                                                     ? affine_orb::select_model(p.points1, p.points2, rule.options)
+                                                     : affine_orb::ModelSelectionResult{};
       const bool want_h = p.kind != "3-D";
       const bool is_right = r.success && (r.model == affine_orb::GeometricModel::kHomography) == want_h;
       right[p.kind].first += is_right;
@@ -388,7 +405,8 @@ int main(int argc, char** argv) {
   cv::setNumThreads(1);  // both sides on one thread
 
   affine_orb::ModelSelectionOptions sigma2;
-  sigma2.sigma = 2.0 * kNoise;  // the score's σ for this per-image noise (the default), see ModelSelectionOptions::sigma
+  sigma2.sigma =
+      2.0 * kNoise;  // the score's σ for this per-image noise (the default), see ModelSelectionOptions::sigma
   affine_orb::ModelSelectionOptions sigma1;
   sigma1.sigma = kNoise;  // ORB-SLAM2's value
   const std::array<affine_orb::ModelSelectionOptions, 2> ours = {sigma2, sigma1};
@@ -423,8 +441,8 @@ int main(int argc, char** argv) {
       const cv::Mat h = cv::findHomography(data.points1, data.points2, cv::RANSAC, kOpenCvThreshold, h_mask);
       const double h_ms = milliseconds_since(start_h);
       const auto start_f = std::chrono::steady_clock::now();
-      const cv::Mat f = cv::findFundamentalMat(data.points1, data.points2, cv::FM_RANSAC, kOpenCvThreshold, 0.99,
-                                               f_mask);
+      const cv::Mat f =
+          cv::findFundamentalMat(data.points1, data.points2, cv::FM_RANSAC, kOpenCvThreshold, 0.99, f_mask);
       const double f_ms = milliseconds_since(start_f);
       (is_planar ? cv_h_planar : cv_h_general).push_back(h_ms);
       (is_planar ? cv_f_planar : cv_f_general).push_back(f_ms);
@@ -440,12 +458,14 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::printf("Model selection, %d correspondences, %.0f %% outliers, %.1f px Gaussian noise per coordinate in "
-              "each image; medians over %d runs (new data each run), one thread.\n\n",
-              kCount, 100.0 * kOutlierRatio, kNoise, runs);
+  std::printf(
+      "Model selection, %d correspondences, %.0f %% outliers, %.1f px Gaussian noise per coordinate in "
+      "each image; medians over %d runs (new data each run), one thread.\n\n",
+      kCount, 100.0 * kOutlierRatio, kNoise, runs);
   std::printf("Time, ms:\n\n");
-  std::printf("| scene | ours sigma 2 | ours sigma 1 | cv::findHomography | cv::findFundamentalMat | both cv calls | "
-              "ratio ours sigma 2 / both | ratio ours sigma 1 / both |\n");
+  std::printf(
+      "| scene | ours sigma 2 | ours sigma 1 | cv::findHomography | cv::findFundamentalMat | both cv calls | "
+      "ratio ours sigma 2 / both | ratio ours sigma 1 / both |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const bool is_planar : {true, false}) {
     const std::array<Figures, 3>& f = is_planar ? planar : general;
@@ -456,8 +476,9 @@ int main(int argc, char** argv) {
                 median(f[1].time_ms) / both);
   }
   std::printf("\nAccuracy (H on the planar scene, F on the 3-D scene):\n\n");
-  std::printf("| method | H corner error px | H inlier recall | F epipolar distance px | F inlier recall | H chosen, "
-              "planar | H chosen, 3-D |\n");
+  std::printf(
+      "| method | H corner error px | H inlier recall | F epipolar distance px | F inlier recall | H chosen, "
+      "planar | H chosen, 3-D |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (std::size_t which = 0; which < 3; ++which) {
     const bool peer = which == 2;

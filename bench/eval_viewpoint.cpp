@@ -42,8 +42,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/affine_orb.hpp"
 #include "affine_orb/affine_matching.hpp"
+#include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
 
 namespace {
@@ -117,7 +117,8 @@ affine_orb::Features<Bits> as_features(const Extracted& e) {
   f.keypoints = e.keypoints;
   f.views = e.views.empty() ? std::vector<int>(e.keypoints.size(), 0) : e.views;
   f.descriptors.resize(e.keypoints.size());
-  for (int i = 0; i < e.descriptors.rows; ++i) std::memcpy(f.descriptors[static_cast<std::size_t>(i)].data(), e.descriptors.ptr(i), Bits / 8);
+  for (int i = 0; i < e.descriptors.rows; ++i)
+    std::memcpy(f.descriptors[static_cast<std::size_t>(i)].data(), e.descriptors.ptr(i), Bits / 8);
   return f;
 }
 
@@ -143,7 +144,8 @@ std::vector<affine_orb::Match> match_float(const Extracted& a, const Extracted& 
       break;
     }
     // Distances scaled to integers for affine_orb::Match; only their order matters below.
-    if (accepted) matches.push_back({best.queryIdx, best.trainIdx, static_cast<int>(std::lround(best.distance * 1000.0f))});
+    if (accepted)
+      matches.push_back({best.queryIdx, best.trainIdx, static_cast<int>(std::lround(best.distance * 1000.0f))});
   }
   std::vector<cv::Point2f> p1, p2;
   for (const auto& kp : a.keypoints) p1.push_back(kp.pt);
@@ -258,19 +260,20 @@ void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, cons
   cv::line(canvas, to_px(15, 0), to_px(65, 0), cv::Scalar(0, 0, 0));
   cv::line(canvas, to_px(15, 0), to_px(15, static_cast<double>(ymax)), cv::Scalar(0, 0, 0));
   for (int a : angles) {
-    cv::putText(canvas, std::to_string(a), to_px(a, 0) + cv::Point(-8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
+    cv::putText(canvas, std::to_string(a), to_px(a, 0) + cv::Point(-8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                cv::Scalar(0, 0, 0));
   }
   for (std::size_t v = 0; v <= ymax; v += ymax / 5) {
-    cv::putText(canvas, std::to_string(v), to_px(15, static_cast<double>(v)) + cv::Point(-50, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                cv::Scalar(0, 0, 0));
+    cv::putText(canvas, std::to_string(v), to_px(15, static_cast<double>(v)) + cv::Point(-50, 5),
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
   }
   cv::putText(canvas, "viewpoint change (degrees), graf 1->2 ... 1->6", cv::Point(left + 120, height - 15),
               cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0));
   cv::putText(canvas, "distinct correct matches per 1000 keypoints", cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.5,
               cv::Scalar(0, 0, 0));
-  const cv::Scalar colours[] = {{200, 120, 0}, {120, 60, 0}, {0, 160, 0}, {0, 90, 0},     {230, 180, 90}, {90, 220, 90},
-                                {0, 60, 0},    {0, 0, 220},  {0, 0, 130}, {150, 0, 150}, {0, 140, 255}, {120, 120, 120},
-                                {255, 0, 255}, {0, 200, 200}, {60, 60, 200}};
+  const cv::Scalar colours[] = {{200, 120, 0}, {120, 60, 0},    {0, 160, 0},   {0, 90, 0},    {230, 180, 90},
+                                {90, 220, 90}, {0, 60, 0},      {0, 0, 220},   {0, 0, 130},   {150, 0, 150},
+                                {0, 140, 255}, {120, 120, 120}, {255, 0, 255}, {0, 200, 200}, {60, 60, 200}};
   for (std::size_t m = 0; m < methods.size(); ++m) {
     const cv::Scalar colour = colours[m % (sizeof(colours) / sizeof(colours[0]))];
     cv::Point previous(-1, -1);
@@ -285,7 +288,8 @@ void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, cons
     }
     const cv::Point legend(width - right + 15, top + 20 + static_cast<int>(m) * 24);
     cv::line(canvas, legend, legend + cv::Point(25, 0), colour, 3, cv::LINE_AA);
-    cv::putText(canvas, methods[m].name, legend + cv::Point(32, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
+    cv::putText(canvas, methods[m].name, legend + cv::Point(32, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                cv::Scalar(0, 0, 0));
   }
   cv::imwrite(path, canvas);
 }
@@ -302,13 +306,20 @@ int main(int argc, char** argv) {
   std::string asift_only = ",graf,opencv-doc graf,";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--out") out_dir = argv[i + 1];
-    else if (flag == "--features") features = std::atoi(argv[i + 1]);
-    else if (flag == "--view-features") view_features = std::atof(argv[i + 1]);
-    else if (flag == "--threads") threads = std::atoi(argv[i + 1]);
-    else if (flag == "--sequences") only = std::string(",") + argv[i + 1] + ",";
-    else if (flag == "--methods") method_filter = argv[i + 1];
-    else if (flag == "--asift-sequences") asift_only = std::string(argv[i + 1]) == "all" ? "" : std::string(",") + argv[i + 1] + ",";
+    if (flag == "--out")
+      out_dir = argv[i + 1];
+    else if (flag == "--features")
+      features = std::atoi(argv[i + 1]);
+    else if (flag == "--view-features")
+      view_features = std::atof(argv[i + 1]);
+    else if (flag == "--threads")
+      threads = std::atoi(argv[i + 1]);
+    else if (flag == "--sequences")
+      only = std::string(",") + argv[i + 1] + ",";
+    else if (flag == "--methods")
+      method_filter = argv[i + 1];
+    else if (flag == "--asift-sequences")
+      asift_only = std::string(argv[i + 1]) == "all" ? "" : std::string(",") + argv[i + 1] + ",";
     else {
       std::fprintf(stderr,
                    "usage: eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] "
@@ -381,7 +392,8 @@ int main(int argc, char** argv) {
   for (const std::string sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
     if (!only.empty() && only.find("," + sequence + ",") == std::string::npos) continue;
     for (int n = 2; n <= 6; ++n) {
-      pairs.push_back({sequence, n, oxford + sequence + "/img1.png", oxford + sequence + "/img" + std::to_string(n) + ".png",
+      pairs.push_back({sequence, n, oxford + sequence + "/img1.png",
+                       oxford + sequence + "/img" + std::to_string(n) + ".png",
                        read_oxford_homography(oxford + sequence + "/H1to" + std::to_string(n) + "p")});
     }
   }
@@ -421,23 +433,27 @@ int main(int argc, char** argv) {
   csv << "sequence,pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,precision,inliers,"
          "inliers_correct,repeatability,distinct_per_1000,within_2px,ms_extract\n";
   std::ostringstream md;
-  md << "# Viewpoint evaluation (SPEC §7)\n\n" << features << " image features for ours, plus " << view_features
+  md << "# Viewpoint evaluation (SPEC §7)\n\n"
+     << features << " image features for ours, plus " << view_features
      << " x as many from the 18 views (tilts up to 2√2) for the affine rows; " << threads
      << " thread(s); correct = ‖H x1 − x2‖ < 3 px; distinct = image-1 points in distinct 2-px cells; /1000 = "
      << "distinct per 1000 keypoints; inliers = cv::findHomography RANSAC 3 px on the matches (share correct); "
      << "2 px = share of image-1 keypoints within 2 px of another; ms = mean extraction time per image of the pair.\n\n"
-     << "| pair | method | kp1 | kp2 | matches | correct | distinct | /1000 | precision | inliers (correct) | repeat. | 2 px | ms |\n"
+     << "| pair | method | kp1 | kp2 | matches | correct | distinct | /1000 | precision | inliers (correct) | repeat. "
+        "| 2 px | ms |\n"
      << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
     char line[512];
-    std::snprintf(line, sizeof(line), "%s,1-%d,%s,%zu,%zu,%zu,%zu,%zu,%.4f,%zu,%zu,%.4f,%.1f,%.4f,%.2f\n", r.sequence.c_str(),
-                  r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct, r.distinct, r.precision,
-                  r.inliers, r.inliers_correct, r.repeatability, r.per_1000(), r.crowded, r.ms);
-    csv << line;
-    std::snprintf(line, sizeof(line), "| %s 1→%d | %s | %zu | %zu | %zu | %zu | %zu | %.0f | %.2f | %zu (%.0f%%) | %.2f | %.2f | %.1f |\n",
+    std::snprintf(line, sizeof(line), "%s,1-%d,%s,%zu,%zu,%zu,%zu,%zu,%.4f,%zu,%zu,%.4f,%.1f,%.4f,%.2f\n",
                   r.sequence.c_str(), r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct,
-                  r.distinct, r.per_1000(), r.precision, r.inliers, r.inliers ? 100.0 * r.inliers_correct / r.inliers : 0.0,
-                  r.repeatability, r.crowded, r.ms);
+                  r.distinct, r.precision, r.inliers, r.inliers_correct, r.repeatability, r.per_1000(), r.crowded,
+                  r.ms);
+    csv << line;
+    std::snprintf(line, sizeof(line),
+                  "| %s 1→%d | %s | %zu | %zu | %zu | %zu | %zu | %.0f | %.2f | %zu (%.0f%%) | %.2f | %.2f | %.1f |\n",
+                  r.sequence.c_str(), r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct,
+                  r.distinct, r.per_1000(), r.precision, r.inliers,
+                  r.inliers ? 100.0 * r.inliers_correct / r.inliers : 0.0, r.repeatability, r.crowded, r.ms);
     md << line;
   }
   // Median extraction time per method over every image of the run.

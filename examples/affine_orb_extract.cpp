@@ -101,19 +101,20 @@ int main(int argc, char** argv) {
       throw std::invalid_argument("--descriptor must be rbrief or brisk, got " + descriptor);
     }
     if (json) {
-      std::printf("{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"descriptor\": \"%s\", \"keypoints\": %zu, "
-                  "\"descriptor_bytes\": %d, \"views\": %zu, \"max_tilt\": %.4f, \"threads\": %d, \"repeat\": %d, "
-                  "\"ms_first_extract\": %.3f, \"ms_extract\": %.3f, \"per_level\": [",
-                  positional[0].c_str(), image.cols, image.rows, descriptor.c_str(), report.keypoints,
-                  report.descriptor_bytes, report.views, options.views.max_tilt, options.threads, repeat,
-                  report.ms_first_extract, report.ms_extract);
+      std::printf(
+          "{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"descriptor\": \"%s\", \"keypoints\": %zu, "
+          "\"descriptor_bytes\": %d, \"views\": %zu, \"max_tilt\": %.4f, \"threads\": %d, \"repeat\": %d, "
+          "\"ms_first_extract\": %.3f, \"ms_extract\": %.3f, \"per_level\": [",
+          positional[0].c_str(), image.cols, image.rows, descriptor.c_str(), report.keypoints, report.descriptor_bytes,
+          report.views, options.views.max_tilt, options.threads, repeat, report.ms_first_extract, report.ms_extract);
       for (std::size_t l = 0; l < report.per_level.size(); ++l) std::printf("%s%d", l ? ", " : "", report.per_level[l]);
       std::printf("]}\n");
     } else {
-      std::printf("%s: %dx%d, %zu keypoints from %zu views (%s, %d-byte descriptors), %.2f ms per extraction "
-                  "(median of %d after the extractor's first call, %.2f ms; %d thread(s))\n",
-                  positional[0].c_str(), image.cols, image.rows, report.keypoints, report.views, descriptor.c_str(),
-                  report.descriptor_bytes, report.ms_extract, repeat, report.ms_first_extract, options.threads);
+      std::printf(
+          "%s: %dx%d, %zu keypoints from %zu views (%s, %d-byte descriptors), %.2f ms per extraction "
+          "(median of %d after the extractor's first call, %.2f ms; %d thread(s))\n",
+          positional[0].c_str(), image.cols, image.rows, report.keypoints, report.views, descriptor.c_str(),
+          report.descriptor_bytes, report.ms_extract, repeat, report.ms_first_extract, options.threads);
       if (!out.empty()) std::printf("keypoints drawn to %s\n", out.c_str());
     }
     return 0;

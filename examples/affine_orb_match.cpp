@@ -143,7 +143,8 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const affine_orb::Extr
     for (std::size_t k = 0; k < matches.size(); ++k) {
       const cv::Vec3d q = *truth * cv::Vec3d(p1[k].x, p1[k].y, 1.0);
       correct[k] = std::hypot(q[0] / q[2] - p2[k].x, q[1] / q[2] - p2[k].y) < 3.0;
-      if (correct[k]) cells.insert({static_cast<int>(std::floor(p1[k].x / 2)), static_cast<int>(std::floor(p1[k].y / 2))});
+      if (correct[k])
+        cells.insert({static_cast<int>(std::floor(p1[k].x / 2)), static_cast<int>(std::floor(p1[k].y / 2))});
     }
     o.correct = static_cast<std::size_t>(std::count(correct.begin(), correct.end(), 1));
     o.distinct = cells.size();
@@ -155,7 +156,8 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const affine_orb::Extr
     // 9 significant digits: every float written exactly, so that a judge recomputing correctness
     // from the file counts what the program counted.
     file << std::setprecision(std::numeric_limits<float>::max_digits10);
-    for (std::size_t k = 0; k < matches.size(); ++k) file << p1[k].x << ' ' << p1[k].y << ' ' << p2[k].x << ' ' << p2[k].y << '\n';
+    for (std::size_t k = 0; k < matches.size(); ++k)
+      file << p1[k].x << ' ' << p1[k].y << ' ' << p2[k].x << ' ' << p2[k].y << '\n';
   }
   if (!out.empty()) {
     const int height = std::max(image1.rows, image2.rows);
@@ -182,8 +184,8 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const affine_orb::Extr
       cv::Mat side;
       cv::hconcat(image1, corrected.image, side);
       if (!cv::imwrite(rectified, side)) throw std::runtime_error("cannot write " + rectified);
-      o.rectified_from = o.selection.model == affine_orb::GeometricModel::kHomography ? "chosen homography"
-                                                                                      : "estimated homography";
+      o.rectified_from =
+          o.selection.model == affine_orb::GeometricModel::kHomography ? "chosen homography" : "estimated homography";
     } else {
       std::fprintf(stderr, "affine_orb_match: no homography was estimated, %s not written\n", rectified.c_str());
     }
@@ -240,30 +242,34 @@ int main(int argc, char** argv) {
       std::printf(
           "{\"image1\": \"%s\", \"image2\": \"%s\", \"descriptor\": \"%s\", \"max_tilt\": %.4f, \"threads\": %d, "
           "\"keypoints1\": %zu, \"keypoints2\": %zu, \"views\": %zu, \"matches\": %zu, ",
-          images[0].c_str(), images[1].c_str(), descriptor.c_str(), options.views.max_tilt, options.threads, o.keypoints1,
-          o.keypoints2, o.views, o.matches);
+          images[0].c_str(), images[1].c_str(), descriptor.c_str(), options.views.max_tilt, options.threads,
+          o.keypoints1, o.keypoints2, o.views, o.matches);
       if (o.ground_truth) {
-        std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct, precision);
+        std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct,
+                    precision);
       } else {
         std::printf("\"correct\": null, \"distinct_correct\": null, \"precision\": null, ");
       }
-      std::printf("\"model\": \"%s\", \"homography_ratio\": %.4f, \"homography_ratio_threshold\": %.2f, "
-                  "\"inliers\": %zu, ",
-                  model_name(o.selection.model), o.selection.homography_ratio,
-                  affine_orb::ModelSelectionOptions{}.homography_ratio_threshold, o.inliers);
+      std::printf(
+          "\"model\": \"%s\", \"homography_ratio\": %.4f, \"homography_ratio_threshold\": %.2f, "
+          "\"inliers\": %zu, ",
+          model_name(o.selection.model), o.selection.homography_ratio,
+          affine_orb::ModelSelectionOptions{}.homography_ratio_threshold, o.inliers);
       if (o.rectified_from.empty()) {
         std::printf("\"rectified\": null, \"rectified_from\": null, ");
       } else {
         std::printf("\"rectified\": \"%s\", \"rectified_from\": \"%s\", ", rectified.c_str(), o.rectified_from.c_str());
       }
-      std::printf("\"ms_first_extract\": %.2f, \"ms_extract1\": %.2f, \"ms_extract2\": %.2f, \"ms_match\": %.2f, "
-                  "\"ms_model\": %.2f}\n",
-                  o.ms_first_extract, o.ms_extract1, o.ms_extract2, o.ms_match, o.ms_model);
+      std::printf(
+          "\"ms_first_extract\": %.2f, \"ms_extract1\": %.2f, \"ms_extract2\": %.2f, \"ms_match\": %.2f, "
+          "\"ms_model\": %.2f}\n",
+          o.ms_first_extract, o.ms_extract1, o.ms_extract2, o.ms_match, o.ms_model);
     } else {
       std::printf("%s <-> %s (%s, %zu views, %d thread(s))\n", images[0].c_str(), images[1].c_str(), descriptor.c_str(),
                   o.views, options.threads);
       std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
-      if (o.ground_truth) std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
+      if (o.ground_truth)
+        std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
       std::printf("\nmodel %s (R_H = %.2f), %zu inliers\n", model_name(o.selection.model), o.selection.homography_ratio,
                   o.inliers);
       std::printf("time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",

@@ -350,9 +350,10 @@ void draw_plot(const std::string& path, const std::string& name, const std::vect
 void print_summary_text(const Summary& s, bool rotation) {
   std::printf("frames %d, lost %d (frame loss rate %.1f %%), keyframes %d\n", s.frames, s.lost, 100.0 * s.loss_rate,
               s.keyframes);
-  std::printf("extraction %.1f ms/frame (median %.1f; the extractor's first call, not counted: %.1f ms), tracking %.1f "
-              "ms/frame\n",
-              s.ms_extract_mean, s.ms_extract_median, s.ms_first_extract, s.ms_track_mean);
+  std::printf(
+      "extraction %.1f ms/frame (median %.1f; the extractor's first call, not counted: %.1f ms), tracking %.1f "
+      "ms/frame\n",
+      s.ms_extract_mean, s.ms_extract_median, s.ms_first_extract, s.ms_track_mean);
   if (!rotation) return;
   if (s.compared > 0) {
     std::printf(

@@ -8,9 +8,9 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
-#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>

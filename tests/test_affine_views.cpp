@@ -99,7 +99,8 @@ TEST_CASE("a rendered view samples the original image where to_view says") {
   cv::Mat image(300, 400, CV_8UC1);
   for (int y = 0; y < image.rows; ++y) {
     for (int x = 0; x < image.cols; ++x) {
-      image.at<uchar>(y, x) = cv::saturate_cast<uchar>(128 + 60 * std::sin(x * 0.05) + 50 * std::cos(y * 0.04 + x * 0.01));
+      image.at<uchar>(y, x) =
+          cv::saturate_cast<uchar>(128 + 60 * std::sin(x * 0.05) + 50 * std::cos(y * 0.04 + x * 0.01));
     }
   }
   const affine_orb::AffineView view = affine_orb::make_view(2.0, 36.0, image.size());
@@ -111,12 +112,14 @@ TEST_CASE("a rendered view samples the original image where to_view says") {
   int checked = 0;
   double worst = 0.0;
   for (int k = 0; k < 2000; ++k) {
-    const cv::Point2d v(rng() % static_cast<unsigned>(view.size.width), rng() % static_cast<unsigned>(view.size.height));
+    const cv::Point2d v(rng() % static_cast<unsigned>(view.size.width),
+                        rng() % static_cast<unsigned>(view.size.height));
     const cv::Point2d p = affine_orb::apply_affine(view.to_original, v);
     if (p.x < 10 || p.y < 10 || p.x > image.cols - 11 || p.y > image.rows - 11) continue;
     cv::Mat sample;
     cv::getRectSubPix(image, cv::Size(1, 1), cv::Point2f(static_cast<float>(p.x), static_cast<float>(p.y)), sample);
-    worst = std::max(worst, std::abs(rendered.at<uchar>(static_cast<int>(v.y), static_cast<int>(v.x)) - double(sample.at<uchar>(0, 0))));
+    worst = std::max(worst, std::abs(rendered.at<uchar>(static_cast<int>(v.y), static_cast<int>(v.x)) -
+                                     double(sample.at<uchar>(0, 0))));
     ++checked;
   }
   CHECK(checked > 500);
@@ -191,8 +194,10 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
     REQUIRE(compared > 50);
     std::sort(angle_errors.begin(), angle_errors.end());
     const double median = angle_errors[angle_errors.size() / 2];
-    MESSAGE((definition ? "J by the view's definition" : "J by blur + one warpAffine") << ": view keypoints within 1 px "
-            << "of a true position: " << close << " of " << compared << ", median angle error " << median << " degrees");
+    MESSAGE((definition ? "J by the view's definition" : "J by blur + one warpAffine")
+            << ": view keypoints within 1 px "
+            << "of a true position: " << close << " of " << compared << ", median angle error " << median
+            << " degrees");
     if (definition) {
       CHECK(close >= compared * 95 / 100);
       CHECK(median <= 0.3);
@@ -205,8 +210,9 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
 
 TEST_CASE("affine extraction: exact budget, view records, identical output for every thread count") {
   const cv::Mat image = affine_orb::test::kitti_frame(20);
-  const auto one = affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::DuplicatePolicy::kMerge, 1))
-                       .extract(image);
+  const auto one =
+      affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::DuplicatePolicy::kMerge, 1))
+          .extract(image);
   // The additive budget: 2000 of the image, view_features (1) x 2000 from the tilted views.
   REQUIRE(one.size() == 4000);
   CHECK(std::count(one.views.begin(), one.views.end(), 0) == 2000);
@@ -290,13 +296,14 @@ struct LevelledKeypoint {
   int order;  ///< position among the keypoints of its view and level (raster order)
 };
 
-std::vector<LevelledKeypoint> with_levels(const affine_orb::Features<256>& f, const std::vector<affine_orb::AffineView>& views) {
+std::vector<LevelledKeypoint> with_levels(const affine_orb::Features<256>& f,
+                                          const std::vector<affine_orb::AffineView>& views) {
   std::vector<LevelledKeypoint> out;
   std::map<std::pair<int, int>, int> counts;
   for (std::size_t i = 0; i < f.size(); ++i) {
     const double tilt = views[static_cast<std::size_t>(f.views[i])].tilt;
-    const int level = static_cast<int>(
-        std::lround(std::log(f.keypoints[i].size / (affine_orb::Rbrief::kPatchSize * std::sqrt(tilt))) / std::log(1.2)));
+    const int level = static_cast<int>(std::lround(
+        std::log(f.keypoints[i].size / (affine_orb::Rbrief::kPatchSize * std::sqrt(tilt))) / std::log(1.2)));
     out.push_back({f.keypoints[i], f.views[i], level, counts[{f.views[i], level}]++});
   }
   return out;
@@ -647,9 +654,10 @@ TEST_CASE("refinement puts view keypoints on corners of the original image, as p
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
   };
-  MESSAGE("median distance to the true vertex in pixels of the keypoint's octave: image keypoints " << median(image_errors) << " px ("
-          << image_errors.size() << "), view keypoints mapped " << median(mapped_errors) << " px, refined "
-          << median(refined_errors) << " px (" << refined_errors.size() << ", " << moved << " moved)");
+  MESSAGE("median distance to the true vertex in pixels of the keypoint's octave: image keypoints "
+          << median(image_errors) << " px (" << image_errors.size() << "), view keypoints mapped "
+          << median(mapped_errors) << " px, refined " << median(refined_errors) << " px (" << refined_errors.size()
+          << ", " << moved << " moved)");
   // Both are located as precisely as the image's own keypoints (the mapped position already is).
   CHECK(median(mapped_errors) <= median(image_errors) + 0.25);
   CHECK(median(refined_errors) <= median(image_errors) + 0.25);

@@ -1002,8 +1002,10 @@ TEST_CASE("the strongest spreading gives the budget and more matches; the quadtr
   for (std::size_t i = 0; i < 1000; ++i) {
     spread_mean += spread.keypoints[i].response;
     strong_mean += strong.keypoints[i].response;
-    spread_cells.insert(static_cast<int>(spread.keypoints[i].pt.y / 64) * 16 + static_cast<int>(spread.keypoints[i].pt.x / 64));
-    strong_cells.insert(static_cast<int>(strong.keypoints[i].pt.y / 64) * 16 + static_cast<int>(strong.keypoints[i].pt.x / 64));
+    spread_cells.insert(static_cast<int>(spread.keypoints[i].pt.y / 64) * 16 +
+                        static_cast<int>(spread.keypoints[i].pt.x / 64));
+    strong_cells.insert(static_cast<int>(strong.keypoints[i].pt.y / 64) * 16 +
+                        static_cast<int>(strong.keypoints[i].pt.x / 64));
   }
   CHECK(strong_mean > spread_mean);
   CHECK(spread_cells.size() > strong_cells.size());

@@ -134,9 +134,9 @@ TEST_CASE("bad input through the interface gives the library's errors") {
   CHECK_THROWS_AS(f2d->detectAndCompute(cv::Mat(), cv::noArray(), keypoints, descriptors), std::invalid_argument);
   CHECK_THROWS_AS(f2d->detectAndCompute(cv::Mat(40, 40, CV_8UC3), cv::noArray(), keypoints, descriptors),
                   std::invalid_argument);
-  CHECK_THROWS_AS(f2d->detectAndCompute(cv::Mat(40, 40, CV_8UC1, cv::Scalar(9)), cv::Mat(20, 40, CV_8UC1),
-                                        keypoints, descriptors),
-                  std::invalid_argument);
+  CHECK_THROWS_AS(
+      f2d->detectAndCompute(cv::Mat(40, 40, CV_8UC1, cv::Scalar(9)), cv::Mat(20, 40, CV_8UC1), keypoints, descriptors),
+      std::invalid_argument);
   CHECK_THROWS_AS(f2d->compute(cv::Mat(40, 40, CV_32F), keypoints, descriptors), std::invalid_argument);
   affine_orb::ExtractorOptions nonsense;
   nonsense.features = 0;

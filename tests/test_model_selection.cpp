@@ -79,8 +79,8 @@ struct Pair {
 // camera-1 ray of pixel. `count` correspondences, a fraction `outlier_ratio` of them outliers
 // (independent uniform points in both images), all inliers visible in both images.
 template <class DepthOf>
-Pair make_pair(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, DepthOf depth_of, int count,
-               double outlier_ratio, std::uint64_t seed) {
+Pair make_pair(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, DepthOf depth_of, int count, double outlier_ratio,
+               std::uint64_t seed) {
   const Eigen::Matrix3d k = intrinsics();
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> px(0.0, kWidth - 1), py(0.0, kHeight - 1), unit(0.0, 1.0);
@@ -129,9 +129,7 @@ struct PlanarRig {
   }
   Pair make(int count, double outlier_ratio, std::uint64_t seed) const {
     const Eigen::Matrix3d k_inv = intrinsics().inverse();
-    const auto depth = [&](const Eigen::Vector2d& x1, std::mt19937_64&) {
-      return d / n.dot(k_inv * x1.homogeneous());
-    };
+    const auto depth = [&](const Eigen::Vector2d& x1, std::mt19937_64&) { return d / n.dot(k_inv * x1.homogeneous()); };
     return make_pair(r, t, depth, count, outlier_ratio, seed);
   }
 };
@@ -279,8 +277,7 @@ TEST_CASE("sigma equal to the per-image noise: a perfect plane scores R_H at its
 }
 
 TEST_CASE("rotation-only camera (t = 0), general 3-D points: H chosen, equal to K R K^-1") {
-  const Eigen::Matrix3d r =
-      Eigen::AngleAxisd(0.15, Eigen::Vector3d(-0.3, 1.0, 0.2).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.15, Eigen::Vector3d(-0.3, 1.0, 0.2).normalized()).toRotationMatrix();
   const auto depth = [](const Eigen::Vector2d&, std::mt19937_64& rng) {
     return std::uniform_real_distribution<double>(1.0, 20.0)(rng);
   };
@@ -297,8 +294,7 @@ TEST_CASE("rotation-only camera (t = 0), general 3-D points: H chosen, equal to 
 }
 
 TEST_CASE("general 3-D scene with translation: F chosen, true correspondences on their epipolar lines") {
-  const Eigen::Matrix3d r =
-      Eigen::AngleAxisd(0.08, Eigen::Vector3d(0.1, 1.0, -0.1).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.08, Eigen::Vector3d(0.1, 1.0, -0.1).normalized()).toRotationMatrix();
   const Eigen::Vector3d t(-0.6, 0.05, 0.2);
   const auto depth = [](const Eigen::Vector2d&, std::mt19937_64& rng) {
     return std::uniform_real_distribution<double>(2.0, 10.0)(rng);
@@ -405,8 +401,7 @@ TEST_CASE("degenerate input and bad options: success = false or std::invalid_arg
   const ModelSelectionResult collinear = affine_orb::select_model(line1, line2);
   CHECK_FALSE(collinear.success);
   CHECK(collinear.model == GeometricModel::kNone);
-  CHECK_FALSE(affine_orb::select_model(line1, std::vector<cv::Point2f>(pair.points2.begin(),
-                                                                      pair.points2.begin() + 60))
+  CHECK_FALSE(affine_orb::select_model(line1, std::vector<cv::Point2f>(pair.points2.begin(), pair.points2.begin() + 60))
                   .success);
 
   // Sizes differ, non-finite coordinates.

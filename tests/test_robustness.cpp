@@ -73,7 +73,8 @@ TEST_CASE("empty image: std::invalid_argument naming the problem") {
 TEST_CASE("wrong pixel types (CV_8UC3, CV_16U, CV_32F, CV_8UC4): std::invalid_argument naming the type") {
   for_each_extractor([](auto& extractor) {
     for (int type : {CV_8UC3, CV_16UC1, CV_32FC1, CV_8UC4, CV_8SC1}) {
-      const std::string message = invalid_argument_message([&] { extractor.extract(cv::Mat(64, 64, type, cv::Scalar::all(1))); });
+      const std::string message =
+          invalid_argument_message([&] { extractor.extract(cv::Mat(64, 64, type, cv::Scalar::all(1))); });
       CHECK(message.find(cv::typeToString(type)) != std::string::npos);
     }
   });
@@ -86,7 +87,8 @@ TEST_CASE("masks of the wrong size or type: std::invalid_argument") {
     CHECK_THROWS_AS(extractor.extract(image, cv::Mat(image.cols, image.rows, CV_8UC1, cv::Scalar(1))),
                     std::invalid_argument);
     CHECK_THROWS_AS(extractor.extract(image, cv::Mat(image.size(), CV_32FC1, cv::Scalar(1))), std::invalid_argument);
-    CHECK_THROWS_AS(extractor.extract(image, cv::Mat(image.size(), CV_8UC3, cv::Scalar::all(1))), std::invalid_argument);
+    CHECK_THROWS_AS(extractor.extract(image, cv::Mat(image.size(), CV_8UC3, cv::Scalar::all(1))),
+                    std::invalid_argument);
   });
 }
 
@@ -224,7 +226,8 @@ TEST_CASE("model selection inputs: mismatched sizes, NaN, too few, identical and
   CHECK_FALSE(affine_orb::select_model(std::vector<cv::Point2f>(p.begin(), p.begin() + 5),
                                        std::vector<cv::Point2f>(q.begin(), q.begin() + 5))
                   .success);
-  CHECK_FALSE(affine_orb::select_model(std::vector<cv::Point2f>(20, {5, 5}), std::vector<cv::Point2f>(20, {7, 7})).success);
+  CHECK_FALSE(
+      affine_orb::select_model(std::vector<cv::Point2f>(20, {5, 5}), std::vector<cv::Point2f>(20, {7, 7})).success);
   std::vector<cv::Point2f> line1, line2;
   for (int i = 0; i < 30; ++i) {
     line1.emplace_back(static_cast<float>(i), static_cast<float>(2 * i));

@@ -38,7 +38,8 @@ cv::Mat as_gray(const py::handle& object, const char* what, py::array_t<std::uin
   if (!py::isinstance<py::array>(object)) throw py::type_error(std::string(what) + " must be a numpy array");
   const py::array array = py::reinterpret_borrow<py::array>(object);
   if (!array.dtype().is(py::dtype::of<std::uint8_t>()))
-    throw py::type_error(std::string(what) + " must have dtype uint8, got " + py::str(array.dtype()).cast<std::string>());
+    throw py::type_error(std::string(what) + " must have dtype uint8, got " +
+                         py::str(array.dtype()).cast<std::string>());
   if (array.ndim() != 2)
     throw py::value_error(std::string(what) + " must be 2-D (a grey image), got " + std::to_string(array.ndim()) +
                           " dimensions");

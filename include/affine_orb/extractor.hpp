@@ -79,7 +79,8 @@ struct RefineOptions {
   int radius = 1;
 
   void check() const {
-    detail::require(radius >= 0 && radius <= 8, "RefineOptions::radius must be in [0, 8], got " + std::to_string(radius));
+    detail::require(radius >= 0 && radius <= 8,
+                    "RefineOptions::radius must be in [0, 8], got " + std::to_string(radius));
   }
 };
 
@@ -142,9 +143,9 @@ struct ExtractorOptions {
                     "ExtractorOptions::view_budget is invalid");
     detail::require(std::isfinite(view_features) && view_features >= 0.0 && view_features <= 16.0,
                     "ExtractorOptions::view_features must be in [0, 16], got " + std::to_string(view_features));
-    detail::require(std::isfinite(view_weight_exponent) && view_weight_exponent >= -4.0 && view_weight_exponent <= 4.0,
-                    "ExtractorOptions::view_weight_exponent must be in [-4, 4], got " +
-                        std::to_string(view_weight_exponent));
+    detail::require(
+        std::isfinite(view_weight_exponent) && view_weight_exponent >= -4.0 && view_weight_exponent <= 4.0,
+        "ExtractorOptions::view_weight_exponent must be in [-4, 4], got " + std::to_string(view_weight_exponent));
     detail::require(repeat_levels >= 0 && repeat_levels <= 4,
                     "ExtractorOptions::repeat_levels must be in [0, 4], got " + std::to_string(repeat_levels));
     refine.check();
@@ -449,7 +450,8 @@ class Extractor {
     const int levels = options_.pyramid.levels;
     range_budgets_.assign(budgets_.begin() + begin, budgets_.begin() + end);
     available_.clear();
-    for (int g = begin; g < end; ++g) available_.push_back(static_cast<int>(level_of(g / levels, g % levels).alive.size()));
+    for (int g = begin; g < end; ++g)
+      available_.push_back(static_cast<int>(level_of(g / levels, g % levels).alive.size()));
     allocate_with_carry(range_budgets_, available_, range_take_);
     std::copy(range_take_.begin(), range_take_.end(), take_.begin() + begin);
   }
@@ -784,8 +786,8 @@ class Extractor {
       }
     }
     if (best_score < 0) return std::nullopt;
-    const cv::Point2f refined = Pyramid::to_level0(cv::Point2f(static_cast<float>(best.x), static_cast<float>(best.y)),
-                                                   base, level.size());
+    const cv::Point2f refined =
+        Pyramid::to_level0(cv::Point2f(static_cast<float>(best.x), static_cast<float>(best.y)), base, level.size());
     if (!mask.empty() && mask.at<std::uint8_t>(cvRound(refined.y), cvRound(refined.x)) == 0) return std::nullopt;
     return refined;
   }
@@ -836,7 +838,8 @@ class Extractor {
         for (const cv::KeyPoint& kp : level.keypoints) ++octave_start_[static_cast<std::size_t>(kp.octave) + 1];
       }
     }
-    for (int o = 0; o < levels; ++o) octave_start_[static_cast<std::size_t>(o) + 1] += octave_start_[static_cast<std::size_t>(o)];
+    for (int o = 0; o < levels; ++o)
+      octave_start_[static_cast<std::size_t>(o) + 1] += octave_start_[static_cast<std::size_t>(o)];
     const std::size_t total = static_cast<std::size_t>(octave_start_.back());
     Features<kBits> features;
     features.keypoints.resize(total);
@@ -845,7 +848,8 @@ class Extractor {
     for (std::size_t v = 0; v < view_work_.size(); ++v) {
       for (const LevelWork& level : view_work_[v].levels) {
         for (std::size_t i = 0; i < level.keypoints.size(); ++i) {
-          const std::size_t slot = static_cast<std::size_t>(octave_start_[static_cast<std::size_t>(level.keypoints[i].octave)]++);
+          const std::size_t slot =
+              static_cast<std::size_t>(octave_start_[static_cast<std::size_t>(level.keypoints[i].octave)]++);
           features.keypoints[slot] = level.keypoints[i];
           features.descriptors[slot] = level.descriptors[i];
           features.views[slot] = static_cast<int>(v);

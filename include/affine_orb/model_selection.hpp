@@ -164,8 +164,7 @@ inline double spread_across_line(const std::vector<Eigen::Vector2d>& points) {
 }
 
 /// Torr's GRIC of one model (SelectionRule::kGric) from the squared residuals e² (pixels²).
-inline double gric(const std::vector<double>& squared_residuals, double sigma, int manifold_dimension,
-                   int parameters) {
+inline double gric(const std::vector<double>& squared_residuals, double sigma, int manifold_dimension, int parameters) {
   constexpr double kDataDimension = 4.0;  // r: two 2-D points
   const double n = static_cast<double>(squared_residuals.size());
   const double cap = 2.0 * (kDataDimension - manifold_dimension);  // λ3·(r − d), λ3 = 2
@@ -283,8 +282,8 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
         detail::gric(detail::homography_gric_residuals(result.homography, points1, points2), options.gric_sigma, 2, 8);
   }
   if (result.fundamental_found) {
-    result.fundamental_gric =
-        detail::gric(detail::fundamental_gric_residuals(result.fundamental, points1, points2), options.gric_sigma, 3, 7);
+    result.fundamental_gric = detail::gric(detail::fundamental_gric_residuals(result.fundamental, points1, points2),
+                                           options.gric_sigma, 3, 7);
   }
   const double total = result.homography_score + result.fundamental_score;
   if (!(total > 0.0)) return result;
@@ -292,8 +291,8 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
   result.success = true;
   bool homography;
   if (options.rule == SelectionRule::kGric) {
-    homography = result.homography_found &&
-                 (!result.fundamental_found || result.homography_gric < result.fundamental_gric);
+    homography =
+        result.homography_found && (!result.fundamental_found || result.homography_gric < result.fundamental_gric);
   } else {
     homography = result.homography_ratio > options.homography_ratio_threshold;
   }

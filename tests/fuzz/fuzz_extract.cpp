@@ -74,13 +74,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const int height = 1 + bytes.next() % 120;
   const std::uint8_t flags = bytes.next();
   affine_orb::ExtractorOptions options;
-  options.features = static_cast<int>(bytes.next()) * 4 - 8;            // may be <= 0: invalid
-  options.views.max_tilt = 0.5 + (bytes.next() % 16) * 0.25;            // 0.5 (invalid) ... 4.25
-  options.pyramid.levels = bytes.next() % 10;                           // 0 is invalid
-  options.pyramid.scale_factor = 0.9 + (bytes.next() % 8) * 0.15;       // <= 1 is invalid
-  options.detector.initial_threshold = bytes.next() % 64;              // 0 is invalid
-  options.detector.min_threshold = bytes.next() % 64;                  // may exceed the initial one
-  options.detector.cell_size = bytes.next() % 80;                      // < 4 is invalid
+  options.features = static_cast<int>(bytes.next()) * 4 - 8;       // may be <= 0: invalid
+  options.views.max_tilt = 0.5 + (bytes.next() % 16) * 0.25;       // 0.5 (invalid) ... 4.25
+  options.pyramid.levels = bytes.next() % 10;                      // 0 is invalid
+  options.pyramid.scale_factor = 0.9 + (bytes.next() % 8) * 0.15;  // <= 1 is invalid
+  options.detector.initial_threshold = bytes.next() % 64;          // 0 is invalid
+  options.detector.min_threshold = bytes.next() % 64;              // may exceed the initial one
+  options.detector.cell_size = bytes.next() % 80;                  // < 4 is invalid
   options.detector.score = (flags & 2) ? affine_orb::ScoreType::kHarris : affine_orb::ScoreType::kFast;
   options.duplicates = (flags & 4) ? affine_orb::DuplicatePolicy::kKeepAll : affine_orb::DuplicatePolicy::kMerge;
   options.threads = 1 + ((flags >> 3) & 1);

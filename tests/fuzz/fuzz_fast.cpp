@@ -47,7 +47,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (int x = 0; x < width; ++x) {
       int want = 0;
       if (inner.contains(cv::Point(x, y))) {
-        const int score = affine_orb::fast_score(image.ptr<std::uint8_t>(y) + x, static_cast<std::ptrdiff_t>(image.step[0]));
+        const int score =
+            affine_orb::fast_score(image.ptr<std::uint8_t>(y) + x, static_cast<std::ptrdiff_t>(image.step[0]));
         want = score >= threshold ? score : 0;
       }
       require(scores.at<std::uint8_t>(y, x) == want);

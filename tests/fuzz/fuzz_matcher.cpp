@@ -29,7 +29,9 @@ Naive naive(const Descriptor& q, const std::vector<Descriptor>& train) {
   Naive n;
   for (int j = 0; j < static_cast<int>(train.size()); ++j) {
     int d = 0;
-    for (int w = 0; w < 4; ++w) d += __builtin_popcountll(q[static_cast<std::size_t>(w)] ^ train[static_cast<std::size_t>(j)][static_cast<std::size_t>(w)]);
+    for (int w = 0; w < 4; ++w)
+      d += __builtin_popcountll(q[static_cast<std::size_t>(w)] ^
+                                train[static_cast<std::size_t>(j)][static_cast<std::size_t>(w)]);
     if (n.best < 0 || d < n.best_distance) {
       n.second = n.best;
       n.second_distance = n.best_distance;
@@ -60,7 +62,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<Descriptor> set(count);
     for (Descriptor& d : set) {
       const std::uint8_t b = next < size ? data[next++] : 0;
-      for (std::size_t w = 0; w < 4; ++w) d[w] = (0x9E3779B97F4A7C15ull * (b >> 2)) ^ (static_cast<std::uint64_t>(b & 3) << (w * 9));
+      for (std::size_t w = 0; w < 4; ++w)
+        d[w] = (0x9E3779B97F4A7C15ull * (b >> 2)) ^ (static_cast<std::uint64_t>(b & 3) << (w * 9));
     }
     return set;
   };
@@ -91,10 +94,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const affine_orb::KnnMatch& m = knn[i];
     bool accept = m.best.distance <= options.max_distance && affine_orb::passes_ratio_test(m, options.ratio);
     // The ratio test by its definition, in double precision.
-    const bool ratio_ok = m.count < 2 || static_cast<double>(m.best.distance) <
-                                             static_cast<double>(options.ratio) * static_cast<double>(m.second.distance);
+    const bool ratio_ok =
+        m.count < 2 || static_cast<double>(m.best.distance) <
+                           static_cast<double>(options.ratio) * static_cast<double>(m.second.distance);
     require(affine_orb::passes_ratio_test(m, options.ratio) == ratio_ok);
-    if (options.cross_check) accept = accept && back[static_cast<std::size_t>(m.best.train)].best.train == static_cast<int>(i);
+    if (options.cross_check)
+      accept = accept && back[static_cast<std::size_t>(m.best.train)].best.train == static_cast<int>(i);
     if (!accept) continue;
     require(k < matches.size());
     require(matches[k].query == static_cast<int>(i) && matches[k].train == m.best.train &&

@@ -26,11 +26,16 @@ void require(bool condition) {
 /// A coordinate from two bytes: mostly a grid value in [−64, 960), sometimes a special value.
 float coordinate(std::uint8_t hi, std::uint8_t lo) {
   switch (hi) {
-    case 255: return std::numeric_limits<float>::quiet_NaN();
-    case 254: return std::numeric_limits<float>::infinity();
-    case 253: return -std::numeric_limits<float>::infinity();
-    case 252: return 1e30f;
-    default: return static_cast<float>(hi * 4 + lo / 64.0) - 64.0f;
+    case 255:
+      return std::numeric_limits<float>::quiet_NaN();
+    case 254:
+      return std::numeric_limits<float>::infinity();
+    case 253:
+      return -std::numeric_limits<float>::infinity();
+    case 252:
+      return 1e30f;
+    default:
+      return static_cast<float>(hi * 4 + lo / 64.0) - 64.0f;
   }
 }
 

@@ -151,6 +151,16 @@ class PyExtractor {
   affine_orb::ExtractorOptions options_;
 };
 
+/// The enum value named by `text` among two, or ValueError naming the argument and both choices.
+template <class Enum>
+Enum one_of(const std::string& text, const char* argument, const char* first_name, Enum first, const char* second_name,
+            Enum second) {
+  if (text == first_name) return first;
+  if (text == second_name) return second;
+  throw py::value_error(std::string(argument) + " must be \"" + first_name + "\" or \"" + second_name + "\", got \"" +
+                        text + "\"");
+}
+
 affine_orb::ExtractorOptions make_options(int features, double max_tilt, int threads, double view_features,
                                           const std::string& view_budget, const std::string& spreading,
                                           const std::string& duplicates, int levels, double scale_factor,
@@ -160,27 +170,12 @@ affine_orb::ExtractorOptions make_options(int features, double max_tilt, int thr
   o.views.max_tilt = max_tilt;
   o.threads = threads;
   o.view_features = view_features;
-  if (view_budget == "additive") {
-    o.view_budget = affine_orb::ViewBudget::kAdditive;
-  } else if (view_budget == "area_split") {
-    o.view_budget = affine_orb::ViewBudget::kAreaSplit;
-  } else {
-    throw py::value_error("view_budget must be \"additive\" or \"area_split\", got \"" + view_budget + "\"");
-  }
-  if (spreading == "quadtree") {
-    o.spreading = affine_orb::Spreading::kQuadtree;
-  } else if (spreading == "strongest") {
-    o.spreading = affine_orb::Spreading::kStrongest;
-  } else {
-    throw py::value_error("spreading must be \"quadtree\" or \"strongest\", got \"" + spreading + "\"");
-  }
-  if (duplicates == "merge") {
-    o.duplicates = affine_orb::DuplicatePolicy::kMerge;
-  } else if (duplicates == "keep") {
-    o.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
-  } else {
-    throw py::value_error("duplicates must be \"merge\" or \"keep\", got \"" + duplicates + "\"");
-  }
+  o.view_budget = one_of(view_budget, "view_budget", "additive", affine_orb::ViewBudget::kAdditive, "area_split",
+                         affine_orb::ViewBudget::kAreaSplit);
+  o.spreading = one_of(spreading, "spreading", "quadtree", affine_orb::Spreading::kQuadtree, "strongest",
+                       affine_orb::Spreading::kStrongest);
+  o.duplicates = one_of(duplicates, "duplicates", "merge", affine_orb::DuplicatePolicy::kMerge, "keep",
+                        affine_orb::DuplicatePolicy::kKeepAll);
   o.pyramid.levels = levels;
   o.pyramid.scale_factor = scale_factor;
   o.detector.initial_threshold = initial_threshold;

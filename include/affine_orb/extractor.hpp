@@ -569,57 +569,63 @@ class Extractor {
     }
   }
 
-  /// m.order: the candidates of level l, strongest first, ties to the lower view, then the lower
-  /// index.
-  void order_candidates(int l, MergeWork& m) {
-    const int n_views = static_cast<int>(view_work_.size());
-    m.order.clear();
-    bool integral = true;
-    for (int v = 0; v < n_views && integral; ++v) {
-      for (float r : level_of(v, l).responses) {
-        if (!(r >= 0.0f && r <= 255.0f && r == std::floor(r))) {
-          integral = false;
-          break;
-        }
-      }
-    }
-    if (!integral) {
-      for (int v = 0; v < n_views; ++v) {
-        const LevelWork& work = level_of(v, l);
-        for (int i : work.alive) {
-          m.order.push_back(
-              {work.responses[static_cast<std::size_t>(i)], v, i, work.original_points[static_cast<std::size_t>(i)]});
-        }
-      }
-      std::sort(m.order.begin(), m.order.end(), [](const MergeRef& a, const MergeRef& b) {
-        return a.response > b.response ||
-               (a.response == b.response && (a.view < b.view || (a.view == b.view && a.index < b.index)));
-      });
-      return;
-    }
-    // Counting sort on the scores 0..255, descending; within a score, visiting views and indices
-    // in increasing order keeps the tie order.
+  /// Whether every response is a FAST score (an integer in [0, 255]), so that candidates can be
+  /// ordered by a counting sort.
+  static bool fast_scores(const std::vector<float>& responses) {
+    return std::all_of(responses.begin(), responses.end(),
+                       [](float r) { return r >= 0.0f && r <= 255.0f && r == std::floor(r); });
+  }
+
+  /// `out` = the elements `visit` offers, by descending FAST score 0..255, in the order offered
+  /// within a score (a counting sort). visit(take) calls take(score, element) for every element,
+  /// the same sequence each time it is called (twice: counting, then placing).
+  template <class Visit, class Ref>
+  static void order_by_score(Visit visit, std::vector<Ref>& out) {
     std::array<int, 257> start{};
-    for (int v = 0; v < n_views; ++v) {
-      const LevelWork& work = level_of(v, l);
-      for (int i : work.alive)
-        ++start[static_cast<std::size_t>(256 - static_cast<int>(work.responses[static_cast<std::size_t>(i)]))];
-    }
+    visit([&](float score, const Ref&) { ++start[static_cast<std::size_t>(256 - static_cast<int>(score))]; });
     int total = 0;
     for (int& count : start) {
       const int c = count;
       count = total;
       total += c;
     }
-    m.order.resize(static_cast<std::size_t>(total));
-    for (int v = 0; v < n_views; ++v) {
-      const LevelWork& work = level_of(v, l);
-      for (int i : work.alive) {
-        const float response = work.responses[static_cast<std::size_t>(i)];
-        int& slot = start[static_cast<std::size_t>(256 - static_cast<int>(response))];
-        m.order[static_cast<std::size_t>(slot++)] = {response, v, i, work.original_points[static_cast<std::size_t>(i)]};
-      }
+    out.resize(static_cast<std::size_t>(total));
+    visit([&](float score, const Ref& ref) {
+      out[static_cast<std::size_t>(start[static_cast<std::size_t>(256 - static_cast<int>(score))]++)] = ref;
+    });
+  }
+
+  /// `out` = the elements `visit` offers (see order_by_score()), strongest first, ties in the order
+  /// offered: by a counting sort when every score is a FAST score (`integral`), else by a stable
+  /// comparison sort.
+  template <class Visit, class Ref>
+  static void order_strongest_first(Visit visit, bool integral, std::vector<Ref>& out) {
+    if (integral) {
+      order_by_score(visit, out);
+      return;
     }
+    out.clear();
+    visit([&](float, const Ref& ref) { out.push_back(ref); });
+    std::stable_sort(out.begin(), out.end(), [](const Ref& a, const Ref& b) { return a.response > b.response; });
+  }
+
+  /// m.order: the candidates of level l, strongest first, ties to the lower view, then the lower
+  /// index.
+  void order_candidates(int l, MergeWork& m) {
+    const int n_views = static_cast<int>(view_work_.size());
+    // Views, then indices, in increasing order: the tie order.
+    const auto visit = [&](auto&& take) {
+      for (int v = 0; v < n_views; ++v) {
+        const LevelWork& work = level_of(v, l);
+        for (int i : work.alive) {
+          const float r = work.responses[static_cast<std::size_t>(i)];
+          take(r, MergeRef{r, v, i, work.original_points[static_cast<std::size_t>(i)]});
+        }
+      }
+    };
+    bool integral = true;
+    for (int v = 0; v < n_views && integral; ++v) integral = fast_scores(level_of(v, l).responses);
+    order_strongest_first(visit, integral, m.order);
   }
 
   /// ViewBudget::kAdditive, step 3: visits the tilted views' candidates from the strongest down
@@ -700,58 +706,23 @@ class Extractor {
   void order_tilted_candidates() {
     const int n_views = static_cast<int>(view_work_.size());
     const int levels = options_.pyramid.levels;
-    repeat_order_.clear();
-    bool integral = true;
-    for (int v = 1; v < n_views && integral; ++v) {
-      for (int l = 0; l < levels && integral; ++l) {
-        for (float r : level_of(v, l).responses) {
-          if (!(r >= 0.0f && r <= 255.0f && r == std::floor(r))) {
-            integral = false;
-            break;
-          }
-        }
-      }
-    }
-    if (!integral) {
+    // Views, then levels, then indices, in increasing order: the tie order.
+    const auto visit = [&](auto&& take) {
       for (int v = 1; v < n_views; ++v) {
         for (int l = 0; l < levels; ++l) {
           const LevelWork& work = level_of(v, l);
           for (int i : work.alive) {
-            repeat_order_.push_back({work.responses[static_cast<std::size_t>(i)], v, l, i,
-                                     work.original_points[static_cast<std::size_t>(i)]});
+            const float r = work.responses[static_cast<std::size_t>(i)];
+            take(r, RepeatRef{r, v, l, i, work.original_points[static_cast<std::size_t>(i)]});
           }
         }
       }
-      std::stable_sort(repeat_order_.begin(), repeat_order_.end(),
-                       [](const RepeatRef& a, const RepeatRef& b) { return a.response > b.response; });
-      return;
+    };
+    bool integral = true;
+    for (int v = 1; v < n_views && integral; ++v) {
+      for (int l = 0; l < levels && integral; ++l) integral = fast_scores(level_of(v, l).responses);
     }
-    std::array<int, 257> start{};
-    for (int v = 1; v < n_views; ++v) {
-      for (int l = 0; l < levels; ++l) {
-        const LevelWork& work = level_of(v, l);
-        for (int i : work.alive)
-          ++start[static_cast<std::size_t>(256 - static_cast<int>(work.responses[static_cast<std::size_t>(i)]))];
-      }
-    }
-    int total = 0;
-    for (int& count : start) {
-      const int c = count;
-      count = total;
-      total += c;
-    }
-    repeat_order_.resize(static_cast<std::size_t>(total));
-    for (int v = 1; v < n_views; ++v) {
-      for (int l = 0; l < levels; ++l) {
-        const LevelWork& work = level_of(v, l);
-        for (int i : work.alive) {
-          const float response = work.responses[static_cast<std::size_t>(i)];
-          int& slot = start[static_cast<std::size_t>(256 - static_cast<int>(response))];
-          repeat_order_[static_cast<std::size_t>(slot++)] = {response, v, l, i,
-                                                             work.original_points[static_cast<std::size_t>(i)]};
-        }
-      }
-    }
+    order_strongest_first(visit, integral, repeat_order_);
   }
 
   /// RefineOptions: the strongest FAST corner of the original image's level o within

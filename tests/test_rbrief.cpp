@@ -16,19 +16,40 @@
 
 namespace {
 
-// m10 = Σ u I, m01 = Σ v I over the disc u² + v² <= r², angle = atan2(m01, m10).
+// ORB's disc by its definition, formulated as transpose symmetry: rows |v| <= r/√2 have half-width
+// round(√(r² − v²)); a higher row v reaches every column u whose own (rounded) column reaches v,
+// i.e. max{u : round(√(r² − u²)) >= v}.
+std::vector<int> naive_orb_disc(int r) {
+  std::vector<int> w(static_cast<std::size_t>(r) + 1);
+  for (int v = 0; v <= r; ++v) {
+    if (v <= r / std::sqrt(2.0)) {
+      w[static_cast<std::size_t>(v)] = static_cast<int>(std::lround(std::sqrt(r * r - v * v)));
+      continue;
+    }
+    int reach = 0;
+    for (int u = 0; u <= r; ++u) {
+      if (std::lround(std::sqrt(r * r - u * u)) >= v) reach = u;
+    }
+    w[static_cast<std::size_t>(v)] = reach;
+  }
+  return w;
+}
+
+// m10 = Σ u I, m01 = Σ v I over ORB's disc, angle = fastAtan2(m01, m10) degrees times the float
+// π/180, as ORB (OpenCV, ORB-SLAM2) steers its pattern.
 float naive_centroid_angle(const cv::Mat& image, int x, int y, int r) {
-  double m10 = 0.0;
-  double m01 = 0.0;
+  const std::vector<int> w = naive_orb_disc(r);
+  long long m10 = 0;
+  long long m01 = 0;
   for (int v = -r; v <= r; ++v) {
     for (int u = -r; u <= r; ++u) {
-      if (u * u + v * v > r * r) continue;
-      const double value = image.at<uchar>(y + v, x + u);
+      if (std::abs(u) > w[static_cast<std::size_t>(std::abs(v))]) continue;
+      const int value = image.at<uchar>(y + v, x + u);
       m10 += u * value;
       m01 += v * value;
     }
   }
-  return std::atan2(static_cast<float>(m01), static_cast<float>(m10));
+  return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10)) * static_cast<float>(CV_PI / 180.0);
 }
 
 // Bit i = [I_s(c + R a_i) < I_s(c + R b_i)], byte i / 8, bit i % 8 (OpenCV's byte layout).
@@ -72,6 +93,20 @@ TEST_CASE("ORB's published pair table is the one in the ORB paper's distribution
   }
 }
 
+TEST_CASE("ORB's disc: the published radius-15 rows, and symmetric under transposition for every radius") {
+  CHECK(affine_orb::orb_disc_half_widths(15) == std::vector<int>{15, 15, 15, 15, 14, 14, 14, 13, 13, 12, 11, 10, 9, 8, 6, 3});
+  for (int r = 1; r <= 64; ++r) {
+    CAPTURE(r);
+    const std::vector<int> w = affine_orb::orb_disc_half_widths(r);
+    CHECK(w == naive_orb_disc(r));
+    int asymmetric = 0;
+    for (int v = 0; v <= r; ++v) {
+      for (int u = 0; u <= r; ++u) asymmetric += (u <= w[static_cast<std::size_t>(v)]) != (v <= w[static_cast<std::size_t>(u)]);
+    }
+    CHECK(asymmetric == 0);
+  }
+}
+
 TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every level") {
   const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
   affine_orb::ExtractorOptions options;
@@ -104,10 +139,7 @@ TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every 
     CHECK(std::abs(p.x - static_cast<float>(x)) < 1e-3f);
     CHECK(std::abs(p.y - static_cast<float>(y)) < 1e-3f);
     const float angle = naive_centroid_angle(level_image, x, y, 15);
-    float degrees = angle * static_cast<float>(180.0 / CV_PI);
-    if (degrees < 0) degrees += 360.0f;
-    const float diff = std::abs(degrees - kp.angle);
-    angle_mismatch += std::min(diff, 360.0f - diff) > 1e-3f;
+    angle_mismatch += affine_orb::radians_to_degrees_0_360(angle) != kp.angle;
     const std::vector<uchar> expected =
         naive_rbrief(smoothed[static_cast<std::size_t>(level)], cv::Point2f(static_cast<float>(x), static_cast<float>(y)),
                      angle);

@@ -251,9 +251,9 @@ class Rbrief {
     const std::size_t chunks = d.x.size();
     d.u.assign((static_cast<std::size_t>(r) + 1) * chunks, {});
     d.v.assign(d.u.size(), {});
+    const std::vector<int> widths = orb_disc_half_widths(r);
     for (int v = 0; v <= r; ++v) {
-      int half = 0;
-      while ((half + 1) * (half + 1) + v * v <= r * r) ++half;
+      const int half = widths[static_cast<std::size_t>(v)];
       for (std::size_t j = 0; j < chunks; ++j) {
         for (int i = 0; i < 8; ++i) {
           const int u = d.x[j] + i;
@@ -307,7 +307,7 @@ class Rbrief {
     _mm_store_si128(reinterpret_cast<__m128i*>(y), m01);
     const std::int64_t sx = static_cast<std::int64_t>(x[0]) + x[1] + x[2] + x[3];
     const std::int64_t sy = static_cast<std::int64_t>(y[0]) + y[1] + y[2] + y[3];
-    return std::atan2(static_cast<float>(sy), static_cast<float>(sx));
+    return orb_angle(sy, sx);
   }
 #endif
 

@@ -17,6 +17,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "affine_orb/detail/buffer.hpp"
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/row_spans.hpp"
 #include "affine_orb/detail/view_render.hpp"
@@ -188,7 +189,8 @@ class ViewRenderer {
 
   /// Renders `image` into `out` (view.size, CV_8UC1, its buffer reused). With `region`, only the
   /// columns of each row's run are computed (the whole row where the run is empty), and the other
-  /// pixels of the row repeat the nearest computed one. `scratch` holds one canvas row.
+  /// pixels of the row repeat the nearest computed one. `scratch` holds one canvas row (grown to the
+  /// widest row it has held, so that views of several sizes share it without reallocating).
   void render(const cv::Mat& image, const RowSpans* region, cv::Mat& scratch, cv::Mat& out) const {
     detail::require_gray8(image, "render_view");
     if (view_.is_identity()) {
@@ -203,9 +205,10 @@ class ViewRenderer {
     const CanvasSampler sampler(view_.to_original_canvas(), image.size());
     const int canvas_width = view_.canvas_size.width;
     const int width = view_.size.width;
-    // The widest row: every view column computed.
-    scratch.create(1, resampler_.first.back() + resampler_.stride - resampler_.first.front(), CV_8UC1);
-    std::uint8_t* row = scratch.ptr<std::uint8_t>(0);
+    // The widest row: every view column computed (in `scratch`, grown to the widest row seen).
+    cv::Mat row_buffer = detail::fit_buffer(
+        scratch, cv::Size(resampler_.first.back() + resampler_.stride - resampler_.first.front(), 1), CV_8UC1);
+    std::uint8_t* row = row_buffer.ptr<std::uint8_t>(0);
     for (int y = 0; y < view_.size.height; ++y) {
       int x0 = 0;
       int x1 = width;

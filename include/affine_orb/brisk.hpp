@@ -49,6 +49,7 @@
 
 #include "affine_orb/descriptor.hpp"
 #include "affine_orb/detail/brisk_pattern.hpp"
+#include "affine_orb/detail/buffer.hpp"
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/features.hpp"
 
@@ -143,11 +144,14 @@ class Brisk {
   static constexpr int kPoints = detail::kBriskPointCount;
   using Options = BriskOptions;
 
-  /// Per-level data: the integral image of the level, reused across frames.
+  /// Per-level data: the integral image of the level. One LevelData serves levels of any size in
+  /// turn without reallocating once it has held the largest.
   struct LevelData {
-    /// (rows + 1) x (cols + 1) CV_32S; read as unsigned 32-bit numbers whose differences are exact
-    /// box sums (the sums wrap modulo 2^32 on levels larger than 8.4 Mpixels).
+    /// (rows + 1) x (cols + 1) CV_32S, the top-left part of `storage`; read as unsigned 32-bit
+    /// numbers whose differences are exact box sums (the sums wrap modulo 2^32 on levels larger
+    /// than 8.4 Mpixels).
     cv::Mat integral;
+    cv::Mat storage;  ///< grown to the largest level seen, never shrunk
     /// Size of the level image.
     cv::Size size;
   };
@@ -209,16 +213,17 @@ class Brisk {
   /// [border(), size − border()) is safe after rounding to the nearest pixel. 14 with the defaults.
   int border() const { return extent_ + 1; }
 
-  /// Fills `data` with the integral image of `level` (CV_8UC1, else std::invalid_argument), reusing
-  /// its buffer when the size is unchanged.
   /// The same as prepare(level, data): the integral image costs one pass whatever the keypoints.
   void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& /*points*/, LevelData& data) const {
     prepare(level, data);
   }
 
+  /// Fills `data` with the integral image of `level` (CV_8UC1, else std::invalid_argument), in
+  /// its storage (no allocation for a level no larger than one it held before).
   void prepare(const cv::Mat& level, LevelData& data) const {
     detail::require_gray8(level, "Brisk::prepare");
     data.size = level.size();
+    data.integral = detail::fit_buffer(data.storage, cv::Size(level.cols + 1, level.rows + 1), CV_32S);
     const std::int64_t largest_sum = std::int64_t{255} * level.rows * level.cols;
     if (largest_sum <= std::numeric_limits<std::int32_t>::max()) {
       cv::integral(level, data.integral, CV_32S);

@@ -11,7 +11,9 @@
 /// - `using Options = ...;` a plain options struct with `void check() const` (throws
 ///   std::invalid_argument);
 /// - `using LevelData = ...;` what the policy precomputes once per level image (a smoothed copy, an
-///   integral image, ...); default-constructible, its buffers reused across frames;
+///   integral image, ...); default-constructible; one LevelData is prepared for levels of varying
+///   sizes in turn (every level of every view, on one thread), so it should keep its buffers and
+///   allocate only for a level larger than any it held (detail::fit_buffer());
 /// - `explicit D(const Options& options = {});` checks the options, builds the sampling pattern;
 /// - `int border() const;` the radius, in level pixels, of the support of orientation and descriptor
 ///   around a keypoint: a keypoint at integer position (x, y) must satisfy

@@ -9,6 +9,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "affine_orb/detail/buffer.hpp"
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/resize.hpp"
 #include "affine_orb/detail/row_spans.hpp"
@@ -40,12 +41,15 @@ inline cv::Size pyramid_level_size(cv::Size size, const PyramidOptions& options,
           std::max(1, static_cast<int>(std::lround(size.height * inv)))};
 }
 
-/// An image pyramid whose buffers are reused across build() calls of same-sized images.
+/// An image pyramid whose buffers are reused across builds: each level lives in storage grown to
+/// the largest size it has held and never shrunk, so that pyramids of images of varying sizes built
+/// one after the other on one Pyramid allocate nothing once it has seen the largest.
 ///
 /// Level l is produced from level l−1 by bilinear interpolation with the pixel-centre convention
 /// of cv::resize (fixed point, fractions of 1/128 pixel: detail/resize.hpp; within a grey level of
 /// cv::resize with INTER_LINEAR), so a level-l pixel (x_l, y_l) corresponds to the level-0 point
 /// ((x_l + 0.5)·W/W_l − 0.5, (y_l + 0.5)·H/H_l − 0.5): the ratios telescope across levels.
+/// Levels are ROIs of their storage (their row step may exceed their width).
 class Pyramid {
  public:
   explicit Pyramid(PyramidOptions options = {}) : options_(options) { options_.check(); }
@@ -54,23 +58,44 @@ class Pyramid {
   /// memory with `image` (it is copied), so the pyramid stays valid if the caller's image changes.
   void build(const cv::Mat& image) {
     detail::require_gray8(image, "Pyramid::build");
-    levels_.resize(static_cast<std::size_t>(options_.levels));
-    image.copyTo(levels_[0]);
-    build_levels();
+    image.copyTo(level0(image.size()));
+    build_from_level0();
   }
 
-  /// build() without the copy: `image` becomes level 0 and receives the previous level-0 matrix
-  /// in exchange, so that a caller rendering into the same matrix every frame reuses both buffers.
-  /// With `regions` (one per level, regions[0] unused), level l >= 1 is computed only on the runs
-  /// of regions[l], the rest of each row repeating its nearest computed pixel (see
-  /// detail::resize_bilinear()).
-  void build_swap(cv::Mat& image, const std::vector<detail::RowSpans>* regions = nullptr) {
-    detail::require_gray8(image, "Pyramid::build_swap");
-    detail::require(regions == nullptr || static_cast<int>(regions->size()) == options_.levels,
-                    "Pyramid::build_swap: one region per level expected");
+  /// Level 0, sized `size` (at least 1x1), for the caller to fill (e.g. to render a view into)
+  /// before build_from_level0(); its previous content is undefined.
+  cv::Mat& level0(cv::Size size) {
+    detail::require(size.width >= 1 && size.height >= 1, "Pyramid::level0: the size must be at least 1x1");
     levels_.resize(static_cast<std::size_t>(options_.levels));
-    std::swap(levels_[0], image);
-    build_levels(regions);
+    storage_.resize(levels_.size());
+    levels_[0] = detail::fit_buffer(storage_[0], size, CV_8UC1);
+    return levels_[0];
+  }
+
+  /// Computes levels 1… from the level 0 filled after level0(). With `regions` (one per level,
+  /// regions[0] unused), level l >= 1 is computed only on the runs of regions[l], the rest of each
+  /// row repeating its nearest computed pixel (see detail::resize_bilinear()).
+  void build_from_level0(const std::vector<detail::RowSpans>* regions = nullptr) {
+    detail::require(!levels_.empty() && !levels_[0].empty(), "Pyramid::build_from_level0: call level0() first");
+    detail::require(regions == nullptr || static_cast<int>(regions->size()) == options_.levels,
+                    "Pyramid::build_from_level0: one region per level expected");
+    resize_work_.resize(levels_.size());
+    for (int l = 1; l < options_.levels; ++l) {
+      const std::size_t i = static_cast<std::size_t>(l);
+      const cv::Size size = pyramid_level_size(levels_[0].size(), options_, l);
+      levels_[i] = detail::fit_buffer(storage_[i], size, CV_8UC1);
+      detail::resize_bilinear(levels_[i - 1], levels_[i], size, regions != nullptr ? &(*regions)[i] : nullptr,
+                              resize_work_[i]);
+    }
+  }
+
+  /// Grows the storage to hold the levels of an image of `size` (allocated, not touched: pages
+  /// become resident when a build writes them).
+  void reserve(cv::Size size) {
+    storage_.resize(static_cast<std::size_t>(options_.levels));
+    for (int l = 0; l < options_.levels; ++l) {
+      detail::fit_buffer(storage_[static_cast<std::size_t>(l)], pyramid_level_size(size, options_, l), CV_8UC1);
+    }
   }
 
   const PyramidOptions& options() const { return options_; }
@@ -91,17 +116,9 @@ class Pyramid {
   }
 
  private:
-  void build_levels(const std::vector<detail::RowSpans>* regions = nullptr) {
-    resize_work_.resize(levels_.size());
-    for (int l = 1; l < options_.levels; ++l) {
-      const std::size_t i = static_cast<std::size_t>(l);
-      detail::resize_bilinear(levels_[i - 1], levels_[i], pyramid_level_size(levels_[0].size(), options_, l),
-                              regions != nullptr ? &(*regions)[i] : nullptr, resize_work_[i]);
-    }
-  }
-
   PyramidOptions options_;
   std::vector<cv::Mat> levels_;
+  std::vector<cv::Mat> storage_;  ///< per level, the buffer levels_[l] is the top-left part of
   std::vector<detail::ResizeWork> resize_work_;
 };
 

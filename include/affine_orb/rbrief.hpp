@@ -26,6 +26,7 @@
 #endif
 
 #include "affine_orb/descriptor.hpp"
+#include "affine_orb/detail/buffer.hpp"
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/gaussian_q8.hpp"
 #include "affine_orb/detail/orb_pattern.hpp"
@@ -61,10 +62,13 @@ class Rbrief {
   static constexpr float kPatchSize = 31.0f;
   using Options = RbriefOptions;
 
-  /// Per-level data: the level image (shallow) for the orientation and its smoothed copy for the tests.
+  /// Per-level data: the level image (shallow) for the orientation and its smoothed copy for the
+  /// tests. One LevelData serves levels of any size in turn without reallocating once it has held
+  /// the largest.
   struct LevelData {
     cv::Mat image;
-    cv::Mat smoothed;
+    cv::Mat smoothed;                ///< the top-left part of `storage`
+    cv::Mat storage;                 ///< grown to the largest level seen, never shrunk
     detail::GaussianQ8Work squares;  ///< scratch of the integer smoothing
   };
 
@@ -96,12 +100,12 @@ class Rbrief {
   void prepare(const cv::Mat& level, LevelData& data) const {
     detail::require_gray8(level, "Rbrief::prepare");
     data.image = level;
+    data.smoothed = detail::fit_buffer(data.storage, level.size(), CV_8UC1);
     if (kernel_q8_.empty()) {
       cv::GaussianBlur(level, data.smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel), options_.blur_sigma,
                        options_.blur_sigma, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
       return;
     }
-    data.smoothed.create(level.size(), CV_8UC1);
     detail::smooth_square_q8(level, cv::Rect(0, 0, level.cols, level.rows), kernel_q8_, data.squares, data.smoothed);
   }
 
@@ -130,7 +134,7 @@ class Rbrief {
       return;
     }
     data.image = level;
-    data.smoothed.create(level.size(), CV_8UC1);
+    data.smoothed = detail::fit_buffer(data.storage, level.size(), CV_8UC1);
     detail::smooth_runs_q8(level, kernel_q8_, data.squares, data.smoothed);
   }
 

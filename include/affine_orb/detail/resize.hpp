@@ -35,9 +35,10 @@ struct ResizeAxis {
   std::vector<int> index;
   std::vector<std::int16_t> fraction;
 
-  ResizeAxis() = default;
-  ResizeAxis(int source, int target)
-      : index(static_cast<std::size_t>(target)), fraction(static_cast<std::size_t>(target)) {
+  /// Fills the tables for `source` -> `target` pixels, reusing the vectors' capacity.
+  void set(int source, int target) {
+    index.resize(static_cast<std::size_t>(target));
+    fraction.resize(static_cast<std::size_t>(target));
     const double scale = static_cast<double>(source) / target;
     for (int d = 0; d < target; ++d) {
       const double u = (d + 0.5) * scale - 0.5;
@@ -56,7 +57,8 @@ struct ResizeAxis {
   }
 };
 
-/// Buffers and tables of resize_bilinear(), reused while the sizes stay the same.
+/// Buffers and tables of resize_bilinear(), recomputed when the sizes change (in the vectors'
+/// capacity: no allocation once they have held the largest sizes).
 struct ResizeWork {
   cv::Size source;
   cv::Size target;
@@ -69,8 +71,8 @@ struct ResizeWork {
     if (from == source && to == target && !x.index.empty()) return;
     source = from;
     target = to;
-    x = ResizeAxis(from.width, to.width);
-    y = ResizeAxis(from.height, to.height);
+    x.set(from.width, to.width);
+    y.set(from.height, to.height);
     x_weights.resize(static_cast<std::size_t>(to.width));
     for (std::size_t d = 0; d < x_weights.size(); ++d) {
       const std::int32_t a = x.fraction[d];
@@ -232,8 +234,10 @@ inline void resize_bilinear(const cv::Mat& src, cv::Mat& dst, cv::Size size, con
 /// The definition in the file comment evaluated pixel by pixel: the reference resize_bilinear()
 /// is tested against.
 inline void resize_bilinear_reference(const cv::Mat& src, cv::Mat& dst, cv::Size size) {
-  const ResizeAxis ax(src.cols, size.width);
-  const ResizeAxis ay(src.rows, size.height);
+  ResizeAxis ax;
+  ResizeAxis ay;
+  ax.set(src.cols, size.width);
+  ay.set(src.rows, size.height);
   dst.create(size, CV_8UC1);
   for (int y = 0; y < size.height; ++y) {
     const int j = ay.index[static_cast<std::size_t>(y)];

@@ -1,5 +1,5 @@
 // eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] [--sequences a,b,...]
-//                [--methods SUBSTRING] [--asift-sequences a,b,...|all]
+//                [--methods SUBSTRING] [--shortlist F] [--asift-sequences a,b,...|all]
 //
 // The SPEC §7 evaluation on image pairs with ground-truth homographies: every pair 1->2 ... 1->6 of
 // every sequence in ../shared/data/oxford, and Debian opencv-doc's graf1/graf3 pair, for every
@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -79,11 +80,11 @@ struct Row {
   }
 };
 
-/// Our extractor with the defaults but for `features`, `max_tilt` and what `configure` changes.
+/// Our extractor with the options `base` but for `features`, `max_tilt` and what `configure` changes.
 template <class Descriptor>
-Method ours(const std::string& name, int features, double max_tilt, int threads,
-            const std::function<void(affine_orb::ExtractorOptions&)>& configure = {}) {
-  affine_orb::ExtractorOptions options;
+Method ours(const affine_orb::ExtractorOptions& base, const std::string& name, int features, double max_tilt,
+            int threads, const std::function<void(affine_orb::ExtractorOptions&)>& configure = {}) {
+  affine_orb::ExtractorOptions options = base;
   options.features = features;
   options.views.max_tilt = max_tilt;
   options.threads = threads;
@@ -300,6 +301,7 @@ int main(int argc, char** argv) {
   std::string out_dir = ".";
   int features = 1000;
   double view_features = affine_orb::ExtractorOptions{}.view_features;
+  affine_orb::ExtractorOptions base;
   int threads = 1;
   std::string only;
   std::string method_filter;
@@ -316,6 +318,8 @@ int main(int argc, char** argv) {
       threads = std::atoi(argv[i + 1]);
     else if (flag == "--sequences")
       only = std::string(",") + argv[i + 1] + ",";
+    else if (flag == "--shortlist")
+      base.shortlist = std::atof(argv[i + 1]);
     else if (flag == "--methods")
       method_filter = argv[i + 1];
     else if (flag == "--asift-sequences")
@@ -323,9 +327,15 @@ int main(int argc, char** argv) {
     else {
       std::fprintf(stderr,
                    "usage: eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] "
-                   "[--sequences a,b] [--methods SUBSTRING] [--asift-sequences a,b|all]\n");
+                   "[--sequences a,b] [--methods SUBSTRING] [--shortlist F] [--asift-sequences a,b|all]\n");
       return 2;
     }
+  }
+  try {
+    base.check();
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "eval_viewpoint: %s\n", e.what());
+    return 2;
   }
   if (features < 1 || threads < 1 || !(view_features >= 0.0)) {
     std::fprintf(stderr, "eval_viewpoint: --features and --threads must be >= 1, --view-features >= 0\n");
@@ -349,20 +359,20 @@ int main(int argc, char** argv) {
   };
   auto quadtree = [view_features](affine_orb::ExtractorOptions& o) { o.view_features = view_features; };
   std::vector<Method> methods = {
-      ours<affine_orb::Rbrief>("ours plain rBRIEF " + n_image, features, 1.0, threads, strongest),
-      ours<affine_orb::Rbrief>("ours plain rBRIEF " + n_total, total, 1.0, threads, strongest),
-      ours<affine_orb::Rbrief>("ours affine rBRIEF", features, max_tilt, threads, strongest),
-      ours<affine_orb::Rbrief>("ours affine rBRIEF area split " + n_total, total, max_tilt, threads, area_split),
-      ours<affine_orb::Rbrief>("ours affine rBRIEF repeats +-1 level", features, max_tilt, threads,
+      ours<affine_orb::Rbrief>(base, "ours plain rBRIEF " + n_image, features, 1.0, threads, strongest),
+      ours<affine_orb::Rbrief>(base, "ours plain rBRIEF " + n_total, total, 1.0, threads, strongest),
+      ours<affine_orb::Rbrief>(base, "ours affine rBRIEF", features, max_tilt, threads, strongest),
+      ours<affine_orb::Rbrief>(base, "ours affine rBRIEF area split " + n_total, total, max_tilt, threads, area_split),
+      ours<affine_orb::Rbrief>(base, "ours affine rBRIEF repeats +-1 level", features, max_tilt, threads,
                                [view_features](affine_orb::ExtractorOptions& o) {
                                  o.view_features = view_features;
                                  o.spreading = affine_orb::Spreading::kStrongest;
                                  o.repeat_levels = 1;
                                }),
-      ours<affine_orb::Brisk>("ours plain BRISK " + n_total, total, 1.0, threads, strongest),
-      ours<affine_orb::Brisk>("ours affine BRISK", features, max_tilt, threads, strongest),
-      ours<affine_orb::Rbrief>("ours plain rBRIEF quadtree " + n_total, total, 1.0, threads, quadtree),
-      ours<affine_orb::Rbrief>("ours affine rBRIEF quadtree", features, max_tilt, threads, quadtree),
+      ours<affine_orb::Brisk>(base, "ours plain BRISK " + n_total, total, 1.0, threads, strongest),
+      ours<affine_orb::Brisk>(base, "ours affine BRISK", features, max_tilt, threads, strongest),
+      ours<affine_orb::Rbrief>(base, "ours plain rBRIEF quadtree " + n_total, total, 1.0, threads, quadtree),
+      ours<affine_orb::Rbrief>(base, "ours affine rBRIEF quadtree", features, max_tilt, threads, quadtree),
       peer("cv::ORB 1000", cv::ORB::create(1000)),
       peer("cv::ORB 2000", cv::ORB::create(2000)),
       peer("cv::BRISK", cv::BRISK::create()),

@@ -635,7 +635,7 @@ TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianB
   }
 }
 
-TEST_CASE("the area split's merge keeps exactly what a brute-force greedy merge keeps") {
+TEST_CASE("the area split's merge keeps exactly what a brute-force merge keeps") {
   // With an unbounded budget every candidate is returned, so kKeepAll lists all of them (by
   // octave, view, level, then raster order in the view) and kMerge the ones the merge kept.
   cv::Mat image;
@@ -659,27 +659,24 @@ TEST_CASE("the area split's merge keeps exactly what a brute-force greedy merge 
                                           std::log(options.pyramid.scale_factor)));
     };
 
+    // Views in index order; a candidate is dropped when a survivor of an earlier view of its
+    // level lies within the merge radius (repeat_levels 0).
     std::vector<std::size_t> expected;
-    for (int level = 0; level < options.pyramid.levels; ++level) {
-      std::vector<std::size_t> order;
+    for (int view = 0; view < static_cast<int>(views.size()); ++view) {
+      std::vector<std::size_t> survivors;
       for (std::size_t i = 0; i < all.size(); ++i) {
-        if (level_of(i) == level) order.push_back(i);
-      }
-      // Strongest first; ties to the lower view, then to the earlier position in that view.
-      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return all.keypoints[a].response > all.keypoints[b].response ||
-               (all.keypoints[a].response == all.keypoints[b].response && all.views[a] < all.views[b]);
-      });
-      const double radius = options.merge_radius * std::pow(options.pyramid.scale_factor, level);
-      for (std::size_t i : order) {
+        if (all.views[i] != view) continue;
+        const int level = level_of(i);
+        const double radius = options.merge_radius * std::pow(options.pyramid.scale_factor, level);
         bool duplicate = false;
         for (std::size_t k : expected) {
           if (level_of(k) != level) continue;
           const cv::Point2f d = all.keypoints[k].pt - all.keypoints[i].pt;
-          duplicate = duplicate || (all.views[k] != all.views[i] && std::hypot(d.x, d.y) < radius);
+          duplicate = duplicate || std::hypot(d.x, d.y) < radius;
         }
-        if (!duplicate) expected.push_back(i);
+        if (!duplicate) survivors.push_back(i);
       }
+      expected.insert(expected.end(), survivors.begin(), survivors.end());
     }
     // The merged output is the kept subset in the output order of all candidates.
     std::sort(expected.begin(), expected.end());

@@ -9,8 +9,11 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <condition_variable>
 #include <cstdint>
 #include <memory>
+#include <mutex>
+#include <numeric>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +22,7 @@
 
 #include "affine_orb/affine_views.hpp"
 #include "affine_orb/descriptor.hpp"
+#include "affine_orb/detail/buffer.hpp"
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/row_spans.hpp"
 #include "affine_orb/detail/view_regions.hpp"
@@ -34,9 +38,8 @@ namespace affine_orb {
 /// What to do when several views return the same scene point (SPEC §2).
 enum class DuplicatePolicy {
   kKeepAll,  ///< Keep every view's keypoint: best for wide-baseline matching of two images.
-  kMerge,    ///< Drop the keypoints that repeat a stronger one: with ViewBudget::kAdditive, see
-             ///< ExtractorOptions::repeat_octaves; with kAreaSplit, the keypoints of one level that
-             ///< other views put within ExtractorOptions::merge_radius of a stronger one.
+  kMerge,    ///< Drop a view's candidates that repeat a keypoint chosen by an earlier view (views in
+             ///< index order, the image first): see ExtractorOptions::repeat_levels and merge_radius.
 };
 
 /// How each (view, level) keeps its share of the budget among its candidates.
@@ -101,29 +104,44 @@ struct ExtractorOptions {
   /// Default 1, measured on the 31 Oxford pairs of bench/eval_viewpoint at 2000 keypoints in all:
   /// 1000 + 1000 found 7515 distinct correct matches in all, 500 + 1500 (3) 7307, the area split
   /// 6979; 3 does better only from about 40° of viewpoint change (graf 1→4 / 1→5 / 1→6: 147 / 72 /
-  /// 51 against 123 / 71 / 50). Must be in [0, 16]; ignored with kAreaSplit or max_tilt < √2.
+  /// 51 against 123 / 71 / 50) — figures of the whole-frame selection before shortlists (with
+  /// them the default finds 7352). Must be in [0, 16]; ignored with kAreaSplit or max_tilt < √2.
   double view_features = 1.0;
   /// ViewBudget::kAdditive: the tilted views share the views' budget in proportion to t^e for this
   /// exponent e. −1 is ASIFT's area weighting (a view of tilt t has 1/t of the image's pixels), 0
   /// equal shares; 1 (the more tilted views, which find what the image cannot, get more) measured
   /// best in bench/eval_viewpoint at 1000 + 1000 keypoints: 7515 distinct correct matches over the
   /// 31 Oxford pairs against 7464 (0) and 7403 (−1), graf 1→4 / 1→5 / 1→6 123 / 71 / 50 against
-  /// 120 / 66 / 49 and 116 / 59 / 36, for 414 against 421 and 429 at 1→2. Must be in [−4, 4].
+  /// 120 / 66 / 49 and 116 / 59 / 36, for 414 against 421 and 429 at 1→2 (whole-frame selection,
+  /// before shortlists). Must be in [−4, 4].
   double view_weight_exponent = 1.0;
   DuplicatePolicy duplicates = DuplicatePolicy::kMerge;
-  /// ViewBudget::kAdditive with DuplicatePolicy::kMerge: a tilted-view candidate of level l is a
-  /// repeat, and dropped before the budget, when a keypoint the image kept, or a stronger candidate
-  /// of another view (or of another level of its own view), of a level l' with |l − l'| <=
-  /// repeat_levels lies within merge_radius · s^max(l, l') original pixels. 0 (the same level
-  /// only): measured best for matching two images in bench/eval_viewpoint at 1000 + 1000
-  /// keypoints (1 found 2–13 % fewer distinct correct matches on graf 1→2 … 1→6 and 2.4 % fewer
-  /// over the 31 Oxford pairs: a corner's copy at the next level is not a wasted keypoint there).
-  /// Must be in [0, 4].
+  /// DuplicatePolicy::kMerge: a candidate of view v, level l is a repeat, and dropped before its
+  /// view's selection, when a keypoint chosen by an earlier view (lower index; the image is view 0)
+  /// of a level l' with |l − l'| <= repeat_levels lies within merge_radius · s^max(l, l') original
+  /// pixels. "Chosen" is the final keypoints for the image with kAdditive and, for a shortlist
+  /// (ExtractorOptions::shortlist), what it keeps at its nominal budget. 0 (the same level only):
+  /// measured best for matching two images in bench/eval_viewpoint at 1000 + 1000 keypoints: 1
+  /// found 7326 distinct correct matches over the 31 Oxford pairs against 7352, and 415 / 212 /
+  /// 111 / 65 / 40 on graf 1→2 … 1→6 against 440 / 215 / 116 / 62 / 49 (a corner's copy at the
+  /// next level is not a wasted keypoint there). Must be in [0, 4].
   int repeat_levels = 0;
   /// Location of the tilted views' keypoints in the original image.
   RefineOptions refine;
+  /// With several views: a view's pixels exist only while it is processed (one view's buffers per
+  /// thread, issue 16), so each (view, level) whose final share depends on the other views (every
+  /// tilted view with kAdditive, every view with kAreaSplit) describes a shortlist of up to
+  /// ceil(shortlist · its nominal budget) of its candidates, spread as the final selection is;
+  /// once every view is done, the carrying of shortfalls and the final spreading choose among the
+  /// shortlists. Above 1 it leaves room for carried shortfalls; larger costs description time
+  /// and, with kQuadtree, moves the final choice away from the spreading of all candidates.
+  /// 1.25 measured in bench/eval_viewpoint (31 Oxford pairs, 1000 + 1000 keypoints): quadtree
+  /// spreading found 6043 distinct correct matches in all against 5995 with 2; with kStrongest
+  /// the value makes no difference (7352). Must be in [1, 64].
+  double shortlist = 1.25;
   /// Radius in original pixels, times the level scale s^l, within which kMerge treats keypoints of
-  /// different views on the same level as one; 2 px is the SPEC §7 duplicate cell size.
+  /// different views as one (ExtractorOptions::repeat_levels); 2 px is the SPEC §7 duplicate cell
+  /// size.
   double merge_radius = 2.0;
   /// Selection within each (view, level); kQuadtree for SLAM, kStrongest for matching two images
   /// (bench/eval_viewpoint measures both).
@@ -149,6 +167,8 @@ struct ExtractorOptions {
     detail::require(repeat_levels >= 0 && repeat_levels <= 4,
                     "ExtractorOptions::repeat_levels must be in [0, 4], got " + std::to_string(repeat_levels));
     refine.check();
+    detail::require(std::isfinite(shortlist) && shortlist >= 1.0 && shortlist <= 64.0,
+                    "ExtractorOptions::shortlist must be in [1, 64], got " + std::to_string(shortlist));
     detail::require(duplicates == DuplicatePolicy::kKeepAll || duplicates == DuplicatePolicy::kMerge,
                     "ExtractorOptions::duplicates is invalid");
     detail::require(std::isfinite(merge_radius) && merge_radius > 0.0 && merge_radius <= 64.0,
@@ -162,7 +182,9 @@ struct ExtractorOptions {
 
 /// Extracts keypoints and descriptors from grey images.
 ///
-/// For an image of size W x H and every view v of ExtractorOptions::views (affine_views.hpp):
+/// For an image of size W x H and every view v of ExtractorOptions::views (affine_views.hpp), one
+/// view at a time on each thread (its pixels live in that thread's buffers only while it is
+/// processed; the image's pyramid is kept until the next call, see pyramid()):
 /// 1. the view is rendered (render_view()) and a pyramid of PyramidOptions::levels levels is built
 ///    on it; for a tilted view, level pixels farther than 8 level pixels from the original image
 ///    repeat the nearest computed pixel of their row (only descriptor reads beyond the image, which
@@ -174,26 +196,29 @@ struct ExtractorOptions {
 ///    its valid pixels hold no corner at the initial one. A candidate is kept if the mask pixel
 ///    nearest to its original position is non-zero;
 /// 3. ViewBudget::kAdditive: the image (view 0) keeps `features` of its candidates exactly as
-///    with max_tilt = 1 (step 4 on its own); then, with DuplicatePolicy::kMerge, the tilted views'
-///    candidates that repeat a kept image keypoint or a stronger tilted candidate are dropped
-///    (ExtractorOptions::repeat_levels), and the tilted views share view_features · features.
-///    ViewBudget::kAreaSplit: with kMerge, candidates of one level that other views put within
-///    merge_radius · s^l original pixels of a stronger one are dropped, and all views share
-///    `features`;
-/// 4. a budget is split over views (kAreaSplit: in proportion to their area 1/t; kAdditive, over
-///    the tilted views: to t^view_weight_exponent) and, within a view, over
-///    levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry()); each
-///    (view, level) keeps its share by quadtree spreading (distribute_quadtree()) in original
-///    coordinates, or its strongest candidates (select_strongest()), per
-///    ExtractorOptions::spreading;
-/// 5. kept keypoints are oriented and described in their view, then mapped back: position through
-///    the inverse view map, orientation by mapping the direction vector, scale s^l·√t (SPEC §1);
-///    a tilted view's keypoint is then snapped to a corner of the original image (RefineOptions).
+///    with max_tilt = 1 (step 4 on its own) and describes them; a tilted view, with
+///    DuplicatePolicy::kMerge, drops its candidates that repeat a keypoint the image kept
+///    (ExtractorOptions::repeat_levels), then describes a shortlist of each level
+///    (ExtractorOptions::shortlist). ViewBudget::kAreaSplit: every view describes shortlists;
+/// 4. once every view is done, with kMerge, shortlisted keypoints that repeat a stronger one of
+///    another view are dropped (kAdditive: ExtractorOptions::repeat_levels; kAreaSplit: the same
+///    level within merge_radius · s^l original pixels); then a budget is split over views
+///    (kAreaSplit: `features`, in proportion to their area 1/t; kAdditive: view_features ·
+///    features over the tilted views, in proportion to t^view_weight_exponent) and, within a view,
+///    over levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry());
+///    each (view, level) keeps its share by quadtree spreading (distribute_quadtree()) in original
+///    coordinates, or its strongest keypoints (select_strongest()), per ExtractorOptions::spreading;
+/// 5. keypoints are oriented and described in their view, then mapped back: position through the
+///    inverse view map, orientation by mapping the direction vector, scale s^l·√t (SPEC §1); a
+///    tilted view's keypoint is then snapped to a corner of the original image (RefineOptions).
 ///
 /// Output order: by octave (0 first), then by view, then by level, then raster order in the view.
+/// The output does not depend on ExtractorOptions::threads.
 ///
 /// An Extractor holds a workspace reused across calls (and, with ExtractorOptions::threads > 1, its
-/// worker threads): it can be moved, not copied. One instance must not be used by two threads at
+/// worker threads): it can be moved, not copied. Its size is the image's pyramid plus, per thread,
+/// the buffers of the largest view; once they have held the largest view of an image size, a call
+/// allocates only the three vectors it returns. One instance must not be used by two threads at
 /// once; separate instances share nothing.
 template <class Descriptor>
 class Extractor {
@@ -202,7 +227,11 @@ class Extractor {
   using DescriptorOptions = typename Descriptor::Options;
 
   explicit Extractor(ExtractorOptions options = {}, DescriptorOptions descriptor_options = {})
-      : options_((options.check(), options)), descriptor_(descriptor_options) {}
+      : options_((options.check(), options)),
+        descriptor_(descriptor_options),
+        image_pyramid_(options_.pyramid),
+        thread_work_(static_cast<std::size_t>(options_.threads), ThreadWork(options_.pyramid)),
+        turns_(std::make_unique<Turns>()) {}
 
   const ExtractorOptions& options() const { return options_; }
   const Descriptor& descriptor() const { return descriptor_; }
@@ -216,8 +245,8 @@ class Extractor {
 
   /// The pyramid of the original (untilted) image of the last extract() call.
   const Pyramid& pyramid() const {
-    detail::require(!view_work_.empty(), "Extractor::pyramid: extract() was not called yet");
-    return view_work_.front().pyramid;
+    detail::require(!view_work_.empty() && !image_pyramid_.empty(), "Extractor::pyramid: extract() was not called yet");
+    return image_pyramid_;
   }
 
   /// Keypoints (original pixel coordinates) and descriptors of a CV_8UC1 image (a ROI of a larger
@@ -234,60 +263,15 @@ class Extractor {
     detail::require_mask(mask, image.size(), "Extractor::extract");
     prepare_views(image.size());
     const int n_views = static_cast<int>(view_work_.size());
-    const int levels = options_.pyramid.levels;
-    const std::size_t threads = static_cast<std::size_t>(options_.threads);
-
-    scratch_.resize(threads);
-    merge_.resize(threads);
-    spread_.resize(threads);
-    for_each(n_views, [&](int v, int w) {
-      detect_view(image, mask, view_work_[static_cast<std::size_t>(v)], scratch_[static_cast<std::size_t>(w)]);
-    });
-    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(image.cols), static_cast<float>(image.rows));
     take_.assign(budgets_.size(), 0);
-    if (options_.view_budget == ViewBudget::kAdditive) {
-      // The image first, alone, exactly as with max_tilt = 1; then the tilted views around it.
-      take_range(0, levels);
-      for_each(levels, [&](int l, int w) { spread_level(0, l, region, spread_[static_cast<std::size_t>(w)]); });
-      if (n_views > 1) {
-        if (options_.duplicates == DuplicatePolicy::kMerge) suppress_repeats(image.size());
-        take_range(levels, n_views * levels);
-        for_each(n_views - 1, [&](int v, int w) {
-          for (int l = 0; l < levels; ++l) spread_level(v + 1, l, region, spread_[static_cast<std::size_t>(w)]);
-        });
-      }
-    } else {
-      if (options_.duplicates == DuplicatePolicy::kMerge && n_views > 1) merge_duplicates(image.size());
-      take_range(0, n_views * levels);
-      for_each(n_views, [&](int v, int w) {
-        for (int l = 0; l < levels; ++l) spread_level(v, l, region, spread_[static_cast<std::size_t>(w)]);
-      });
-    }
-    for_each(n_views, [&](int v, int) { describe_view(v, mask); });
+    if (merging()) reset_repeat_grids(image.size());
+    turns_->reset();
+    for_each(n_views, [&](int v, int w) { process_view(v, image, mask, thread_work_[static_cast<std::size_t>(w)]); });
+    if (n_views > 1) select_across_views(image.size());
     return assemble();
   }
 
  private:
-  /// A candidate in merge order, with its original position copied so that the visit in that
-  /// order reads memory sequentially.
-  struct MergeRef {
-    float response;
-    int view;
-    int index;
-    cv::Point2f point;
-  };
-  struct MergeKept {
-    cv::Point2f point;
-    int view;
-    int next;  ///< next kept candidate of the same cell, −1 at the end
-  };
-  /// Buffers of merge_duplicates() reused across frames.
-  struct MergeWork {
-    std::vector<MergeRef> order;
-    std::vector<int> head;  ///< per grid cell, the last kept candidate in it (−1: none)
-    std::vector<MergeKept> kept;
-  };
-
   /// Buffers of the budget step of one thread, reused across frames.
   struct SpreadWork {
     std::vector<cv::Point2f> points;
@@ -296,19 +280,9 @@ class Extractor {
     QuadtreeWorkspace quadtree;
   };
 
-  /// A tilted-view candidate in repeat-suppression order (suppress_repeats()).
-  struct RepeatRef {
-    float response;
-    int view;
-    int level;
-    int index;
-    cv::Point2f point;
-  };
-  /// A keypoint accepted by suppress_repeats(), in the grid of its level.
+  /// A keypoint accepted by the repeat suppression, in the grid of its level.
   struct RepeatKept {
     cv::Point2f point;
-    int view;
-    int level;
     int next;  ///< next accepted keypoint of the same cell, −1 at the end
   };
   /// Accepted keypoints of one level l on a grid of cells merge_radius · s^(l + repeat_levels)
@@ -325,36 +299,108 @@ class Extractor {
     }
   };
 
-  struct LevelWork {
-    RowSpans valid;  ///< level pixels whose support maps inside the original image (image-size dependent)
-    Candidates candidates;
-    std::vector<cv::Point2f> level_points;     ///< candidate positions, level pixels of the view
+  /// The candidates of one level of the view a thread is processing.
+  struct LevelCandidates {
+    Candidates detected;
+    std::vector<cv::Point2f> level_points;     ///< level pixels of the view
     std::vector<cv::Point2f> original_points;  ///< the same, original pixels
     std::vector<float> responses;
-    std::vector<int> alive;        ///< candidates that survived the support, mask and duplicate checks
-    std::vector<char> keep_flags;  ///< merge_duplicates(): candidate kept
-    std::vector<int> kept;         ///< candidates chosen by the budget
-    std::vector<cv::Point2f> kept_points;
-    typename Descriptor::LevelData descriptor_data;
-    std::vector<cv::KeyPoint> keypoints;
-    std::vector<BinaryDescriptor<kBits>> descriptors;
+    std::vector<int> chosen;  ///< the candidates to describe, ascending
   };
 
+  /// The buffers one thread processes views with, reused view after view and frame after frame:
+  /// everything that scales with a view's area.
+  struct ThreadWork {
+    explicit ThreadWork(const PyramidOptions& options) : pyramid(options) {}
+    cv::Mat scratch;  ///< one canvas row of the renderer
+    Pyramid pyramid;  ///< a tilted view's levels (the image's are image_pyramid_)
+    DetectorWorkspace detector;
+    std::vector<LevelCandidates> levels;
+    typename Descriptor::LevelData descriptor_data;  ///< one level at a time
+    std::vector<cv::Point2f> describe_points;
+    SpreadWork spread;
+  };
+
+  /// What a (view, level) keeps of its view once the view's pixels are gone: its described
+  /// keypoints (the final ones for the image with kAdditive, a shortlist otherwise), in raster
+  /// order of the view, and the selection among them.
+  struct LevelWork {
+    RowSpans valid;  ///< level pixels whose support maps inside the original image (image-size dependent)
+    std::vector<cv::Point2f> original_points;  ///< unrefined positions, original pixels
+    std::vector<float> responses;
+    std::vector<cv::KeyPoint> keypoints;
+    std::vector<BinaryDescriptor<kBits>> descriptors;
+    std::vector<int> kept;  ///< the output: indices into the described keypoints, ascending
+
+    void clear() {
+      original_points.clear();
+      responses.clear();
+      keypoints.clear();
+      descriptors.clear();
+      kept.clear();
+    }
+  };
+
+  /// A view and its per-level records (fixed for an image size, prepare_views()).
   struct ViewWork {
     AffineView view;
     detail::ViewRenderer renderer;
     /// Per level, the pixels computed (the rest repeats the row's edge pixels): level 0 is
     /// rendered, the others resized, within kRenderMargin level pixels of the image.
     std::vector<RowSpans> regions;
-    cv::Mat scratch;
-    cv::Mat image;
-    Pyramid pyramid;
     std::vector<LevelWork> levels;
+    int budget = 0;  ///< the view's nominal budget, summed over its levels
+  };
+
+  /// Gives the views their turn in index order for what depends on the views before them (the
+  /// repeat suppression, the image's pyramid for RefineOptions) while they render, detect and
+  /// describe in parallel. WorkerPool hands out views in increasing order, so a thread waiting
+  /// for its turn waits for views already being processed: no deadlock, and the output does not
+  /// depend on the number of threads.
+  struct Turns {
+    std::mutex mutex;
+    std::condition_variable changed;
+    int next = 0;         ///< the view whose turn it is
+    bool failed = false;  ///< a view threw: no turn comes any more
+
+    void reset() {
+      const std::lock_guard<std::mutex> lock(mutex);
+      next = 0;
+      failed = false;
+    }
+    /// Waits for view v's turn; false when a view failed (its exception is the one extract()
+    /// rethrows).
+    bool wait(int v) {
+      std::unique_lock<std::mutex> lock(mutex);
+      changed.wait(lock, [&] { return failed || next == v; });
+      return !failed;
+    }
+    void pass(int v) {
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        next = v + 1;
+      }
+      changed.notify_all();
+    }
+    void fail() {
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        failed = true;
+      }
+      changed.notify_all();
+    }
   };
 
   LevelWork& level_of(int v, int l) {
     return view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
   }
+
+  bool additive() const { return options_.view_budget == ViewBudget::kAdditive; }
+  bool merging() const { return options_.duplicates == DuplicatePolicy::kMerge; }
+
+  /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
+  /// only view), rather than a shortlist chosen from once every view is done.
+  bool direct(int v) const { return v == 0 && (additive() || view_work_.size() == 1); }
 
   /// (Re)builds the view set, the renderers and the valid regions when the image size changes;
   /// buffers are kept otherwise.
@@ -362,7 +408,8 @@ class Extractor {
     if (size == views_size_ && !view_work_.empty()) return;
     const std::vector<AffineView> views = make_views(options_.views, size);
     view_work_.clear();
-    view_work_.resize(views.size(), ViewWork{AffineView{}, {}, {}, {}, {}, Pyramid(options_.pyramid), {}});
+    view_work_.resize(views.size());
+    cv::Size largest_tilted;
     for (std::size_t v = 0; v < views.size(); ++v) {
       ViewWork& work = view_work_[v];
       work.view = views[v];
@@ -376,10 +423,14 @@ class Extractor {
         work.regions[static_cast<std::size_t>(l)] = detail::region_near_image(
             detail::level_to_original(work.view, level_size), level_size, size, kRenderMargin);
       }
+      if (v > 0) {
+        largest_tilted.width = std::max(largest_tilted.width, work.view.size.width);
+        largest_tilted.height = std::max(largest_tilted.height, work.view.size.height);
+      }
     }
     budgets_.clear();
     std::vector<int> per_view;
-    if (options_.view_budget == ViewBudget::kAdditive) {
+    if (additive()) {
       per_view = view_budgets(1, static_cast<int>(std::lround(options_.view_features * options_.features)),
                               options_.view_weight_exponent);
       per_view.front() = options_.features;
@@ -396,6 +447,16 @@ class Extractor {
       const std::vector<int> per_level =
           level_budgets(per_view[v], options_.pyramid.scale_factor, options_.pyramid.levels);
       budgets_.insert(budgets_.end(), per_level.begin(), per_level.end());
+      view_work_[v].budget = per_view[v];
+    }
+    // Every thread's buffers sized for the largest tilted view now, so that which thread gets
+    // which view in later frames never makes one allocate.
+    for (ThreadWork& work : thread_work_) {
+      work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      if (largest_tilted.area() > 0) {
+        work.pyramid.reserve(largest_tilted);
+        detail::fit_buffer(work.detector.scores, largest_tilted, CV_8UC1);
+      }
     }
     views_size_ = size;
   }
@@ -445,194 +506,173 @@ class Extractor {
   }
 
   /// take_[g] for the (view, level) groups g in [begin, end) (index v·levels + l): their budgets
-  /// with shortfalls carried among them (allocate_with_carry()), given what each offers.
+  /// with shortfalls carried among them (allocate_with_carry()), given available_[g − begin], what
+  /// each offers.
   void take_range(int begin, int end) {
-    const int levels = options_.pyramid.levels;
     range_budgets_.assign(budgets_.begin() + begin, budgets_.begin() + end);
-    available_.clear();
-    for (int g = begin; g < end; ++g)
-      available_.push_back(static_cast<int>(level_of(g / levels, g % levels).alive.size()));
     allocate_with_carry(range_budgets_, available_, range_take_);
     std::copy(range_take_.begin(), range_take_.end(), take_.begin() + begin);
   }
 
-  /// Step 4 for (view v, level l): keeps take_ of its surviving candidates, by quadtree spreading
-  /// or strength (ExtractorOptions::spreading), into LevelWork::kept.
-  void spread_level(int v, int l, const cv::Rect2f& region, SpreadWork& spread) {
-    LevelWork& work = level_of(v, l);
-    spread.points.clear();
-    spread.responses.clear();
-    for (int i : work.alive) {
-      spread.points.push_back(work.original_points[static_cast<std::size_t>(i)]);
-      spread.responses.push_back(work.responses[static_cast<std::size_t>(i)]);
+  /// Steps 1–3 and 5 for view v on the thread owning `work`.
+  void process_view(int v, const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
+    try {
+      process(v, image, mask, work);
+    } catch (...) {
+      turns_->fail();
+      throw;
     }
-    const int target = take_[static_cast<std::size_t>(v * options_.pyramid.levels + l)];
-    if (options_.spreading == Spreading::kQuadtree) {
-      distribute_quadtree(spread.points, spread.responses, region, target, spread.quadtree, spread.kept);
-    } else {
-      select_strongest(spread.responses, target, spread.kept);
-    }
-    work.kept.clear();
-    for (int k : spread.kept) work.kept.push_back(work.alive[static_cast<std::size_t>(k)]);
   }
 
-  /// Step 1–2 for one view: render, pyramid, candidates in the valid regions, mask check.
-  void detect_view(const cv::Mat& image, const cv::Mat& mask, ViewWork& work, DetectorWorkspace& detector) {
-    work.renderer.render(image, &work.regions.front(), work.scratch, work.image);
-    work.pyramid.build_swap(work.image, work.view.is_identity() ? nullptr : &work.regions);
+  /// Render, pyramid and candidates; in view v's turn, the repeats dropped and the keypoints to
+  /// describe chosen (the final ones when direct(), else the shortlists), entered in the repeat
+  /// grids; after the turn, their description.
+  void process(int v, const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
+    ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+    const int levels = options_.pyramid.levels;
+    for (LevelWork& level : view.levels) level.clear();
+    const bool empty = v != 0 && view.budget == 0;  // nothing of it could be kept
+    Pyramid& pyramid = v == 0 ? image_pyramid_ : work.pyramid;
+    if (!empty) {
+      view.renderer.render(image, &view.regions.front(), work.scratch, pyramid.level0(view.view.size));
+      pyramid.build_from_level0(view.view.is_identity() ? nullptr : &view.regions);
+      detect_view(v, image, mask, pyramid, work);
+    }
+    if (!turns_->wait(v)) return;
+    if (empty) {
+      turns_->pass(v);
+      return;
+    }
+    if (merging()) drop_repeats(v, work);
+    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(image.cols), static_cast<float>(image.rows));
+    if (direct(v)) {
+      available_.clear();
+      for (const LevelCandidates& c : work.levels) available_.push_back(static_cast<int>(c.responses.size()));
+      take_range(0, levels);
+    }
+    for (int l = 0; l < levels; ++l) {
+      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+      const std::size_t g = static_cast<std::size_t>(v * levels + l);
+      const int target = direct(v) ? take_[g]
+                                   : static_cast<int>(std::min<double>(static_cast<double>(c.responses.size()),
+                                                                       std::ceil(options_.shortlist * budgets_[g])));
+      spread(c.original_points, c.responses, region, target, work.spread);
+      c.chosen = work.spread.kept;
+      if (merging()) enter_repeat_references(c, l, direct(v) ? target : budgets_[g], region, work.spread);
+    }
+    turns_->pass(v);
+    for (int l = 0; l < levels; ++l) {
+      describe_level(v, l, pyramid, mask, work);
+      if (direct(v)) {
+        LevelWork& level = view.levels[static_cast<std::size_t>(l)];
+        level.kept.resize(level.keypoints.size());
+        std::iota(level.kept.begin(), level.kept.end(), 0);
+      }
+    }
+  }
+
+  /// Step 2 for view v: candidates of every level into work.levels, with the support and mask checks.
+  void detect_view(int v, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, ThreadWork& work) {
+    const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
     const int border = support_border();
-    const cv::Matx23d& back = work.view.to_original;
+    const cv::Matx23d& back = view.view.to_original;
     for (int l = 0; l < options_.pyramid.levels; ++l) {
-      LevelWork& level = work.levels[static_cast<std::size_t>(l)];
-      level.level_points.clear();
-      level.original_points.clear();
-      level.responses.clear();
-      level.alive.clear();
-      if (level.valid.rows() == 0) continue;
-      const cv::Mat& level_image = work.pyramid.level(l);
-      detect_candidates(level_image, level.valid, cv::Point(border, border), options_.detector, detector,
-                        level.candidates);
-      const Candidates& candidates = level.candidates;
-      for (std::size_t i = 0; i < candidates.corners.size(); ++i) {
-        const Corner& c = candidates.corners[i];
-        const cv::Point2f p(static_cast<float>(c.x), static_cast<float>(c.y));
-        const cv::Point2d q = apply_affine(back, work.pyramid.to_level0(p, l));
+      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+      c.level_points.clear();
+      c.original_points.clear();
+      c.responses.clear();
+      const RowSpans& valid = view.levels[static_cast<std::size_t>(l)].valid;
+      if (valid.rows() == 0) continue;
+      detect_candidates(pyramid.level(l), valid, cv::Point(border, border), options_.detector, work.detector,
+                        c.detected);
+      for (std::size_t i = 0; i < c.detected.corners.size(); ++i) {
+        const Corner& corner = c.detected.corners[i];
+        const cv::Point2f p(static_cast<float>(corner.x), static_cast<float>(corner.y));
+        const cv::Point2d q = apply_affine(back, pyramid.to_level0(p, l));
         const int mx = cvRound(q.x);
         const int my = cvRound(q.y);
         if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) continue;
         if (!mask.empty() && mask.at<std::uint8_t>(my, mx) == 0) continue;
-        level.alive.push_back(static_cast<int>(level.level_points.size()));
-        level.level_points.push_back(p);
-        level.original_points.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
-        level.responses.push_back(candidates.responses[i]);
+        c.level_points.push_back(p);
+        c.original_points.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+        c.responses.push_back(c.detected.responses[i]);
       }
     }
   }
 
-  /// Step 3: per level, visits candidates from the strongest down (ties: lower view, lower index)
-  /// and drops one when a kept candidate of another view lies within the merge radius. Integer
-  /// (FAST) responses are visited by a counting sort, others by a comparison sort; kept candidates
-  /// are found again through a grid of cells one radius wide over the original image.
-  void merge_duplicates(cv::Size size) {
-    for_each(options_.pyramid.levels, [&](int l, int w) { merge_level(l, size, merge_[static_cast<std::size_t>(w)]); });
+  /// Keeps take of `points` by quadtree spreading or strength (ExtractorOptions::spreading), into
+  /// spread.kept (ascending indices).
+  void spread(const std::vector<cv::Point2f>& points, const std::vector<float>& responses, const cv::Rect2f& region,
+              int target, SpreadWork& work) const {
+    if (options_.spreading == Spreading::kQuadtree) {
+      distribute_quadtree(points, responses, region, target, work.quadtree, work.kept);
+    } else {
+      select_strongest(responses, target, work.kept);
+    }
   }
 
-  /// merge_duplicates() for level l, with the buffers `m`.
-  void merge_level(int l, cv::Size size, MergeWork& m) {
+  /// Step 5 for the chosen candidates of view v, level l: orientation and descriptor in
+  /// the view, keypoints mapped back (and, for a tilted view, refined on the original image:
+  /// RefineOptions), appended to the level's record.
+  void describe_level(int v, int l, const Pyramid& pyramid, const cv::Mat& mask, ThreadWork& work) {
+    const LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+    const std::vector<int>& chosen = c.chosen;
+    if (chosen.empty()) return;
+    const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+    LevelWork& level = view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
+    const cv::Matx23d& back = view.view.to_original;
+    const bool identity = view.view.is_identity();
+    work.describe_points.clear();
+    for (int i : chosen) work.describe_points.push_back(c.level_points[static_cast<std::size_t>(i)]);
+    descriptor_.prepare(pyramid.level(l), work.describe_points, work.descriptor_data);
+    const float scale = static_cast<float>(options_.pyramid.scale(l) * std::sqrt(view.view.tilt));
+    const int octave = std::min(l + octave_shift_[static_cast<std::size_t>(v)], options_.pyramid.levels - 1);
+    for (int i : chosen) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      const cv::Point2f p = c.level_points[k];
+      const float angle = descriptor_.orientation(work.descriptor_data, p);
+      level.descriptors.push_back(descriptor_.describe(work.descriptor_data, p, angle));
+      // The direction (cos θ, sin θ) in the view, mapped to the original image.
+      const double dx = back(0, 0) * std::cos(angle) + back(0, 1) * std::sin(angle);
+      const double dy = back(1, 0) * std::cos(angle) + back(1, 1) * std::sin(angle);
+      const float original_angle = identity ? angle : static_cast<float>(std::atan2(dy, dx));
+      cv::Point2f position = c.original_points[k];
+      if (!identity && options_.refine.enabled) {
+        if (const std::optional<cv::Point2f> refined = refine_point(position, octave, mask)) position = *refined;
+      }
+      level.keypoints.emplace_back(position, Descriptor::kPatchSize * scale, radians_to_degrees_0_360(original_angle),
+                                   c.responses[k], octave);
+      level.original_points.push_back(c.original_points[k]);
+      level.responses.push_back(c.responses[k]);
+    }
+  }
+
+  /// Step 4, once every view is done: the budget with carried shortfalls over the views whose
+  /// keypoints are shortlists, and each one's final selection among its shortlist.
+  void select_across_views(cv::Size size) {
     const int n_views = static_cast<int>(view_work_.size());
-    order_candidates(l, m);
-    const double radius = options_.merge_radius * options_.pyramid.scale(l);
-    const double radius_squared = radius * radius;
-    const double cell = radius;
-    // Cells of points in [−0.5, W − 0.5): floor(x / cell) + 1 lies in [0, columns − 1].
-    const int columns = static_cast<int>(std::floor(size.width / cell)) + 3;
-    const int rows = static_cast<int>(std::floor(size.height / cell)) + 3;
-    m.head.assign(static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows), -1);
-    m.kept.clear();
-    for (int v = 0; v < n_views; ++v) {
-      LevelWork& work = level_of(v, l);
-      work.keep_flags.assign(work.level_points.size(), 0);
+    const int levels = options_.pyramid.levels;
+    const int first = additive() ? 1 : 0;
+    available_.clear();
+    for (int g = first * levels; g < n_views * levels; ++g) {
+      available_.push_back(static_cast<int>(level_of(g / levels, g % levels).keypoints.size()));
     }
-    for (const MergeRef& r : m.order) {
-      const cv::Point2f& p = r.point;
-      const int cx = static_cast<int>(std::floor(p.x / cell)) + 1;
-      const int cy = static_cast<int>(std::floor(p.y / cell)) + 1;
-      bool duplicate = false;
-      for (int y = cy - 1; y <= cy + 1 && !duplicate; ++y) {
-        for (int x = cx - 1; x <= cx + 1 && !duplicate; ++x) {
-          for (int k = m.head[static_cast<std::size_t>(y) * static_cast<std::size_t>(columns) +
-                              static_cast<std::size_t>(x)];
-               k >= 0; k = m.kept[static_cast<std::size_t>(k)].next) {
-            const MergeKept& o = m.kept[static_cast<std::size_t>(k)];
-            const double dx = o.point.x - p.x;
-            const double dy = o.point.y - p.y;
-            if (o.view != r.view && dx * dx + dy * dy < radius_squared) {
-              duplicate = true;
-              break;
-            }
-          }
-        }
+    take_range(first * levels, n_views * levels);
+    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));
+    for_each(n_views - first, [&](int i, int w) {
+      ThreadWork& work = thread_work_[static_cast<std::size_t>(w)];
+      for (int l = 0; l < levels; ++l) {
+        LevelWork& level = level_of(i + first, l);
+        spread(level.original_points, level.responses, region,
+               take_[static_cast<std::size_t>((i + first) * levels + l)], work.spread);
+        level.kept = work.spread.kept;
       }
-      if (duplicate) continue;
-      int& head =
-          m.head[static_cast<std::size_t>(cy) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(cx)];
-      m.kept.push_back({p, r.view, head});
-      head = static_cast<int>(m.kept.size()) - 1;
-      level_of(r.view, l).keep_flags[static_cast<std::size_t>(r.index)] = 1;
-    }
-    for (int v = 0; v < n_views; ++v) {
-      LevelWork& work = level_of(v, l);
-      work.alive.clear();
-      for (std::size_t i = 0; i < work.keep_flags.size(); ++i) {
-        if (work.keep_flags[i]) work.alive.push_back(static_cast<int>(i));
-      }
-    }
-  }
-
-  /// Whether every response is a FAST score (an integer in [0, 255]), so that candidates can be
-  /// ordered by a counting sort.
-  static bool fast_scores(const std::vector<float>& responses) {
-    return std::all_of(responses.begin(), responses.end(),
-                       [](float r) { return r >= 0.0f && r <= 255.0f && r == std::floor(r); });
-  }
-
-  /// `out` = the elements `visit` offers, by descending FAST score 0..255, in the order offered
-  /// within a score (a counting sort). visit(take) calls take(score, element) for every element,
-  /// the same sequence each time it is called (twice: counting, then placing).
-  template <class Visit, class Ref>
-  static void order_by_score(Visit visit, std::vector<Ref>& out) {
-    std::array<int, 257> start{};
-    visit([&](float score, const Ref&) { ++start[static_cast<std::size_t>(256 - static_cast<int>(score))]; });
-    int total = 0;
-    for (int& count : start) {
-      const int c = count;
-      count = total;
-      total += c;
-    }
-    out.resize(static_cast<std::size_t>(total));
-    visit([&](float score, const Ref& ref) {
-      out[static_cast<std::size_t>(start[static_cast<std::size_t>(256 - static_cast<int>(score))]++)] = ref;
     });
   }
 
-  /// `out` = the elements `visit` offers (see order_by_score()), strongest first, ties in the order
-  /// offered: by a counting sort when every score is a FAST score (`integral`), else by a stable
-  /// comparison sort.
-  template <class Visit, class Ref>
-  static void order_strongest_first(Visit visit, bool integral, std::vector<Ref>& out) {
-    if (integral) {
-      order_by_score(visit, out);
-      return;
-    }
-    out.clear();
-    visit([&](float, const Ref& ref) { out.push_back(ref); });
-    std::stable_sort(out.begin(), out.end(), [](const Ref& a, const Ref& b) { return a.response > b.response; });
-  }
-
-  /// m.order: the candidates of level l, strongest first, ties to the lower view, then the lower
-  /// index.
-  void order_candidates(int l, MergeWork& m) {
-    const int n_views = static_cast<int>(view_work_.size());
-    // Views, then indices, in increasing order: the tie order.
-    const auto visit = [&](auto&& take) {
-      for (int v = 0; v < n_views; ++v) {
-        const LevelWork& work = level_of(v, l);
-        for (int i : work.alive) {
-          const float r = work.responses[static_cast<std::size_t>(i)];
-          take(r, MergeRef{r, v, i, work.original_points[static_cast<std::size_t>(i)]});
-        }
-      }
-    };
-    bool integral = true;
-    for (int v = 0; v < n_views && integral; ++v) integral = fast_scores(level_of(v, l).responses);
-    order_strongest_first(visit, integral, m.order);
-  }
-
-  /// ViewBudget::kAdditive, step 3: visits the tilted views' candidates from the strongest down
-  /// (ties: lower view, lower level, lower index) and drops each one that repeats a keypoint kept
-  /// from the image or an already accepted tilted candidate (ExtractorOptions::repeat_levels).
-  void suppress_repeats(cv::Size size) {
-    const int n_views = static_cast<int>(view_work_.size());
+  /// DuplicatePolicy::kMerge: empties the repeat grids, one per level l with cells
+  /// merge_radius · s^(l + repeat_levels) wide over the original image.
+  void reset_repeat_grids(cv::Size size) {
     const int levels = options_.pyramid.levels;
     const int reach = options_.repeat_levels;
     repeat_grids_.resize(static_cast<std::size_t>(levels));
@@ -647,82 +687,70 @@ class Extractor {
       grid.head.assign(static_cast<std::size_t>(grid.columns) * static_cast<std::size_t>(rows), -1);
     }
     repeat_kept_.clear();
-    auto accept = [&](cv::Point2f p, int v, int l) {
-      RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(l)];
+  }
+
+  /// Enters in the repeat grid of level l what later views must not repeat of the chosen
+  /// candidates of `c`: those a selection of `take` among them keeps (all of them when they are
+  /// the final keypoints; for a shortlist, its nominal budget: the final selection when no
+  /// shortfall is carried, so that the rest of the shortlist suppresses nothing).
+  void enter_repeat_references(const LevelCandidates& c, int l, int take, const cv::Rect2f& region, SpreadWork& work) {
+    work.points.clear();
+    work.responses.clear();
+    for (int i : c.chosen) {
+      work.points.push_back(c.original_points[static_cast<std::size_t>(i)]);
+      work.responses.push_back(c.responses[static_cast<std::size_t>(i)]);
+    }
+    spread(work.points, work.responses, region, std::min(take, static_cast<int>(work.points.size())), work);
+    RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(l)];
+    for (int k : work.kept) {
+      const cv::Point2f p = work.points[static_cast<std::size_t>(k)];
       int& head = grid.head[grid.index(p, 0, 0)];
-      repeat_kept_.push_back({p, v, l, head});
+      repeat_kept_.push_back({p, head});
       head = static_cast<int>(repeat_kept_.size()) - 1;
-    };
-    for (int l = 0; l < levels; ++l) {
-      const LevelWork& work = level_of(0, l);
-      for (int i : work.kept) accept(work.original_points[static_cast<std::size_t>(i)], 0, l);
-    }
-    order_tilted_candidates();
-    for (int v = 1; v < n_views; ++v) {
-      for (int l = 0; l < levels; ++l) {
-        LevelWork& work = level_of(v, l);
-        work.keep_flags.assign(work.level_points.size(), 0);
-      }
-    }
-    for (const RepeatRef& r : repeat_order_) {
-      bool repeat = false;
-      for (int q = std::max(r.level - reach, 0); q <= std::min(r.level + reach, levels - 1) && !repeat; ++q) {
-        const RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(q)];
-        const double radius_squared = repeat_grids_[static_cast<std::size_t>(std::max(r.level, q))].radius_squared;
-        for (int dy = -1; dy <= 1 && !repeat; ++dy) {
-          for (int dx = -1; dx <= 1 && !repeat; ++dx) {
-            for (int k = grid.head[grid.index(r.point, dx, dy)]; k >= 0;
-                 k = repeat_kept_[static_cast<std::size_t>(k)].next) {
-              const RepeatKept& e = repeat_kept_[static_cast<std::size_t>(k)];
-              // Candidates of one view and level are distinct corners (FAST's non-maximum suppression).
-              if (e.view == r.view && e.level == r.level) continue;
-              const double ex = e.point.x - r.point.x;
-              const double ey = e.point.y - r.point.y;
-              if (ex * ex + ey * ey < radius_squared) {
-                repeat = true;
-                break;
-              }
-            }
-          }
-        }
-      }
-      if (repeat) continue;
-      accept(r.point, r.view, r.level);
-      level_of(r.view, r.level).keep_flags[static_cast<std::size_t>(r.index)] = 1;
-    }
-    for (int v = 1; v < n_views; ++v) {
-      for (int l = 0; l < levels; ++l) {
-        LevelWork& work = level_of(v, l);
-        work.alive.clear();
-        for (std::size_t i = 0; i < work.keep_flags.size(); ++i) {
-          if (work.keep_flags[i]) work.alive.push_back(static_cast<int>(i));
-        }
-      }
     }
   }
 
-  /// repeat_order_: the surviving candidates of the tilted views, strongest first, ties to the
-  /// lower view, then level, then index (a counting sort for FAST's integer scores).
-  void order_tilted_candidates() {
-    const int n_views = static_cast<int>(view_work_.size());
+  /// Whether a candidate of level l at p (original pixels) repeats a keypoint chosen by an
+  /// earlier view: one of a level l' with |l − l'| <= repeat_levels within merge_radius ·
+  /// s^max(l, l').
+  bool repeats(cv::Point2f p, int l) const {
     const int levels = options_.pyramid.levels;
-    // Views, then levels, then indices, in increasing order: the tie order.
-    const auto visit = [&](auto&& take) {
-      for (int v = 1; v < n_views; ++v) {
-        for (int l = 0; l < levels; ++l) {
-          const LevelWork& work = level_of(v, l);
-          for (int i : work.alive) {
-            const float r = work.responses[static_cast<std::size_t>(i)];
-            take(r, RepeatRef{r, v, l, i, work.original_points[static_cast<std::size_t>(i)]});
+    const int reach = options_.repeat_levels;
+    for (int q = std::max(l - reach, 0); q <= std::min(l + reach, levels - 1); ++q) {
+      const RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(q)];
+      const double radius_squared = repeat_grids_[static_cast<std::size_t>(std::max(l, q))].radius_squared;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          for (int k = grid.head[grid.index(p, dx, dy)]; k >= 0; k = repeat_kept_[static_cast<std::size_t>(k)].next) {
+            const cv::Point2f e = repeat_kept_[static_cast<std::size_t>(k)].point;
+            const double ex = e.x - p.x;
+            const double ey = e.y - p.y;
+            if (ex * ex + ey * ey < radius_squared) return true;
           }
         }
       }
-    };
-    bool integral = true;
-    for (int v = 1; v < n_views && integral; ++v) {
-      for (int l = 0; l < levels && integral; ++l) integral = fast_scores(level_of(v, l).responses);
     }
-    order_strongest_first(visit, integral, repeat_order_);
+    return false;
+  }
+
+  /// DuplicatePolicy::kMerge, in view v's turn: drops its candidates that repeat a keypoint chosen
+  /// by an earlier view (repeats()).
+  void drop_repeats(int v, ThreadWork& work) const {
+    if (v == 0) return;
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+      std::size_t n = 0;
+      for (std::size_t i = 0; i < c.responses.size(); ++i) {
+        if (repeats(c.original_points[i], l)) continue;
+        c.level_points[n] = c.level_points[i];
+        c.original_points[n] = c.original_points[i];
+        c.responses[n] = c.responses[i];
+        ++n;
+      }
+      c.level_points.resize(n);
+      c.original_points.resize(n);
+      c.responses.resize(n);
+    }
   }
 
   /// RefineOptions: the strongest FAST corner of the original image's level o within
@@ -730,7 +758,7 @@ class Extractor {
   /// one scores at least the detector's minimum threshold and lies where the mask allows (ties:
   /// the nearer pixel, then raster order).
   std::optional<cv::Point2f> refine_point(cv::Point2f point, int o, const cv::Mat& mask) const {
-    const Pyramid& original = view_work_.front().pyramid;
+    const Pyramid& original = image_pyramid_;
     const cv::Mat& level = original.level(o);
     const cv::Size base = original.level(0).size();
     const double rx = static_cast<double>(base.width) / level.cols;
@@ -763,42 +791,6 @@ class Extractor {
     return refined;
   }
 
-  /// Step 5 for view v: orientation and descriptor in the view, keypoints mapped back (and, for a
-  /// tilted view, refined on the original image: RefineOptions).
-  void describe_view(int v, const cv::Mat& mask) {
-    ViewWork& work = view_work_[static_cast<std::size_t>(v)];
-    const cv::Matx23d& back = work.view.to_original;
-    const float sqrt_tilt = static_cast<float>(std::sqrt(work.view.tilt));
-    const bool identity = work.view.is_identity();
-    const int top = options_.pyramid.levels - 1;
-    for (int l = 0; l < options_.pyramid.levels; ++l) {
-      LevelWork& level = work.levels[static_cast<std::size_t>(l)];
-      level.keypoints.clear();
-      level.descriptors.clear();
-      if (level.kept.empty()) continue;
-      level.kept_points.clear();
-      for (int i : level.kept) level.kept_points.push_back(level.level_points[static_cast<std::size_t>(i)]);
-      descriptor_.prepare(work.pyramid.level(l), level.kept_points, level.descriptor_data);
-      const float scale = static_cast<float>(options_.pyramid.scale(l)) * sqrt_tilt;
-      const int octave = std::min(l + octave_shift_[static_cast<std::size_t>(v)], top);
-      for (int i : level.kept) {
-        const cv::Point2f p = level.level_points[static_cast<std::size_t>(i)];
-        const float angle = descriptor_.orientation(level.descriptor_data, p);
-        level.descriptors.push_back(descriptor_.describe(level.descriptor_data, p, angle));
-        // The direction (cos θ, sin θ) in the view, mapped to the original image.
-        const double dx = back(0, 0) * std::cos(angle) + back(0, 1) * std::sin(angle);
-        const double dy = back(1, 0) * std::cos(angle) + back(1, 1) * std::sin(angle);
-        const float original_angle = identity ? angle : static_cast<float>(std::atan2(dy, dx));
-        cv::Point2f position = level.original_points[static_cast<std::size_t>(i)];
-        if (!identity && options_.refine.enabled) {
-          if (const std::optional<cv::Point2f> refined = refine_point(position, octave, mask)) position = *refined;
-        }
-        level.keypoints.emplace_back(position, Descriptor::kPatchSize * scale, radians_to_degrees_0_360(original_angle),
-                                     level.responses[static_cast<std::size_t>(i)], octave);
-      }
-    }
-  }
-
   /// The output: keypoints grouped by octave (0 first), then by view, then level, then raster order
   /// in the view.
   Features<kBits> assemble() {
@@ -806,7 +798,9 @@ class Extractor {
     octave_start_.assign(static_cast<std::size_t>(levels) + 1, 0);
     for (const ViewWork& w : view_work_) {
       for (const LevelWork& level : w.levels) {
-        for (const cv::KeyPoint& kp : level.keypoints) ++octave_start_[static_cast<std::size_t>(kp.octave) + 1];
+        for (int i : level.kept) {
+          ++octave_start_[static_cast<std::size_t>(level.keypoints[static_cast<std::size_t>(i)].octave) + 1];
+        }
       }
     }
     for (int o = 0; o < levels; ++o)
@@ -818,11 +812,11 @@ class Extractor {
     features.views.resize(total);
     for (std::size_t v = 0; v < view_work_.size(); ++v) {
       for (const LevelWork& level : view_work_[v].levels) {
-        for (std::size_t i = 0; i < level.keypoints.size(); ++i) {
-          const std::size_t slot =
-              static_cast<std::size_t>(octave_start_[static_cast<std::size_t>(level.keypoints[i].octave)]++);
-          features.keypoints[slot] = level.keypoints[i];
-          features.descriptors[slot] = level.descriptors[i];
+        for (int i : level.kept) {
+          const cv::KeyPoint& kp = level.keypoints[static_cast<std::size_t>(i)];
+          const std::size_t slot = static_cast<std::size_t>(octave_start_[static_cast<std::size_t>(kp.octave)]++);
+          features.keypoints[slot] = kp;
+          features.descriptors[slot] = level.descriptors[static_cast<std::size_t>(i)];
           features.views[slot] = static_cast<int>(v);
         }
       }
@@ -831,32 +825,30 @@ class Extractor {
   }
 
   ExtractorOptions options_;
-  /// Budget of each (view, level), index v·levels + l: views in proportion to their area 1/t,
-  /// levels geometric within a view (fixed for a view set, computed by prepare_views()).
+  Descriptor descriptor_;
+  /// Budget of each (view, level), index v·levels + l: views as ExtractorOptions::view_budget
+  /// says, levels geometric within a view (fixed for a view set, computed by prepare_views()).
   std::vector<int> budgets_;
-  /// Per frame: candidates each (view, level) offers, and what it takes (allocate_with_carry());
-  /// the budgets of the groups take_range() allocates, and their result.
-  std::vector<int> available_;
+  /// Per frame: what each (view, level) takes (allocate_with_carry()); the candidates offered,
+  /// budgets and result of the groups take_range() allocates.
   std::vector<int> take_;
+  std::vector<int> available_;
   std::vector<int> range_budgets_;
   std::vector<int> range_take_;
   /// Per view (fixed for a view set, prepare_views()): a keypoint of its level l has the octave
   /// min(l + octave_shift_, levels − 1), the level nearest to its scale s^l·√t.
   std::vector<int> octave_shift_;
-  /// Buffers of suppress_repeats() and assemble().
-  std::vector<RepeatRef> repeat_order_;
+  /// The repeat grids (kMerge) and the buffer of assemble().
   std::vector<RepeatKept> repeat_kept_;
   std::vector<RepeatGrid> repeat_grids_;
   std::vector<int> octave_start_;
-  /// Per worker thread: the buffers of the budget step.
-  std::vector<SpreadWork> spread_;
-  /// Per worker thread: the buffers of merge_level().
-  std::vector<MergeWork> merge_;
-  /// Per worker thread: the detection buffers (one score map reused by every level of every view).
-  std::vector<DetectorWorkspace> scratch_;
-  Descriptor descriptor_;
   cv::Size views_size_;
   std::vector<ViewWork> view_work_;
+  /// The image's pyramid, kept until the next call (pyramid(), RefineOptions).
+  Pyramid image_pyramid_;
+  /// Per worker thread: the buffers views are processed in.
+  std::vector<ThreadWork> thread_work_;
+  std::unique_ptr<Turns> turns_;
   /// The worker threads when options_.threads > 1, started by the first extract().
   std::unique_ptr<detail::WorkerPool> pool_;
 };

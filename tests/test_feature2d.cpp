@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -145,4 +146,19 @@ TEST_CASE("bad input through the interface gives the library's errors") {
   f2d->detectAndCompute(cv::Mat(64, 64, CV_8UC1, cv::Scalar(7)), cv::noArray(), keypoints, descriptors);
   CHECK(keypoints.empty());
   CHECK(descriptors.empty());
+  // Given keypoints with a NaN or infinite angle (fuzz_describe's case): rBRIEF's rotated test
+  // points would be undefined, so both descriptors reject them; −infinity is < 0, "not computed".
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(100, 100, 120, 120)).clone();
+  for (const auto kind : {affine_orb::DescriptorKind::kRbrief, affine_orb::DescriptorKind::kBrisk}) {
+    const cv::Ptr<cv::Feature2D> f = affine_orb::create_feature2d({}, kind);
+    for (const float angle : {std::nanf(""), std::numeric_limits<float>::infinity()}) {
+      std::vector<cv::KeyPoint> given{cv::KeyPoint(60.0f, 60.0f, 31.0f, angle, 0.0f, 0)};
+      CHECK_THROWS_AS(f->compute(image, given, descriptors), std::invalid_argument);
+    }
+    std::vector<cv::KeyPoint> given{cv::KeyPoint(60.0f, 60.0f, 31.0f, -std::numeric_limits<float>::infinity(), 0.0f, 0)};
+    f->compute(image, given, descriptors);
+    REQUIRE(given.size() == 1);
+    CHECK(given[0].angle >= 0.0f);
+    CHECK(given[0].angle < 360.0f);
+  }
 }

@@ -81,7 +81,8 @@ class Feature2DExtractor : public cv::Feature2D {
   /// there, written back. An angle that is, in degrees, exactly the orientation there (as for the
   /// Extractor's own keypoints of the image) is used at full precision, so that those keypoints get
   /// exactly their Extractor descriptors. Keypoints whose support does not fit in the level are
-  /// removed from `keypoints`, as OpenCV's extractors do.
+  /// removed from `keypoints`, as OpenCV's extractors do. A non-finite angle throws
+  /// std::invalid_argument.
   void compute_given(const cv::Mat& image, std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors) {
     detail::require_gray8(image, "Feature2D::compute");
     pyramid_.build(image);

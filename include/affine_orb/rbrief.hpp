@@ -149,7 +149,12 @@ class Rbrief {
 #endif
   }
 
+  /// The 256-bit descriptor of the keypoint at integer level position `pt` (border() <= x <
+  /// width − border(), likewise y) with the test pattern rotated by `angle` (radians, the frame of
+  /// orientation()). Throws std::invalid_argument for a non-finite angle (its rotated test points
+  /// would be undefined).
   BinaryDescriptor<kBits> describe(const LevelData& data, cv::Point2f pt, float angle) const {
+    detail::require(std::isfinite(angle), "Rbrief::describe: the angle is not finite");
     const float a = std::cos(angle);
     const float b = std::sin(angle);
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(data.smoothed.step[0]);

@@ -26,6 +26,7 @@
 #include "affine_orb/affine_matching.hpp"
 #include "affine_orb/affine_orb.hpp"
 #include "cli.hpp"
+#include "homography_io.hpp"
 
 namespace {
 
@@ -46,29 +47,6 @@ const char* const kUsage =
     "  --save-matches F   one line \"x1 y1 x2 y2\" per match, original pixel coordinates (exact floats)\n";
 
 const char* const kDefaultDir = "/usr/share/doc/opencv-doc/examples/data/";
-
-/// Reads a 3x3 homography: OpenCV FileStorage (XML/YAML, first top-level matrix) or 9 numbers.
-cv::Matx33d read_homography(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read homography " + path);
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string content = text.str();
-  if (content.find("<?xml") != std::string::npos || content.find("%YAML") != std::string::npos) {
-    cv::FileStorage fs(path, cv::FileStorage::READ);
-    cv::Mat h;
-    if (fs.isOpened()) fs.getFirstTopLevelNode() >> h;
-    if (h.rows != 3 || h.cols != 3) throw std::runtime_error("no 3x3 matrix in " + path);
-    h.convertTo(h, CV_64F);
-    return cv::Matx33d(h);
-  }
-  std::istringstream numbers(content);
-  cv::Matx33d h;
-  for (int i = 0; i < 9; ++i) {
-    if (!(numbers >> h.val[i])) throw std::runtime_error("expected 9 numbers in " + path);
-  }
-  return h;
-}
 
 cv::Mat read_gray(const std::string& path) {
   cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
@@ -226,7 +204,7 @@ int main(int argc, char** argv) {
     const cv::Mat image1 = read_gray(images[0]);
     const cv::Mat image2 = read_gray(images[1]);
     cv::Matx33d truth;
-    if (!homography.empty()) truth = read_homography(homography);
+    if (!homography.empty()) truth = affine_orb::examples::read_homography(homography);
     const cv::Matx33d* truth_ptr = homography.empty() ? nullptr : &truth;
 
     Outcome o;

@@ -55,11 +55,19 @@ inline Eigen::Matrix3d relative_rotation(const CameraPose& from, const CameraPos
 
 namespace detail {
 
-/// Lines of a text file without comments ('#' to the end of the line) and blank lines, each with
-/// its 1-based line number.
-inline std::vector<std::pair<int, std::string>> content_lines(const std::filesystem::path& path) {
-  std::ifstream in(path);
+/// The whole content of a text file.
+inline std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot read " + path.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// Lines of a text without comments ('#' to the end of the line) and blank lines, each with its
+/// 1-based line number.
+inline std::vector<std::pair<int, std::string>> content_lines(const std::string& text) {
+  std::istringstream in(text);
   std::vector<std::pair<int, std::string>> lines;
   std::string line;
   int number = 0;
@@ -73,16 +81,14 @@ inline std::vector<std::pair<int, std::string>> content_lines(const std::filesys
   return lines;
 }
 
-/// Exactly `count` numbers from `line`, else an error naming the file and line.
-inline std::vector<double> numbers(const std::string& line, std::size_t count, const std::filesystem::path& path,
-                                   int number) {
+/// Exactly `count` numbers from `line`, else an error naming the file (`name`) and line.
+inline std::vector<double> numbers(const std::string& line, std::size_t count, const std::string& name, int number) {
   std::istringstream in(line);
   std::vector<double> out;
   double x = 0.0;
   while (in >> x) out.push_back(x);
   if (!in.eof() || out.size() != count) {
-    throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": expected " + std::to_string(count) +
-                             " numbers");
+    throw std::runtime_error(name + ":" + std::to_string(number) + ": expected " + std::to_string(count) + " numbers");
   }
   return out;
 }
@@ -146,12 +152,13 @@ inline std::vector<std::string> image_files(const std::filesystem::path& dir) {
 ///   fx = p00, cx = p02, fy = p11, cy = p12;
 /// - "key=value" tokens fx=…, fy=…, cx=…, cy=… (other keys ignored);
 /// - one line of four numbers "fx fy cx cy".
-inline PinholeCamera read_calibration(const std::filesystem::path& path) {
-  const auto lines = detail::content_lines(path);
-  const auto valid = [&path](const PinholeCamera& c) {
+/// `text` is the file's content, `name` names it in errors.
+inline PinholeCamera parse_calibration(const std::string& text, const std::string& name) {
+  const auto lines = detail::content_lines(text);
+  const auto valid = [&name](const PinholeCamera& c) {
     if (!(std::isfinite(c.fx) && c.fx > 0.0 && std::isfinite(c.fy) && c.fy > 0.0 && std::isfinite(c.cx) &&
           std::isfinite(c.cy))) {
-      throw std::runtime_error(path.string() + ": the focal lengths must be positive and all values finite");
+      throw std::runtime_error(name + ": the focal lengths must be positive and all values finite");
     }
     return c;
   };
@@ -162,7 +169,7 @@ inline PinholeCamera read_calibration(const std::filesystem::path& path) {
     std::string first;
     tokens >> first;
     if (first == "P0:") {
-      const std::vector<double> p = detail::numbers(line.substr(line.find(':') + 1), 12, path, number);
+      const std::vector<double> p = detail::numbers(line.substr(line.find(':') + 1), 12, name, number);
       return valid({p[0], p[5], p[2], p[6]});
     }
     if (line.find('=') != std::string::npos) {
@@ -183,7 +190,7 @@ inline PinholeCamera read_calibration(const std::filesystem::path& path) {
           *target = std::stod(token.substr(eq + 1), &used);
           if (used != token.size() - eq - 1) throw std::invalid_argument(token);
         } catch (const std::exception&) {
-          throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": bad value in " + token);
+          throw std::runtime_error(name + ":" + std::to_string(number) + ": bad value in " + token);
         }
         ++found;
       }
@@ -196,11 +203,76 @@ inline PinholeCamera read_calibration(const std::filesystem::path& path) {
     if (in.eof() && v.size() == 4) return valid({v[0], v[1], v[2], v[3]});
   }
   if (found < 4) {
-    throw std::runtime_error(path.string() +
+    throw std::runtime_error(name +
                              ": no intrinsics found (expected \"P0: ...\", fx=/fy=/cx=/cy= or "
                              "\"fx fy cx cy\")");
   }
   return valid(camera);
+}
+
+/// read_calibration() of a file.
+inline PinholeCamera read_calibration(const std::filesystem::path& path) {
+  return parse_calibration(detail::read_text(path), path.string());
+}
+
+/// KITTI times.txt: one time stamp (seconds) per line.
+inline std::vector<double> parse_times(const std::string& text, const std::string& name) {
+  std::vector<double> times;
+  for (const auto& [number, line] : detail::content_lines(text)) times.push_back(detail::numbers(line, 1, name, number)[0]);
+  return times;
+}
+
+/// KITTI poses: one line per frame of 12 numbers, the 3x4 camera-to-world [R | t], row-major.
+inline std::vector<CameraPose> parse_kitti_poses(const std::string& text, const std::string& name) {
+  std::vector<CameraPose> poses;
+  for (const auto& [number, line] : detail::content_lines(text)) {
+    const std::vector<double> p = detail::numbers(line, 12, name, number);
+    CameraPose pose;
+    pose.rotation << p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10];
+    pose.position << p[3], p[7], p[11];
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+/// TUM rgb.txt: "timestamp path" per line (path relative to the sequence folder), at least one,
+/// time stamps increasing.
+inline std::vector<std::pair<double, std::string>> parse_tum_list(const std::string& text, const std::string& name) {
+  std::vector<std::pair<double, std::string>> list;
+  for (const auto& [number, line] : detail::content_lines(text)) {
+    std::istringstream in(line);
+    double timestamp = 0.0;
+    std::string path, extra;
+    if (!(in >> timestamp >> path) || (in >> extra)) {
+      throw std::runtime_error(name + ":" + std::to_string(number) + ": expected \"timestamp path\"");
+    }
+    list.emplace_back(timestamp, path);
+  }
+  if (list.empty()) throw std::runtime_error("no images listed in " + name);
+  if (!std::is_sorted(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.first < b.first; })) {
+    throw std::runtime_error(name + ": time stamps are not in increasing order");
+  }
+  return list;
+}
+
+/// TUM groundtruth.txt: "timestamp tx ty tz qx qy qz qw" per line (camera-to-world position and
+/// unit quaternion, |q| within 1e-3 of 1), returned in time order.
+inline std::vector<std::pair<double, CameraPose>> parse_tum_groundtruth(const std::string& text,
+                                                                        const std::string& name) {
+  std::vector<std::pair<double, CameraPose>> poses;
+  for (const auto& [number, line] : detail::content_lines(text)) {
+    const std::vector<double> v = detail::numbers(line, 8, name, number);
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    if (!(std::abs(q.norm() - 1.0) < 1e-3)) {
+      throw std::runtime_error(name + ":" + std::to_string(number) + ": the quaternion is not unit length");
+    }
+    CameraPose pose;
+    pose.rotation = q.normalized().toRotationMatrix();
+    pose.position << v[1], v[2], v[3];
+    poses.emplace_back(v[0], pose);
+  }
+  std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return poses;
 }
 
 /// KITTI odometry layout: DIR/image_0/*.png (natural name order), DIR/times.txt (one time stamp
@@ -220,23 +292,15 @@ inline Sequence read_kitti(const std::filesystem::path& dir, const std::filesyst
   };
   const std::filesystem::path times = dir / "times.txt";
   if (std::filesystem::exists(times)) {
-    const auto lines = detail::content_lines(times);
-    if (lines.size() != images.size()) throw count_error(times, lines.size());
-    for (std::size_t i = 0; i < lines.size(); ++i) {
-      s.frames[i].timestamp = detail::numbers(lines[i].second, 1, times, lines[i].first)[0];
-    }
+    const std::vector<double> stamps = parse_times(detail::read_text(times), times.string());
+    if (stamps.size() != images.size()) throw count_error(times, stamps.size());
+    for (std::size_t i = 0; i < stamps.size(); ++i) s.frames[i].timestamp = stamps[i];
   }
   const std::filesystem::path poses = poses_file.empty() ? dir / "poses.txt" : poses_file;
   if (!poses_file.empty() || std::filesystem::exists(poses)) {
-    const auto lines = detail::content_lines(poses);
-    if (lines.size() != images.size()) throw count_error(poses, lines.size());
-    for (std::size_t i = 0; i < lines.size(); ++i) {
-      const std::vector<double> p = detail::numbers(lines[i].second, 12, poses, lines[i].first);
-      CameraPose pose;
-      pose.rotation << p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10];
-      pose.position << p[3], p[7], p[11];
-      s.frames[i].pose = pose;
-    }
+    const std::vector<CameraPose> read = parse_kitti_poses(detail::read_text(poses), poses.string());
+    if (read.size() != images.size()) throw count_error(poses, read.size());
+    for (std::size_t i = 0; i < read.size(); ++i) s.frames[i].pose = read[i];
   }
   const std::filesystem::path calib = dir / "calib.txt";
   if (std::filesystem::exists(calib)) s.camera = read_calibration(calib);
@@ -252,36 +316,13 @@ inline Sequence read_tum(const std::filesystem::path& dir, double max_time_diffe
   Sequence s;
   s.format = "tum";
   const std::filesystem::path rgb = dir / "rgb.txt";
-  for (const auto& [number, line] : detail::content_lines(rgb)) {
-    std::istringstream in(line);
-    SequenceFrame frame;
-    std::string name, extra;
-    if (!(in >> frame.timestamp >> name) || (in >> extra)) {
-      throw std::runtime_error(rgb.string() + ":" + std::to_string(number) + ": expected \"timestamp path\"");
-    }
-    frame.image = (dir / name).string();
-    s.frames.push_back(frame);
-  }
-  if (s.frames.empty()) throw std::runtime_error("no images listed in " + rgb.string());
-  if (!std::is_sorted(s.frames.begin(), s.frames.end(),
-                      [](const SequenceFrame& a, const SequenceFrame& b) { return a.timestamp < b.timestamp; })) {
-    throw std::runtime_error(rgb.string() + ": time stamps are not in increasing order");
+  for (const auto& [timestamp, name] : parse_tum_list(detail::read_text(rgb), rgb.string())) {
+    s.frames.push_back({(dir / name).string(), timestamp, std::nullopt});
   }
   const std::filesystem::path truth = dir / "groundtruth.txt";
   if (!std::filesystem::exists(truth)) return s;
-  std::vector<std::pair<double, CameraPose>> poses;
-  for (const auto& [number, line] : detail::content_lines(truth)) {
-    const std::vector<double> v = detail::numbers(line, 8, truth, number);
-    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-    if (!(std::abs(q.norm() - 1.0) < 1e-3)) {
-      throw std::runtime_error(truth.string() + ":" + std::to_string(number) + ": the quaternion is not unit length");
-    }
-    CameraPose pose;
-    pose.rotation = q.normalized().toRotationMatrix();
-    pose.position << v[1], v[2], v[3];
-    poses.emplace_back(v[0], pose);
-  }
-  std::sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const std::vector<std::pair<double, CameraPose>> poses =
+      parse_tum_groundtruth(detail::read_text(truth), truth.string());
   for (SequenceFrame& frame : s.frames) {
     const auto it = std::lower_bound(poses.begin(), poses.end(), frame.timestamp,
                                      [](const auto& p, double t) { return p.first < t; });

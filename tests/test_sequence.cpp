@@ -25,6 +25,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "../examples/homography_io.hpp"
 #include "../examples/sequence_io.hpp"
 #include "affine_orb/extractor.hpp"
 #include "affine_orb/keyframe_tracker.hpp"
@@ -281,6 +282,41 @@ TEST_CASE("KITTI reader: images in name order, times, poses, calibration in thre
     std::filesystem::remove_all(dir.path() / "image_0");
     CHECK_THROWS_AS(ex::read_kitti(dir.path()), std::runtime_error);
   }
+}
+
+TEST_CASE("homography reader: Oxford numbers and OpenCV XML equal the files; bad files throw") {
+  namespace ex = affine_orb::examples;
+  // The Oxford text file against the test's own reader of it.
+  const cv::Matx33d oxford = ex::read_homography(affine_orb::test::data_dir() + "/oxford/graf/H1to3p");
+  const cv::Matx33d reference = affine_orb::test::oxford_homography("graf", 3);
+  for (int i = 0; i < 9; ++i) CHECK(oxford.val[i] == reference.val[i]);
+  // opencv-doc's graf H1to3p.xml is the same matrix in OpenCV's XML storage (to 1e-6 relative).
+  const std::string xml = affine_orb::test::opencv_samples_dir() + "/H1to3p.xml";
+  if (std::filesystem::exists(xml)) {
+    const cv::Matx33d stored = ex::read_homography(xml);
+    for (int i = 0; i < 9; ++i) CHECK(stored.val[i] == doctest::Approx(reference.val[i]).epsilon(1e-5));
+  }
+  CHECK(ex::parse_homography("%YAML:1.0\n---\nH: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+                             "   data: [ 2., 0., 1., 0., 2., 3., 0., 0., 1. ]\n",
+                             "h.yml")(1, 2) == 3.0);
+  CHECK_THROWS_WITH_AS(ex::parse_homography("1 2 3 4 5", "h"), doctest::Contains("expected 9 numbers"),
+                       std::runtime_error);
+  CHECK_THROWS_WITH_AS(ex::parse_homography("1 2 3 2 4 6 0 0 1", "h"), doctest::Contains("singular"),
+                       std::runtime_error);
+  CHECK_THROWS_WITH_AS(ex::parse_homography("<?xml version=\"1.0\"?><opencv_storage><a>1</a></opencv_storage>", "h"),
+                       doctest::Contains("no 3x3 matrix"), std::runtime_error);
+  // Truncated storage (OpenCV 4.6's own in-memory XML parser crashes on this one) and a 2x3 matrix.
+  CHECK_THROWS_AS(ex::parse_homography("<?xml version=\"1.0\"?><opencv_storage><H type_id=", "h"),
+                  std::runtime_error);
+  CHECK_THROWS_WITH_AS(ex::parse_homography("%YAML:1.0\nH: !!opencv-matrix\n rows: 2\n cols: 3\n dt: d\n"
+                                            " data: [ 1, 0, 0, 0, 1, 0 ]\n",
+                                            "h"),
+                       doctest::Contains("no 3x3 matrix"), std::runtime_error);
+  CHECK_THROWS_WITH_AS(ex::parse_homography("<?xml version=\"1.0\"?><opencv_storage><H type_id=\"opencv-matrix\">"
+                                            "<rows>3</rows><cols>3</cols><dt>d</dt><data>1 0 0 0 1",
+                                            "h"),
+                       doctest::Contains("expected 9 numbers"), std::runtime_error);
+  CHECK_THROWS_WITH_AS(ex::read_homography("/nonexistent/H"), doctest::Contains("cannot read"), std::runtime_error);
 }
 
 TEST_CASE("TUM reader: ground truth associated by the nearest time stamp within 0.02 s") {

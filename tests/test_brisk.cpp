@@ -484,4 +484,8 @@ TEST_CASE("BriskOptions::check() rejects nonsense values and patterns without 51
   CHECK(wide.pattern().short_pairs.size() == 512);
   CHECK(wide.pattern().long_pairs.size() == 870);
   CHECK(wide.border() > Brisk().border());
+  // The default options' rotation table is shared by every default instance; others build their
+  // own, before or after it was built.
+  CHECK(Brisk().border() == 14);
+  CHECK(Brisk(larger).border() == wide.border());
 }

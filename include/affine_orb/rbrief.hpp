@@ -82,7 +82,12 @@ class Rbrief {
     }
     // A rotated test point has |x'|, |y'| <= round(|(x, y)|), the rounded radius.
     border_ = std::max(extent, options_.orientation_radius);
-    kernel_q8_ = detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
+    // The default smoothing's kernel is read and checked once per process (an immutable
+    // function-local static); other kernels at construction.
+    const RbriefOptions defaults;
+    kernel_q8_ = options_.blur_kernel == defaults.blur_kernel && options_.blur_sigma == defaults.blur_sigma
+                     ? default_kernel_q8()
+                     : detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
 #if defined(__SSE2__)
     disc_chunks_ = disc_chunks(options_.orientation_radius);
 #endif
@@ -191,6 +196,13 @@ class Rbrief {
   }
 
  private:
+  // gaussian_kernel_q8() of the default blur_kernel and blur_sigma, computed at the first call.
+  static const std::vector<std::uint16_t>& default_kernel_q8() {
+    static const std::vector<std::uint16_t> kernel =
+        detail::gaussian_kernel_q8(RbriefOptions{}.blur_kernel, RbriefOptions{}.blur_sigma);
+    return kernel;
+  }
+
   /// The test points of the pattern as floats, interleaved a_0, b_0, a_1, b_1, ... (x and y apart).
   struct PatternPoints {
     alignas(16) std::array<float, 2 * kBits> x{};

@@ -1,4 +1,5 @@
-// bench_affine_speed [--rounds N] [--no-instructions] [--profile MODE N [--image graf|kitti]]:
+// bench_affine_speed [--rounds N] [--no-instructions] [--no-memory] [--profile MODE N [--image graf|kitti]]
+//                    [--peak MODE WxH]:
 // affine (18 views, max tilt 2√2) and plain extraction speed, side by side with the peers in one
 // run, on two 640x480 images (the graf1 photo resized, KITTI 06 frame 10 scaled to cover 640x480
 // and centre-cropped):
@@ -13,13 +14,20 @@
 // graf 1 -> 3 (full resolution, 2000 features per image, DuplicatePolicy::kKeepAll, ratio 0.8;
 // correct = ‖H x1 − x2‖ < 3 px; matches whose image-1 points fall in the same 2-px cell count once).
 //
+// Then the peak resident memory of one process per method and image size (graf1 resized to
+// 640x480 and 2560x1920; three frames each), the program running itself with --peak, beside the
+// baseline of a process that only loads and resizes the image (OpenCV's libraries are most of it).
+//
 // --profile affine|affine2|plain|orb|affine_feature N [--image graf|kitti]: runs one warm-up frame,
 // then that extraction N times inside profiled_frames() (for callgrind --toggle-collect).
+// --peak baseline|affine|affine2|plain|orb|affine_feature WxH: prints the process's peak resident
+// memory (VmHWM, kB) after three frames of that extraction on graf1 resized to WxH.
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <functional>
@@ -176,6 +184,51 @@ struct Extractions {
   cv::Mat descriptors;
 };
 
+/// Peak resident set of this process in kB (VmHWM of /proc/self/status), 0 when unknown.
+long peak_resident_kb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::atol(line.c_str() + 6);
+  }
+  return 0;
+}
+
+/// Runs this program with --peak `mode` WxH and returns the peak it reports in MB (0 on failure).
+double peak_memory_mb(const std::string& mode, cv::Size size) {
+  char self[4096] = {};
+  const ssize_t length = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (length <= 0) return 0.0;
+  const std::string command = "'" + std::string(self, static_cast<std::size_t>(length)) + "' --peak " + mode + " " +
+                              std::to_string(size.width) + "x" + std::to_string(size.height);
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return 0.0;
+  char line[256];
+  long kb = 0;
+  while (std::fgets(line, sizeof(line), pipe) != nullptr) {
+    if (std::strncmp(line, "peak_kb ", 8) == 0) kb = std::atol(line + 8);
+  }
+  return pclose(pipe) == 0 ? kb / 1024.0 : 0.0;
+}
+
+/// The peak memory table: one process per method and image size.
+void memory_table() {
+  const std::vector<std::pair<std::string, std::string>> modes = {
+      {"baseline", "image loaded, nothing extracted"},
+      {"affine", "ours affine, 1 thread"},
+      {"affine2", "ours affine, 2 threads"},
+      {"affine_feature", "cv::AffineFeature(ORB)"},
+      {"plain", "ours plain (1000)"},
+      {"orb", "cv::ORB (1000)"}};
+  std::printf("## Peak resident memory of one process (MB, VmHWM after three frames of graf1 resized)\n\n");
+  std::printf("| method | 640x480 | 2560x1920 |\n|---|---:|---:|\n");
+  for (const auto& [mode, label] : modes) {
+    std::printf("| %s | %.1f | %.1f |\n", label.c_str(), peak_memory_mb(mode, {640, 480}),
+                peak_memory_mb(mode, {2560, 1920}));
+  }
+  std::printf("\n");
+}
+
 /// The frames measured under callgrind (--toggle-collect=*profiled_frames*).
 __attribute__((noinline)) std::size_t profiled_frames(const std::function<std::size_t()>& run, int frames) {
   std::size_t total = 0;
@@ -274,12 +327,24 @@ int main(int argc, char** argv) {
   std::string profile;
   std::string profile_image = "graf";
   int profile_runs = 0;
+  bool memory = true;
+  std::string peak_mode;
+  cv::Size peak_size;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--rounds" && i + 1 < argc) {
       rounds = std::max(1, std::atoi(argv[++i]));
     } else if (arg == "--no-instructions") {
       instructions = false;
+    } else if (arg == "--no-memory") {
+      memory = false;
+    } else if (arg == "--peak" && i + 2 < argc) {
+      peak_mode = argv[++i];
+      if (std::sscanf(argv[++i], "%dx%d", &peak_size.width, &peak_size.height) != 2 || peak_size.width < 64 ||
+          peak_size.height < 64) {
+        std::fprintf(stderr, "--peak: expected a size WxH of at least 64x64, got %s\n", argv[i]);
+        return 2;
+      }
     } else if (arg == "--image" && i + 1 < argc) {
       profile_image = argv[++i];
     } else if (arg == "--profile" && i + 2 < argc) {
@@ -287,8 +352,9 @@ int main(int argc, char** argv) {
       profile_runs = std::max(0, std::atoi(argv[++i]));
     } else {
       std::fprintf(stderr,
-                   "usage: %s [--rounds N] [--no-instructions] [--profile affine|affine2|plain|orb|affine_feature N "
-                   "[--image graf|kitti]]\n",
+                   "usage: %s [--rounds N] [--no-instructions] [--no-memory] [--profile affine|affine2|plain|orb|"
+                   "affine_feature N [--image graf|kitti]] [--peak baseline|affine|affine2|plain|orb|affine_feature "
+                   "WxH]\n",
                    argv[0]);
       return 2;
     }
@@ -298,6 +364,24 @@ int main(int argc, char** argv) {
   const cv::Mat graf = to_640x480(load(data + "/oxford/graf/img1.png"));
   const cv::Mat kitti = to_640x480(load(data + "/kitti06/image_0/000010.png"));
 
+  if (!peak_mode.empty()) {
+    cv::Mat image;
+    const cv::Mat photo = load(data + "/oxford/graf/img1.png");
+    cv::resize(photo, image, peak_size, 0, 0, peak_size.width < photo.cols ? cv::INTER_AREA : cv::INTER_LINEAR);
+    if (peak_mode == "baseline") {
+      std::printf("peak_kb %ld\n", peak_resident_kb());
+      return 0;
+    }
+    Extractions extractions(image);
+    for (const Extractions::Entry& entry : extractions.entries()) {
+      if (entry.mode != peak_mode) continue;
+      for (int frame = 0; frame < 3; ++frame) entry.run();
+      std::printf("peak_kb %ld\n", peak_resident_kb());
+      return 0;
+    }
+    std::fprintf(stderr, "unknown mode %s\n", peak_mode.c_str());
+    return 2;
+  }
   if (!profile.empty()) {
     Extractions extractions(profile_image == "kitti" ? kitti : graf);
     for (const Extractions::Entry& entry : extractions.entries()) {
@@ -317,6 +401,7 @@ int main(int argc, char** argv) {
 
   bench_image("graf1", "graf", graf, rounds, instructions);
   bench_image("KITTI 06 frame 10", "kitti", kitti, rounds, instructions);
+  if (memory) memory_table();
 
   affine_orb::ExtractorOptions options = affine_options(1);
   options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;

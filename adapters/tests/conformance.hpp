@@ -501,6 +501,54 @@ TEST_CASE_TEMPLATE_DEFINE("the pyramid of a frame stays valid after the next fra
   CHECK(cv::norm(extractor.mvImagePyramid[0], first, cv::NORM_INF) > 0.0);
 }
 
+TEST_CASE_TEMPLATE_DEFINE("SetViewsActive(false) gives views off exactly; true gives the views back", T,
+                          view_switch) {
+  using affine_orb::adapters::AdapterDescriptor;
+  struct Restore {
+    ~Restore() { T::Extractor::SetViewsActive(true); }
+  } restore;
+  CHECK(T::Extractor::ViewsActive());
+  for (const AdapterDescriptor d : {AdapterDescriptor::kRbrief, AdapterDescriptor::kBrisk}) {
+    CAPTURE(static_cast<int>(d));
+    conformance::Output reference;
+    {
+      conformance::DefaultsGuard<T> guard(conformance::views_options<T>(d, 1.0));
+      typename T::Extractor plain(conformance::kFeatures, conformance::kScale, conformance::kLevels,
+                                  conformance::kIniFast, conformance::kMinFast);
+      T::Extractor::SetViewsActive(false);  // ignored with the views off
+      reference = conformance::run<T>(plain, affine_orb::test::kitti_frame(10));
+      T::Extractor::SetViewsActive(true);
+    }
+    conformance::DefaultsGuard<T> guard(conformance::views_options<T>(d, conformance::kViewsTilt));
+    typename T::Extractor extractor(conformance::kFeatures, conformance::kScale, conformance::kLevels,
+                                    conformance::kIniFast, conformance::kMinFast);
+    REQUIRE(reference.keypoints.size() == static_cast<std::size_t>(conformance::kFeatures));
+    // Views on, off, on again for the same frame: the switch is read at every call.
+    for (const bool active : {true, false, true}) {
+      CAPTURE(active);
+      T::Extractor::SetViewsActive(active);
+      CHECK(T::Extractor::ViewsActive() == active);
+      const conformance::Output out = conformance::run<T>(extractor, affine_orb::test::kitti_frame(10));
+      if (active) {
+        CHECK(out.keypoints.size() >= static_cast<std::size_t>(conformance::kFeatures * 14 / 10));
+        continue;
+      }
+      REQUIRE(out.keypoints.size() == reference.keypoints.size());
+      for (std::size_t i = 0; i < out.keypoints.size(); ++i) {
+        const cv::KeyPoint& a = out.keypoints[i];
+        const cv::KeyPoint& b = reference.keypoints[i];
+        CHECK((a.pt == b.pt && a.angle == b.angle && a.octave == b.octave && a.response == b.response &&
+               a.size == b.size));
+      }
+      CHECK(cv::norm(out.descriptors, reference.descriptors, cv::NORM_HAMMING) == 0.0);
+      REQUIRE(out.pyramid.size() == reference.pyramid.size());
+      for (std::size_t l = 0; l < out.pyramid.size(); ++l) {
+        CHECK(cv::norm(out.pyramid[l], reference.pyramid[l], cv::NORM_INF) == 0.0);
+      }
+    }
+  }
+}
+
 TEST_CASE_TEMPLATE_DEFINE("an empty image leaves every output untouched", T, empty) {
   typename T::Extractor extractor(500, 1.2f, 8, 20, 7);
   conformance::run<T>(extractor, affine_orb::test::kitti_frame(0));

@@ -17,6 +17,7 @@
 ///   that it stays valid after the next frame.
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
@@ -168,6 +169,17 @@ class DefaultOptionsStore {
   AdapterOptions options_;
 };
 
+/// The process-wide switch behind an adapter's static SetViewsActive()/ViewsActive(): an atomic
+/// flag, true by default, read by every extraction of extractors whose options enable the views.
+class ViewSwitch {
+ public:
+  void set(bool active) { active_.store(active, std::memory_order_relaxed); }
+  bool get() const { return active_.load(std::memory_order_relaxed); }
+
+ private:
+  std::atomic<bool> active_{true};
+};
+
 /// One frame's output in ORB-SLAM's layout.
 struct AdapterFrame {
   std::vector<cv::KeyPoint> keypoints;
@@ -219,10 +231,17 @@ class AdapterCore {
         affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;
     options.merge_radius = affine.merge_radius;
     options.threads = affine.threads;
+    // With the views on, a views-off twin serves the frames for which they are switched off
+    // (ViewSwitch): ViewBudget::kAdditive makes its output the image part of the views' output.
+    ExtractorOptions image_only = options;
+    image_only.views.max_tilt = 1.0;
+    const bool views = options.views.max_tilt > 1.0;
     if (affine.descriptor == AdapterDescriptor::kRbrief) {
       rbrief_.emplace(options);
+      if (views) rbrief_image_.emplace(image_only);
     } else {
       brisk_.emplace(options);
+      if (views) brisk_image_.emplace(image_only);
     }
   }
 
@@ -233,12 +252,15 @@ class AdapterCore {
 
   /// Checks the image and mask: nullopt for an empty image (ORB-SLAM's "return, outputs untouched");
   /// std::invalid_argument for a type other than CV_8UC1 or a mask that is neither empty nor CV_8UC1
-  /// of the image size (non-zero = allowed, as affine_orb::Extractor::extract).
-  std::optional<AdapterFrame> run(const cv::Mat& image, const cv::Mat& mask) {
+  /// of the image size (non-zero = allowed, as affine_orb::Extractor::extract). With
+  /// `views_active` false the views are skipped: the output is then exactly that of the same
+  /// extractor with the views off.
+  std::optional<AdapterFrame> run(const cv::Mat& image, const cv::Mat& mask, bool views_active = true) {
     if (image.empty()) return std::nullopt;
     affine_orb::detail::require_gray8(image, who_);
     affine_orb::detail::require_mask(mask, image.size(), who_);
-    return rbrief_ ? convert(*rbrief_, image, mask) : convert(*brisk_, image, mask);
+    if (rbrief_) return convert(views_active || !rbrief_image_ ? *rbrief_ : *rbrief_image_, image, mask);
+    return convert(views_active || !brisk_image_ ? *brisk_ : *brisk_image_, image, mask);
   }
 
  private:
@@ -285,6 +307,8 @@ class AdapterCore {
   ScaleTables scales_;
   std::optional<Extractor<Rbrief>> rbrief_;
   std::optional<Extractor<Brisk>> brisk_;
+  std::optional<Extractor<Rbrief>> rbrief_image_;  ///< views off, only when rbrief_ has views
+  std::optional<Extractor<Brisk>> brisk_image_;    ///< views off, only when brisk_ has views
 };
 
 /// Writes descriptors to an ORB-SLAM output array: released when there is no keypoint (ORB-SLAM's

@@ -16,33 +16,14 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/opencv_feature2d.hpp"
+#include "fuzz_input.hpp"
 
 namespace {
 
-void require(bool condition) {
-  if (!condition) std::abort();
-}
+using affine_orb::fuzz::Bytes;
+using affine_orb::fuzz::require;
 
-/// Reads bytes in order, then zeros.
-class Bytes {
- public:
-  Bytes(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
-  std::uint8_t next() { return position_ < size_ ? data_[position_++] : 0; }
-  float raw_float() {
-    std::uint32_t bits = 0;
-    for (int i = 0; i < 4; ++i) bits = bits << 8 | next();
-    float f = 0.0f;
-    std::memcpy(&f, &bits, sizeof(f));
-    return f;
-  }
-
- private:
-  const std::uint8_t* data_;
-  std::size_t size_;
-  std::size_t position_ = 0;
-};
-
-/// One Feature2D per descriptor, built once (BRISK tabulates its pattern for every rotation).
+/// One Feature2D per descriptor, built once and reused across inputs, as a caller holds one.
 cv::Ptr<cv::Feature2D>& feature2d(bool brisk) {
   static cv::Ptr<cv::Feature2D> rbrief =
       affine_orb::create_feature2d(affine_orb::ExtractorOptions{}, affine_orb::DescriptorKind::kRbrief);

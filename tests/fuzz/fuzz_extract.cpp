@@ -18,26 +18,12 @@
 #include "affine_orb/brisk.hpp"
 #include "affine_orb/extractor.hpp"
 #include "affine_orb/rbrief.hpp"
+#include "fuzz_input.hpp"
 
 namespace {
 
-/// Reads bytes in order, then zeros.
-class Bytes {
- public:
-  Bytes(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
-  std::uint8_t next() { return position_ < size_ ? data_[position_++] : 0; }
-  const std::uint8_t* rest() const { return data_ + position_; }
-  std::size_t remaining() const { return size_ - position_; }
-
- private:
-  const std::uint8_t* data_;
-  std::size_t size_;
-  std::size_t position_ = 0;
-};
-
-void require(bool condition) {
-  if (!condition) std::abort();
-}
+using affine_orb::fuzz::Bytes;
+using affine_orb::fuzz::require;
 
 template <class Descriptor>
 void run(const cv::Mat& image, const cv::Mat& mask, const affine_orb::ExtractorOptions& options) {

@@ -12,12 +12,11 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/fast.hpp"
+#include "fuzz_input.hpp"
 
 namespace {
 
-void require(bool condition) {
-  if (!condition) std::abort();
-}
+using affine_orb::fuzz::require;
 
 }  // namespace
 

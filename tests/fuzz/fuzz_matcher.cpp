@@ -11,12 +11,11 @@
 #include <vector>
 
 #include "affine_orb/matcher.hpp"
+#include "fuzz_input.hpp"
 
 namespace {
 
-void require(bool condition) {
-  if (!condition) std::abort();
-}
+using affine_orb::fuzz::require;
 
 using Descriptor = std::array<std::uint64_t, 4>;
 

@@ -16,12 +16,11 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/model_selection.hpp"
+#include "fuzz_input.hpp"
 
 namespace {
 
-void require(bool condition) {
-  if (!condition) std::abort();
-}
+using affine_orb::fuzz::require;
 
 /// A coordinate from two bytes: mostly a grid value in [−64, 960), sometimes a special value.
 float coordinate(std::uint8_t hi, std::uint8_t lo) {

@@ -12,12 +12,11 @@
 
 #include "homography_io.hpp"
 #include "sequence_io.hpp"
+#include "fuzz_input.hpp"
 
 namespace {
 
-void require(bool condition) {
-  if (!condition) std::abort();
-}
+using affine_orb::fuzz::require;
 
 namespace ex = affine_orb::examples;
 

@@ -619,7 +619,7 @@ class Extractor {
     const std::vector<int>& chosen = c.chosen;
     if (chosen.empty()) return;
     const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
-    LevelWork& level = view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
+    LevelWork& level = level_of(v, l);
     const cv::Matx23d& back = view.view.to_original;
     const bool identity = view.view.is_identity();
     work.describe_points.clear();
@@ -694,20 +694,25 @@ class Extractor {
   /// the final keypoints; for a shortlist, its nominal budget: the final selection when no
   /// shortfall is carried, so that the rest of the shortlist suppresses nothing).
   void enter_repeat_references(const LevelCandidates& c, int l, int take, const cv::Rect2f& region, SpreadWork& work) {
+    RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(l)];
+    const auto enter = [&](cv::Point2f p) {
+      int& head = grid.head[grid.index(p, 0, 0)];
+      repeat_kept_.push_back({p, head});
+      head = static_cast<int>(repeat_kept_.size()) - 1;
+    };
+    // Both selections keep exactly min(take, n) of n: with take >= n, every chosen candidate.
+    if (take >= static_cast<int>(c.chosen.size())) {
+      for (int i : c.chosen) enter(c.original_points[static_cast<std::size_t>(i)]);
+      return;
+    }
     work.points.clear();
     work.responses.clear();
     for (int i : c.chosen) {
       work.points.push_back(c.original_points[static_cast<std::size_t>(i)]);
       work.responses.push_back(c.responses[static_cast<std::size_t>(i)]);
     }
-    spread(work.points, work.responses, region, std::min(take, static_cast<int>(work.points.size())), work);
-    RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(l)];
-    for (int k : work.kept) {
-      const cv::Point2f p = work.points[static_cast<std::size_t>(k)];
-      int& head = grid.head[grid.index(p, 0, 0)];
-      repeat_kept_.push_back({p, head});
-      head = static_cast<int>(repeat_kept_.size()) - 1;
-    }
+    spread(work.points, work.responses, region, take, work);
+    for (int k : work.kept) enter(work.points[static_cast<std::size_t>(k)]);
   }
 
   /// Whether a candidate of level l at p (original pixels) repeats a keypoint chosen by an

@@ -12,17 +12,19 @@
 // image 1; F: mean distance of the noise-free correspondences to their epipolar lines (both
 // images); recall: fraction of the true correspondences flagged as inliers.
 //
-// Then the decision on labelled real and synthetic pairs (issue 14), for each rule: the paper's
-// eq. 22 at θ = 0.45 (the default), ORB-SLAM2's θ = 0.40 and Torr's GRIC (SelectionRule::kGric).
+// Then the decision on labelled real and synthetic pairs, for each rule (SelectionRule): the
+// plane-and-parallax test (the default), the paper's eq. 22 at θ = 0.45 and ORB-SLAM2's θ = 0.40,
+// Torr's GRIC and COLMAP's inlier ratio, each also with σ scaled by the keypoints' octaves.
 // Correspondences come from the affine extractor (1000 + 1000 keypoints, strongest corners) and
 // match_features, as affine_orb_match makes them. Labels: H for the planar pairs (every Oxford pair
 // 1->2 ... 1->6 in ../shared/data, opencv-doc's graf1/graf3 and box/box_in_scene) and for pure
 // camera rotations (four Oxford photos warped by K R K^-1, 6-12 degrees); F for the 3-D pairs (KITTI
-// 06 frames i -> i + g for gaps g = 1, 2, 4, 8 and synthetic 3-D scenes). Pose error: for H-labelled
-// pairs with a ground-truth homography, the largest distance between the true and the chosen
-// homography's images of the image-1 corners (when H was chosen); for pairs with a known rotation
-// (rotations, KITTI, synthetic), the angle between the true rotation and the one relative_pose()
-// recovers from the chosen model.
+// 06 frames i -> i + g for gaps g = 1, 2, 4, 8; KITTI 00 frames i -> i + 3 and i -> i + 6 where the
+// camera moved at least 2 m; synthetic 3-D scenes). Pose error: for H-labelled pairs with a
+// ground-truth homography, the largest distance between the true and the chosen homography's images
+// of the image-1 corners (when H was chosen); for pairs with a known rotation (rotations, KITTI,
+// synthetic), the angle between the true rotation and the one relative_pose() recovers from the
+// chosen model. The tables are Markdown, as the README quotes them.
 //
 // Usage: bench_model_selection [runs (default 25)] [--labelled-only]
 
@@ -66,6 +68,8 @@ constexpr double kOutlierRatio = 0.3;
 constexpr double kNoise = 1.0;
 // OpenCV's default reprojection thresholds (findHomography: 3 px; findFundamentalMat: 3 px at 0.99).
 constexpr double kOpenCvThreshold = 3.0;
+// Least camera translation of a labelled KITTI 00 pair, metres (ground truth, poses.txt).
+constexpr double kMinKittiBaseline = 2.0;
 
 Eigen::Matrix3d intrinsics() {
   Eigen::Matrix3d k;
@@ -183,6 +187,7 @@ struct LabelledPair {
   std::string name;
   std::string kind;  ///< "planar" (H), "rotation" (H) or "3-D" (F)
   std::vector<cv::Point2f> points1, points2;
+  std::vector<int> octaves1, octaves2;  ///< pyramid octave of each matched keypoint (0 for synthetic points)
   cv::Size size1;
   std::optional<Eigen::Matrix3d> homography;  ///< x2 ~ H x1, when known
   std::optional<Eigen::Matrix3d> rotation;    ///< X2 = R X1 (+ t), when known with the camera
@@ -208,17 +213,20 @@ double corner_error(const Eigen::Matrix3d& h, const Eigen::Matrix3d& truth, cv::
   return worst;
 }
 
-/// Matched keypoint positions of two images, as affine_orb_match makes them.
-std::pair<std::vector<cv::Point2f>, std::vector<cv::Point2f>> correspondences(
-    affine_orb::Extractor<affine_orb::Rbrief>& extractor, const cv::Mat& a, const cv::Mat& b) {
+/// Fills `p` with the matched keypoint positions and octaves of two images, as affine_orb_match
+/// makes them.
+void match_into(LabelledPair& p, affine_orb::Extractor<affine_orb::Rbrief>& extractor, const cv::Mat& a,
+                const cv::Mat& b) {
   const auto fa = extractor.extract(a);
   const auto fb = extractor.extract(b);
-  std::vector<cv::Point2f> p1, p2;
   for (const affine_orb::Match& m : affine_orb::match_features(fa, fb)) {
-    p1.push_back(fa.keypoints[static_cast<std::size_t>(m.query)].pt);
-    p2.push_back(fb.keypoints[static_cast<std::size_t>(m.train)].pt);
+    const cv::KeyPoint& ka = fa.keypoints[static_cast<std::size_t>(m.query)];
+    const cv::KeyPoint& kb = fb.keypoints[static_cast<std::size_t>(m.train)];
+    p.points1.push_back(ka.pt);
+    p.points2.push_back(kb.pt);
+    p.octaves1.push_back(ka.octave);
+    p.octaves2.push_back(kb.octave);
   }
-  return {p1, p2};
 }
 
 cv::Mat read_gray(const std::string& path) {
@@ -248,8 +256,7 @@ std::vector<LabelledPair> labelled_pairs() {
     const cv::Mat a = read_gray(data + "/oxford/" + sequence + "/img1.png");
     for (int n = 2; n <= 6; ++n) {
       LabelledPair p = labelled(sequence + " 1->" + std::to_string(n), "planar", a);
-      std::tie(p.points1, p.points2) =
-          correspondences(extractor, a, read_gray(data + "/oxford/" + sequence + "/img" + std::to_string(n) + ".png"));
+      match_into(p, extractor, a, read_gray(data + "/oxford/" + sequence + "/img" + std::to_string(n) + ".png"));
       p.homography = read_oxford_homography(data + "/oxford/" + sequence + "/H1to" + std::to_string(n) + "p");
       pairs.push_back(p);
     }
@@ -257,7 +264,7 @@ std::vector<LabelledPair> labelled_pairs() {
   {
     const cv::Mat a = read_gray(doc + "/graf1.png");
     LabelledPair p = labelled("opencv-doc graf1->graf3", "planar", a);
-    std::tie(p.points1, p.points2) = correspondences(extractor, a, read_gray(doc + "/graf3.png"));
+    match_into(p, extractor, a, read_gray(doc + "/graf3.png"));
     cv::FileStorage fs(doc + "/H1to3p.xml", cv::FileStorage::READ);
     cv::Mat h;
     fs.getFirstTopLevelNode() >> h;
@@ -265,7 +272,7 @@ std::vector<LabelledPair> labelled_pairs() {
     pairs.push_back(p);
     const cv::Mat box = read_gray(doc + "/box.png");
     LabelledPair q = labelled("opencv-doc box->box_in_scene", "planar", box);
-    std::tie(q.points1, q.points2) = correspondences(extractor, box, read_gray(doc + "/box_in_scene.png"));
+    match_into(q, extractor, box, read_gray(doc + "/box_in_scene.png"));
     pairs.push_back(q);
   }
   // Pure rotations: a photo and its image by a camera turned by R about its centre, x2 ~ K R K^-1 x1.
@@ -289,7 +296,7 @@ std::vector<LabelledPair> labelled_pairs() {
     p.homography = h;
     p.rotation = r;
     p.camera = camera;
-    std::tie(p.points1, p.points2) = correspondences(extractor, a, b);
+    match_into(p, extractor, a, b);
     pairs.push_back(p);
   }
   // KITTI 06: real 3-D street scenes, frame gaps 1, 2, 4, 8.
@@ -302,7 +309,26 @@ std::vector<LabelledPair> labelled_pairs() {
       LabelledPair p = labelled("KITTI 06 " + std::to_string(i) + "->" + std::to_string(i + gap), "3-D", a);
       p.rotation = affine_orb::examples::relative_rotation(*f1.pose, *f2.pose);
       p.camera = kitti.camera;
-      std::tie(p.points1, p.points2) = correspondences(extractor, a, affine_orb::examples::load_frame(f2));
+      match_into(p, extractor, a, affine_orb::examples::load_frame(f2));
+      pairs.push_back(p);
+    }
+  }
+  // KITTI 00: real forward driving (the car drives off and takes its first turn). Frames i -> i + 3
+  // and i -> i + 6 for i = 0, 10, ..., 150, kept when poses.txt gives the camera a translation of
+  // at least 2 m between them: under forward motion parallax grows with the baseline, and 2 m makes
+  // the scene clearly 3-D for the near half of the image (road, parked cars, walls).
+  const affine_orb::examples::Sequence kitti00 = affine_orb::examples::read_kitti(data + "/kitti00");
+  for (int i = 0; i + 3 < static_cast<int>(kitti00.frames.size()); i += 10) {
+    for (const int gap : {3, 6}) {
+      if (i + gap >= static_cast<int>(kitti00.frames.size())) continue;
+      const auto& f1 = kitti00.frames[static_cast<std::size_t>(i)];
+      const auto& f2 = kitti00.frames[static_cast<std::size_t>(i + gap)];
+      if ((f2.pose->position - f1.pose->position).norm() < kMinKittiBaseline) continue;
+      const cv::Mat a = affine_orb::examples::load_frame(f1);
+      LabelledPair p = labelled("KITTI 00 " + std::to_string(i) + "->" + std::to_string(i + gap), "3-D", a);
+      p.rotation = affine_orb::examples::relative_rotation(*f1.pose, *f2.pose);
+      p.camera = kitti00.camera;
+      match_into(p, extractor, a, affine_orb::examples::load_frame(f2));
       pairs.push_back(p);
     }
   }
@@ -313,6 +339,8 @@ std::vector<LabelledPair> labelled_pairs() {
     LabelledPair p = labelled("synthetic 3-D #" + std::to_string(seed - 999), "3-D", cv::Mat(kHeight, kWidth, CV_8UC1));
     p.points1 = d.points1;
     p.points2 = d.points2;
+    p.octaves1.assign(d.points1.size(), 0);
+    p.octaves2.assign(d.points2.size(), 0);
     p.rotation = Eigen::AngleAxisd(0.1, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix();
     p.camera = affine_orb::PinholeCamera{k(0, 0), k(1, 1), k(0, 2), k(1, 2)};
     pairs.push_back(p);
@@ -320,22 +348,34 @@ std::vector<LabelledPair> labelled_pairs() {
   return pairs;
 }
 
-/// The decision table: per rule, the share of right decisions per class and the pose errors.
+/// The decision table: per rule, the right decisions per class and the pose errors.
 void labelled_table() {
   const std::vector<LabelledPair> pairs = labelled_pairs();
+  using affine_orb::SelectionRule;
   struct Rule {
     std::string name;
     affine_orb::ModelSelectionOptions options;
+    bool octaves = false;  ///< σ scaled by each keypoint's octave (select_model() with octaves)
   };
-  std::vector<Rule> rules(4);
-  rules[0].name = "eq. 22, R_H > 0.45 (paper; default)";
-  rules[1].name = "eq. 22, R_H > 0.40 (ORB-SLAM2)";
-  rules[1].options.homography_ratio_threshold = 0.40;
-  rules[2].name = "GRIC (Torr 1998), sigma 1 px";
-  rules[2].options.rule = affine_orb::SelectionRule::kGric;
-  rules[3].name = "GRIC, sigma 2 px";
-  rules[3].options.rule = affine_orb::SelectionRule::kGric;
-  rules[3].options.gric_sigma = 2.0;
+  const auto make_rule = [](const std::string& name, SelectionRule r, bool octaves) {
+    Rule out{name, {}, octaves};
+    out.options.rule = r;
+    return out;
+  };
+  std::vector<Rule> rules = {
+      make_rule("plane-and-parallax test (DEGENSAC-style), z <= 4.3 (default)", SelectionRule::kPlaneParallax, false),
+      make_rule("plane-and-parallax test, octave sigma", SelectionRule::kPlaneParallax, true),
+      make_rule("eq. 22, R_H > 0.45 (paper)", SelectionRule::kScoreRatio, false),
+      make_rule("eq. 22, R_H > 0.45, octave sigma", SelectionRule::kScoreRatio, true),
+      make_rule("eq. 22, R_H > 0.40 (ORB-SLAM2)", SelectionRule::kScoreRatio, false),
+      make_rule("GRIC (Torr 1998), sigma 1 px", SelectionRule::kGric, false),
+      make_rule("GRIC, sigma 1 px, octave sigma", SelectionRule::kGric, true),
+      make_rule("GRIC, sigma 2 px", SelectionRule::kGric, false),
+      make_rule("COLMAP inlier ratio H/F > 0.8", SelectionRule::kInlierRatio, false),
+      make_rule("COLMAP inlier ratio H/F > 0.8, octave sigma", SelectionRule::kInlierRatio, true),
+  };
+  rules[4].options.homography_ratio_threshold = 0.40;
+  rules[7].options.gric_sigma = 2.0;
   std::printf(
       "\n## H or F on labelled pairs\n\n%zu pairs; right = H chosen on planar and rotation pairs, F on 3-D "
       "pairs; corner error = median px of the chosen H on the pairs with a ground-truth H where H was "
@@ -344,25 +384,22 @@ void labelled_table() {
   std::printf(
       "| rule | planar right | rotations right | 3-D right | planar corner error px | rotation error deg, "
       "rotations / 3-D | wrong pairs |\n|---|---:|---:|---:|---:|---:|---|\n");
-  std::vector<std::string> ratios;
+  const auto run = [](const LabelledPair& p, const Rule& r) {
+    if (p.points1.size() < 8) return affine_orb::ModelSelectionResult{};
+    return r.octaves ? affine_orb::select_model(p.points1, p.points2, p.octaves1, p.octaves2, r.options)
+                     : affine_orb::select_model(p.points1, p.points2, r.options);
+  };
   for (const Rule& rule : rules) {
     std::map<std::string, std::pair<int, int>> right;  // kind -> (right, total)
     std::vector<double> corner, rotation_error_rot, rotation_error_3d;
     std::string wrong;
     for (const LabelledPair& p : pairs) {
-      const affine_orb::ModelSelectionResult r = p.points1.size() >= 8
-                                                     ? affine_orb::select_model(p.points1, p.points2, rule.options)
-                                                     : affine_orb::ModelSelectionResult{};
+      const affine_orb::ModelSelectionResult r = run(p, rule);
       const bool want_h = p.kind != "3-D";
       const bool is_right = r.success && (r.model == affine_orb::GeometricModel::kHomography) == want_h;
       right[p.kind].first += is_right;
       right[p.kind].second += 1;
-      if (!is_right) {
-        char note[160];
-        std::snprintf(note, sizeof(note), "%s%s (R_H %.2f)", wrong.empty() ? "" : ", ", p.name.c_str(),
-                      r.homography_ratio);
-        wrong += note;
-      }
+      if (!is_right) wrong += (wrong.empty() ? "" : ", ") + p.name;
       if (p.homography && r.model == affine_orb::GeometricModel::kHomography)
         corner.push_back(corner_error(r.homography, *p.homography, p.size1));
       if (p.rotation && p.camera && r.success) {
@@ -383,14 +420,18 @@ void labelled_table() {
                 share("rotation").c_str(), share("3-D").c_str(), med(corner), med(rotation_error_rot),
                 med(rotation_error_3d), wrong.empty() ? "none" : wrong.c_str());
   }
-  // R_H per pair for the default rule, to show the margin.
-  std::printf("\nR_H per pair (paper's rule): ");
+  // The statistics of the default rule and of eq. 22 per pair, to show the margins.
+  std::printf("\nPer pair: parallax z-score of the default rule (H when <= %.1f), R_H of eq. 22 (H when > %.2f):\n\n",
+              affine_orb::ModelSelectionOptions{}.parallax_significance,
+              affine_orb::ModelSelectionOptions{}.homography_ratio_threshold);
+  std::printf("| pair | label | matches | parallax inliers | expected by chance | z | R_H |\n|---|---|---:|---:|---:|---:|---:|\n");
   for (const LabelledPair& p : pairs) {
     if (p.points1.size() < 8) continue;
     const affine_orb::ModelSelectionResult r = affine_orb::select_model(p.points1, p.points2);
-    std::printf("%s %s %.2f; ", p.name.c_str(), p.kind == "3-D" ? "[F]" : "[H]", r.homography_ratio);
+    std::printf("| %s | %s | %zu | %d | %.1f | %.1f | %.3f |\n", p.name.c_str(), p.kind == "3-D" ? "F" : "H",
+                p.points1.size(), r.parallax_inlier_count, r.parallax_expected_count, r.parallax_significance,
+                r.homography_ratio);
   }
-  std::printf("\n");
 }
 
 }  // namespace

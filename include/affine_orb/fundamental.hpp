@@ -125,12 +125,16 @@ class FundamentalEstimator {
   static constexpr int kMaxModels = 1;
 
   /// Matched points in pixels (points2[i]ᵀ F points1[i] = 0), scored with `scoring` (default
-  /// σ = 1 px, T_m = 3.841, T = 5.991). Throws std::invalid_argument when the lists differ in
-  /// length, a coordinate is not finite, or `scoring` fails its check(). Point sets that are all
-  /// one point give an estimator that generates no model.
+  /// σ = 1 px, T_m = 3.841, T = 5.991), the σ of correspondence i multiplied by `scales` (the
+  /// distance of x2 to F x1 by scales.image2[i], of x1 to Fᵀ x2 by scales.image1[i]; empty: σ for
+  /// all). Throws std::invalid_argument when the lists differ in length, a coordinate is not
+  /// finite, or `scoring` or `scales` fails its check(). Point sets that are all one point give an
+  /// estimator that generates no model.
   FundamentalEstimator(const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
-                       const TruncatedChi2Score& scoring = {1.0, 3.841, 5.991})
-      : data_(detail::normalize_correspondences(points1, points2, "FundamentalEstimator")), scorer_(scoring) {}
+                       const TruncatedChi2Score& scoring = {1.0, 3.841, 5.991}, const SigmaScales& scales = {})
+      : data_(detail::normalize_correspondences(points1, points2, "FundamentalEstimator")),
+        scorer_(scoring),
+        scales_(scales, points1.size()) {}
 
   std::size_t size() const { return data_.pixels1.size(); }
 
@@ -158,7 +162,9 @@ class FundamentalEstimator {
     const std::array<double, 2> d = epipolar_squared_distances(model, data_.pixels1[index], data_.pixels2[index]);
     PointScore s;
     s.inlier = true;
-    for (const double squared : d) scorer_.add(squared, s);  // NaN for an undefined epipolar line
+    // NaN for an undefined epipolar line. d[0] is measured in image 2, d[1] in image 1.
+    scorer_.add(d[0], scales_.image2(index), s);
+    scorer_.add(d[1], scales_.image1(index), s);
     return s;
   }
 
@@ -188,6 +194,7 @@ class FundamentalEstimator {
  private:
   detail::NormalizedCorrespondences data_;
   detail::Chi2Scorer scorer_;
+  detail::InverseScaleSquares scales_;
 };
 
 }  // namespace affine_orb

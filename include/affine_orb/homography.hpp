@@ -145,12 +145,16 @@ class HomographyEstimator {
   static constexpr int kMaxModels = 1;
 
   /// Matched points in pixels (points2[i] ~ H points1[i]), scored with `scoring` (default σ = 1 px,
-  /// T_m = T = 5.991). Throws std::invalid_argument when the lists differ in length, a coordinate
-  /// is not finite, or `scoring` fails its check(). Point sets that are all one point give an
-  /// estimator that generates no model.
+  /// T_m = T = 5.991), the σ of correspondence i multiplied by `scales` (the transfer error x2 − H x1
+  /// by scales.image2[i], x1 − H⁻¹ x2 by scales.image1[i]; empty: σ for all). Throws
+  /// std::invalid_argument when the lists differ in length, a coordinate is not finite, or
+  /// `scoring` or `scales` fails its check(). Point sets that are all one point give an estimator
+  /// that generates no model.
   HomographyEstimator(const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
-                      const TruncatedChi2Score& scoring = {})
-      : data_(detail::normalize_correspondences(points1, points2, "HomographyEstimator")), scorer_(scoring) {}
+                      const TruncatedChi2Score& scoring = {}, const SigmaScales& scales = {})
+      : data_(detail::normalize_correspondences(points1, points2, "HomographyEstimator")),
+        scorer_(scoring),
+        scales_(scales, points1.size()) {}
 
   std::size_t size() const { return data_.pixels1.size(); }
 
@@ -177,8 +181,8 @@ class HomographyEstimator {
     PointScore s;
     s.inlier = true;
     // NaN for a point mapped to infinity: an outlier.
-    scorer_.add(transfer_squared(model.h, a, b), s);
-    scorer_.add(transfer_squared(model.inverse, b, a), s);
+    scorer_.add(transfer_squared(model.h, a, b), scales_.image2(index), s);
+    scorer_.add(transfer_squared(model.inverse, b, a), scales_.image1(index), s);
     return s;
   }
 
@@ -228,6 +232,7 @@ class HomographyEstimator {
 
   detail::NormalizedCorrespondences data_;  // pixel H to normalised: T2 H T1⁻¹; back: T2⁻¹ Hn T1
   detail::Chi2Scorer scorer_;
+  detail::InverseScaleSquares scales_;
 };
 
 }  // namespace affine_orb

@@ -116,6 +116,31 @@ struct TruncatedChi2Score {
   }
 };
 
+/// Per-correspondence multipliers of a score's σ, one list per image: an error measured in image k
+/// (the distance of a point of image k to its predicted position or epipolar line) of
+/// correspondence i is divided by (σ · image_k[i])² instead of σ². For keypoints detected at
+/// different pyramid levels: a keypoint of octave o is located to about s^o level-0 pixels (scale
+/// factor s), so image_k[i] = s^o of its keypoint. Empty lists mean 1 for every correspondence.
+struct SigmaScales {
+  std::vector<double> image1;  ///< multiplier of σ for errors measured in image 1, unitless
+  std::vector<double> image2;  ///< multiplier of σ for errors measured in image 2, unitless
+
+  /// Throws std::invalid_argument unless both lists are empty, or both have `count` entries that
+  /// are all positive and finite.
+  void check(std::size_t count) const {
+    detail::require((image1.empty() && image2.empty()) || (image1.size() == count && image2.size() == count),
+                    "SigmaScales: image1 and image2 must both be empty or both have one entry per correspondence (" +
+                        std::to_string(count) + "), got " + std::to_string(image1.size()) + " and " +
+                        std::to_string(image2.size()));
+    for (const std::vector<double>* list : {&image1, &image2}) {
+      for (const double v : *list) {
+        detail::require(detail::positive_finite(v),
+                        "SigmaScales: every multiplier must be positive and finite, got " + std::to_string(v));
+      }
+    }
+  }
+};
+
 /// Score contribution of one correspondence under one model.
 struct PointScore {
   double value = 0.0;   ///< added to the model's score; larger is better
@@ -136,8 +161,10 @@ class Chi2Scorer {
 
   /// Adds the term of one squared residual (pixels²) to `s`: T − d²/σ² when d²/σ² < T_m, else
   /// marks the correspondence an outlier (also for NaN, an undefined residual).
-  void add(double squared, PointScore& s) const {
-    const double chi2 = squared * inv_sigma_squared_;
+  /// `inverse_scale_squared` is 1/m² for a σ multiplied by m for this correspondence (SigmaScales;
+  /// 1 for σ itself).
+  void add(double squared, double inverse_scale_squared, PointScore& s) const {
+    const double chi2 = squared * inv_sigma_squared_ * inverse_scale_squared;
     if (chi2 < threshold_) {
       s.value += constant_ - chi2;
     } else {
@@ -152,6 +179,24 @@ class Chi2Scorer {
   double inv_sigma_squared_;
   double threshold_;
   double constant_;
+};
+
+/// SigmaScales as the factors 1/m² the squared errors are multiplied by (1 when the lists are empty).
+class InverseScaleSquares {
+ public:
+  InverseScaleSquares() = default;
+  /// Throws std::invalid_argument when `scales` fails check(count).
+  InverseScaleSquares(const SigmaScales& scales, std::size_t count) {
+    scales.check(count);
+    for (const double m : scales.image1) image1_.push_back(1.0 / (m * m));
+    for (const double m : scales.image2) image2_.push_back(1.0 / (m * m));
+  }
+  /// 1/m² of correspondence i for an error measured in image 1 (image1()) or image 2 (image2()).
+  double image1(std::size_t i) const { return image1_.empty() ? 1.0 : image1_[i]; }
+  double image2(std::size_t i) const { return image2_.empty() ? 1.0 : image2_[i]; }
+
+ private:
+  std::vector<double> image1_, image2_;
 };
 
 }  // namespace detail

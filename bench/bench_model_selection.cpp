@@ -363,7 +363,7 @@ void labelled_table() {
     return out;
   };
   std::vector<Rule> rules = {
-      make_rule("plane-and-parallax test (DEGENSAC-style), z <= 4.3 (default)", SelectionRule::kPlaneParallax, false),
+      make_rule("plane-and-parallax test (DEGENSAC-style), z <= 3.8 (default)", SelectionRule::kPlaneParallax, false),
       make_rule("plane-and-parallax test, octave sigma", SelectionRule::kPlaneParallax, true),
       make_rule("eq. 22, R_H > 0.45 (paper)", SelectionRule::kScoreRatio, false),
       make_rule("eq. 22, R_H > 0.45, octave sigma", SelectionRule::kScoreRatio, true),

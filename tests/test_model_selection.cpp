@@ -19,6 +19,7 @@
 #include <limits>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -73,14 +74,19 @@ struct Pair {
   std::vector<Eigen::Vector2d> clean1, clean2;
   std::vector<int> truth;
   int scene_count = 0;
+  std::vector<int> octaves1, octaves2;  // pyramid octave of each point (make_pair with max_octave)
 };
+
+constexpr double kLevelScale = 1.2;  // ORB's pyramid scale factor: octave o is located to ~kLevelScale^o px
 
 // Camera 1 = K [I | 0], camera 2 = K [R | t]; `depth_of(pixel, rng)` gives the depth along the
 // camera-1 ray of pixel. `count` correspondences, a fraction `outlier_ratio` of them outliers
-// (independent uniform points in both images), all inliers visible in both images.
+// (independent uniform points in both images), all inliers visible in both images. With
+// max_octave > 0 every correspondence gets an octave o1 uniform in [0, max_octave] in image 1 and
+// o2 within one of it in image 2, and each point's noise is kNoise · kLevelScale^o of its image.
 template <class DepthOf>
 Pair make_pair(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, DepthOf depth_of, int count, double outlier_ratio,
-               std::uint64_t seed) {
+               std::uint64_t seed, int max_octave = 0) {
   const Eigen::Matrix3d k = intrinsics();
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> px(0.0, kWidth - 1), py(0.0, kHeight - 1), unit(0.0, 1.0);
@@ -91,6 +97,15 @@ Pair make_pair(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, DepthOf depth
   for (int i = 0; i < outliers; ++i) kinds[static_cast<std::size_t>(i)] = 0;
   std::shuffle(kinds.begin(), kinds.end(), rng);
   for (const int kind : kinds) {
+    double scale1 = 1.0, scale2 = 1.0;
+    if (max_octave > 0) {
+      const int o1 = std::uniform_int_distribution<int>(0, max_octave)(rng);
+      const int o2 = std::clamp(o1 + std::uniform_int_distribution<int>(-1, 1)(rng), 0, max_octave);
+      pair.octaves1.push_back(o1);
+      pair.octaves2.push_back(o2);
+      scale1 = std::pow(kLevelScale, o1);
+      scale2 = std::pow(kLevelScale, o2);
+    }
     if (kind == 0) {
       pair.points1.emplace_back(static_cast<float>(px(rng)), static_cast<float>(py(rng)));
       pair.points2.emplace_back(static_cast<float>(px(rng)), static_cast<float>(py(rng)));
@@ -107,8 +122,10 @@ Pair make_pair(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, DepthOf depth
     } while (true);
     pair.clean1.push_back(x1);
     pair.clean2.push_back(x2);
-    pair.points1.emplace_back(static_cast<float>(x1.x() + noise(rng)), static_cast<float>(x1.y() + noise(rng)));
-    pair.points2.emplace_back(static_cast<float>(x2.x() + noise(rng)), static_cast<float>(x2.y() + noise(rng)));
+    const double n1x = scale1 * noise(rng), n1y = scale1 * noise(rng);
+    const double n2x = scale2 * noise(rng), n2y = scale2 * noise(rng);
+    pair.points1.emplace_back(static_cast<float>(x1.x() + n1x), static_cast<float>(x1.y() + n1y));
+    pair.points2.emplace_back(static_cast<float>(x2.x() + n2x), static_cast<float>(x2.y() + n2y));
     pair.truth.push_back(1);
     ++pair.scene_count;
   }
@@ -268,6 +285,7 @@ TEST_CASE("sigma equal to the per-image noise: a perfect plane scores R_H at its
   CHECK(expected == doctest::Approx(0.409).epsilon(0.005));
   ModelSelectionOptions o;
   o.sigma = kNoise;
+  o.rule = affine_orb::SelectionRule::kScoreRatio;
   const Pair pair = rig.make(2000, 0.0, 5);
   const ModelSelectionResult r = affine_orb::select_model(pair.points1, pair.points2, o);
   REQUIRE(r.success);
@@ -539,11 +557,11 @@ TEST_CASE("GRIC: the formula against hand-computed values, and the rule on a pla
     const Eigen::Vector2d y = (h * x).hnormalized();
     p2.emplace_back(static_cast<float>(y.x()), static_cast<float>(y.y()));
   }
-  for (double r : affine_orb::detail::homography_gric_residuals(h, p1, p2)) CHECK(r < 1e-6);
+  for (double r : affine_orb::detail::homography_gric_residuals(h, p1, p2, {})) CHECK(r < 1e-6);
   // A point 3 px off along x in image 2 only: forward error 9, backward ≈ 9 / 1.1², a quarter of
   // their sum.
   p2[0].x += 3.0f;
-  const double off = affine_orb::detail::homography_gric_residuals(h, p1, p2)[0];
+  const double off = affine_orb::detail::homography_gric_residuals(h, p1, p2, {})[0];
   CHECK(off > 0.25 * (9.0 + 9.0 / 1.3));
   CHECK(off < 0.25 * (9.0 + 9.0 / 0.8));
 
@@ -565,4 +583,224 @@ TEST_CASE("GRIC: the formula against hand-computed values, and the rule on a pla
   const ModelSelectionResult in_3d = affine_orb::select_model(scene.points1, scene.points2, gric);
   CHECK(in_3d.model == GeometricModel::kFundamental);
   CHECK(in_3d.fundamental_gric < in_3d.homography_gric);
+}
+
+namespace {
+
+// The truncated χ² score of eqs. 20–21 written out from its definition, with σ multiplied by
+// kLevelScale^octave of the image each error is measured in: the independent reference of the
+// octave-scaled scoring. `f_model` selects the epipolar distances (F) instead of the transfer
+// errors (H).
+double naive_octave_score(const Eigen::Matrix3d& model, bool f_model, const Pair& pair, double sigma) {
+  double total = 0.0;
+  for (std::size_t i = 0; i < pair.points1.size(); ++i) {
+    const Eigen::Vector3d x1(pair.points1[i].x, pair.points1[i].y, 1.0);
+    const Eigen::Vector3d x2(pair.points2[i].x, pair.points2[i].y, 1.0);
+    double in2 = 0.0, in1 = 0.0;  // squared errors measured in image 2 and in image 1
+    if (f_model) {
+      const Eigen::Vector3d l2 = model * x1, l1 = model.transpose() * x2;
+      in2 = std::pow(x2.dot(l2), 2) / l2.head<2>().squaredNorm();
+      in1 = std::pow(x1.dot(l1), 2) / l1.head<2>().squaredNorm();
+    } else {
+      in2 = ((model * x1).hnormalized() - x2.head<2>()).squaredNorm();
+      in1 = ((model.inverse() * x2).hnormalized() - x1.head<2>()).squaredNorm();
+    }
+    const double threshold = f_model ? 3.841 : 5.991;
+    double term = 0.0;
+    for (const auto& [squared, octave] : {std::make_pair(in2, pair.octaves2[i]), std::make_pair(in1, pair.octaves1[i])}) {
+      const double s = sigma * std::pow(kLevelScale, octave);
+      const double chi2 = squared / (s * s);
+      if (chi2 < threshold) term += 5.991 - chi2;
+    }
+    total += term;
+  }
+  return total;
+}
+
+// A scene of `kind` with noise at octaves 0-3 (make_pair), 30 % outliers: "plane", "rotation",
+// "sideways" (0.6 m across, depths 2-10 m), "forward" (1.5 m along the optical axis, depths 4-40 m,
+// as a car drives) or "dominant plane" (three quarters of the points on a plane, the rest at depths
+// 2-10 m, 0.6 m across: the configuration DEGENSAC is named for).
+Pair octave_scene(const std::string& kind, std::uint64_t seed) {
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.08, Eigen::Vector3d(0.2, 1.0, -0.1).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d k_inv = intrinsics().inverse();
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.1, -0.2, 1.0).normalized();
+  const auto uniform = [](double lo, double hi) {
+    return [lo, hi](const Eigen::Vector2d&, std::mt19937_64& rng) {
+      return std::uniform_real_distribution<double>(lo, hi)(rng);
+    };
+  };
+  const auto on_plane = [&](const Eigen::Vector2d& x1) { return 6.0 / normal.dot(k_inv * x1.homogeneous()); };
+  if (kind == "plane") {
+    const auto depth = [&](const Eigen::Vector2d& x1, std::mt19937_64&) { return on_plane(x1); };
+    return make_pair(turn, Eigen::Vector3d(-0.5, 0.1, 0.2), depth, 800, 0.3, seed, 3);
+  }
+  if (kind == "rotation") return make_pair(turn, Eigen::Vector3d::Zero(), uniform(1.0, 20.0), 800, 0.3, seed, 3);
+  if (kind == "sideways") return make_pair(turn, Eigen::Vector3d(-0.6, 0.05, 0.1), uniform(2.0, 10.0), 800, 0.3, seed, 3);
+  if (kind == "forward") {
+    const Eigen::Matrix3d slight = Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    return make_pair(slight, Eigen::Vector3d(0.0, 0.0, -1.5), uniform(4.0, 40.0), 800, 0.3, seed, 3);
+  }
+  const auto depth = [&](const Eigen::Vector2d& x1, std::mt19937_64& rng) {
+    return std::uniform_real_distribution<double>(0.0, 1.0)(rng) < 0.75
+               ? on_plane(x1)
+               : std::uniform_real_distribution<double>(2.0, 10.0)(rng);
+  };
+  return make_pair(turn, Eigen::Vector3d(-0.6, 0.05, 0.1), depth, 800, 0.3, seed, 3);
+}
+
+}  // namespace
+
+TEST_CASE("default rule (plane-and-parallax): planes and rotations H, 3-D scenes F, noise at octaves 0-3") {
+  CHECK(ModelSelectionOptions{}.rule == affine_orb::SelectionRule::kPlaneParallax);
+  for (const std::string kind : {"plane", "rotation", "sideways", "forward", "dominant plane"}) {
+    const bool planar = kind == "plane" || kind == "rotation";
+    for (const std::uint64_t seed : {31u, 32u, 33u}) {
+      CAPTURE(kind);
+      CAPTURE(seed);
+      const Pair pair = octave_scene(kind, seed);
+      const ModelSelectionResult plain = affine_orb::select_model(pair.points1, pair.points2);
+      const ModelSelectionResult octaves =
+          affine_orb::select_model(pair.points1, pair.points2, pair.octaves1, pair.octaves2);
+      for (const ModelSelectionResult* r : {&plain, &octaves}) {
+        REQUIRE(r->success);
+        CHECK(r->model == (planar ? GeometricModel::kHomography : GeometricModel::kFundamental));
+        CHECK((r->parallax_significance <= ModelSelectionOptions{}.parallax_significance) == planar);
+        CHECK(r->parallax_significance ==
+              doctest::Approx((std::max(0, r->parallax_inlier_count - 2) - r->parallax_expected_count) /
+                              std::sqrt(std::max(1.0, r->parallax_expected_count))));
+      }
+      // The parallax support off the plane is the scene's: on a 3-D scene most of the homography's
+      // outliers that are scene points lie on the epipolar lines of the completion.
+      if (!planar) {
+        int scene_off_plane = 0;
+        for (std::size_t i = 0; i < pair.truth.size(); ++i)
+          scene_off_plane += pair.truth[i] != 0 && plain.homography_inliers[i] == 0 ? 1 : 0;
+        CHECK(plain.parallax_inlier_count >= 0.8 * scene_off_plane);
+      }
+    }
+  }
+}
+
+TEST_CASE("octave sigma: scores equal the naive per-octave truncated chi2 sum; octave 0 equals no octaves") {
+  const Pair pair = octave_scene("sideways", 41);
+  ModelSelectionOptions o;
+  o.rule = affine_orb::SelectionRule::kScoreRatio;
+  const ModelSelectionResult r = affine_orb::select_model(pair.points1, pair.points2, pair.octaves1, pair.octaves2, o);
+  REQUIRE(r.homography_found);
+  REQUIRE(r.fundamental_found);
+  CHECK(r.homography_score == doctest::Approx(naive_octave_score(r.homography, false, pair, o.sigma)).epsilon(1e-6));
+  CHECK(r.fundamental_score == doctest::Approx(naive_octave_score(r.fundamental, true, pair, o.sigma)).epsilon(1e-6));
+  // Scaling σ only loosens the tests: every high-octave point accepted at σ stays accepted at σ·s^o.
+  const ModelSelectionResult flat = affine_orb::select_model(pair.points1, pair.points2, o);
+  CHECK(r.fundamental_inlier_count >= flat.fundamental_inlier_count);
+
+  // Octave 0 in both images is σ itself: bit-identical results.
+  const std::vector<int> zeros(pair.points1.size(), 0);
+  for (const auto rule : {affine_orb::SelectionRule::kScoreRatio, affine_orb::SelectionRule::kPlaneParallax}) {
+    o.rule = rule;
+    const ModelSelectionResult a = affine_orb::select_model(pair.points1, pair.points2, o);
+    const ModelSelectionResult b = affine_orb::select_model(pair.points1, pair.points2, zeros, zeros, o);
+    CHECK(a.model == b.model);
+    CHECK(a.homography == b.homography);
+    CHECK(a.fundamental == b.fundamental);
+    CHECK(a.homography_score == b.homography_score);
+    CHECK(a.fundamental_score == b.fundamental_score);
+    CHECK(a.parallax_inlier_count == b.parallax_inlier_count);
+    CHECK(a.homography_gric == b.homography_gric);
+  }
+
+  // The estimators with SigmaScales against the same reference, on the true homography of a plane.
+  const Pair plane = octave_scene("plane", 42);
+  const Eigen::Matrix3d k = intrinsics(), k_inv = k.inverse();
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.1, -0.2, 1.0).normalized();
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.08, Eigen::Vector3d(0.2, 1.0, -0.1).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d h = affine_orb::detail::normalize_homogeneous(
+      k * (turn + Eigen::Vector3d(-0.5, 0.1, 0.2) * normal.transpose() / 6.0) * k_inv);
+  affine_orb::SigmaScales scales;
+  for (std::size_t i = 0; i < plane.points1.size(); ++i) {
+    scales.image1.push_back(std::pow(kLevelScale, plane.octaves1[i]));
+    scales.image2.push_back(std::pow(kLevelScale, plane.octaves2[i]));
+  }
+  const affine_orb::HomographyEstimator estimator(plane.points1, plane.points2, {2.0, 5.991, 5.991}, scales);
+  const affine_orb::HomographyModel model{h, h.inverse()};
+  double sum = 0.0;
+  for (std::size_t i = 0; i < plane.points1.size(); ++i) sum += estimator.score(model, i).value;
+  CHECK(sum == doctest::Approx(naive_octave_score(h, false, plane, 2.0)).epsilon(1e-9));
+}
+
+TEST_CASE("every rule on a plane (H) and a 3-D scene (F); eq. 22 and the others stay selectable") {
+  using affine_orb::SelectionRule;
+  const Pair plane = octave_scene("plane", 51);
+  const Pair scene = octave_scene("sideways", 52);
+  for (const SelectionRule rule :
+       {SelectionRule::kScoreRatio, SelectionRule::kGric, SelectionRule::kInlierRatio, SelectionRule::kPlaneParallax}) {
+    CAPTURE(static_cast<int>(rule));
+    ModelSelectionOptions o;
+    o.rule = rule;
+    const ModelSelectionResult h = affine_orb::select_model(plane.points1, plane.points2, plane.octaves1, plane.octaves2, o);
+    const ModelSelectionResult f = affine_orb::select_model(scene.points1, scene.points2, scene.octaves1, scene.octaves2, o);
+    CHECK(h.model == GeometricModel::kHomography);
+    CHECK(f.model == GeometricModel::kFundamental);
+    // Each rule decides by its own statistic.
+    if (rule == SelectionRule::kScoreRatio) {
+      CHECK(h.homography_ratio > o.homography_ratio_threshold);
+      CHECK(f.homography_ratio <= o.homography_ratio_threshold);
+    } else if (rule == SelectionRule::kInlierRatio) {
+      CHECK(h.homography_inlier_count > o.homography_inlier_ratio_threshold * h.fundamental_inlier_count);
+      CHECK(f.homography_inlier_count <= o.homography_inlier_ratio_threshold * f.fundamental_inlier_count);
+    } else if (rule == SelectionRule::kGric) {
+      CHECK(h.homography_gric < h.fundamental_gric);
+      CHECK(f.homography_gric >= f.fundamental_gric);
+    }
+    if (rule != SelectionRule::kPlaneParallax) CHECK(h.parallax_inlier_count == 0);
+  }
+  // The decision moves with its threshold: eq. 22 at θ just above the plane's R_H chooses F.
+  ModelSelectionOptions strict;
+  strict.rule = SelectionRule::kScoreRatio;
+  const double rh = affine_orb::select_model(plane.points1, plane.points2, strict).homography_ratio;
+  strict.homography_ratio_threshold = std::min(0.99, rh + 0.01);
+  CHECK(affine_orb::select_model(plane.points1, plane.points2, strict).model == GeometricModel::kFundamental);
+  ModelSelectionOptions lax;  // a significance no 3-D scene reaches: H
+  lax.parallax_significance = 1e6;
+  CHECK(affine_orb::select_model(scene.points1, scene.points2, lax).model == GeometricModel::kHomography);
+}
+
+TEST_CASE("new options and octave lists: std::invalid_argument for nonsense") {
+  const Pair pair = octave_scene("plane", 61);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto bad = [&](auto change) {
+    ModelSelectionOptions o;
+    change(o);
+    CHECK_THROWS_AS(o.check(), std::invalid_argument);
+    CHECK_THROWS_AS(affine_orb::select_model(pair.points1, pair.points2, o), std::invalid_argument);
+  };
+  bad([](ModelSelectionOptions& o) { o.rule = static_cast<affine_orb::SelectionRule>(42); });
+  bad([](ModelSelectionOptions& o) { o.homography_inlier_ratio_threshold = 0.0; });
+  bad([&](ModelSelectionOptions& o) { o.homography_inlier_ratio_threshold = nan; });
+  bad([&](ModelSelectionOptions& o) { o.parallax_significance = nan; });
+  bad([](ModelSelectionOptions& o) { o.parallax_significance = std::numeric_limits<double>::infinity(); });
+  bad([](ModelSelectionOptions& o) { o.level_scale_factor = 0.9; });
+  bad([](ModelSelectionOptions& o) { o.level_scale_factor = 5.0; });
+  bad([&](ModelSelectionOptions& o) { o.level_scale_factor = nan; });
+
+  std::vector<int> octaves = pair.octaves1;
+  octaves.pop_back();
+  CHECK_THROWS_AS(affine_orb::select_model(pair.points1, pair.points2, octaves, pair.octaves2), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::select_model(pair.points1, pair.points2, pair.octaves1, octaves), std::invalid_argument);
+  for (const int wrong : {-1, 32}) {
+    octaves = pair.octaves1;
+    octaves[3] = wrong;
+    CHECK_THROWS_AS(affine_orb::select_model(pair.points1, pair.points2, octaves, pair.octaves2), std::invalid_argument);
+  }
+  affine_orb::SigmaScales scales;
+  scales.image1.assign(pair.points1.size(), 1.0);
+  CHECK_THROWS_AS(affine_orb::HomographyEstimator(pair.points1, pair.points2, {}, scales), std::invalid_argument);
+  scales.image2.assign(pair.points1.size(), 1.0);
+  CHECK_NOTHROW(affine_orb::HomographyEstimator(pair.points1, pair.points2, {}, scales));
+  for (const double wrong : {0.0, -1.0, nan}) {
+    scales.image2[5] = wrong;
+    CHECK_THROWS_AS(affine_orb::FundamentalEstimator(pair.points1, pair.points2, {1.0, 3.841, 5.991}, scales),
+                    std::invalid_argument);
+  }
 }

@@ -84,6 +84,17 @@ std::vector<std::array<std::uint64_t, Words>> descriptor_rows(const py::handle& 
   return rows;
 }
 
+/// The SelectionRule named by `text` (its enumerator without the k, in snake case), or ValueError.
+affine_orb::SelectionRule selection_rule(const std::string& text) {
+  using affine_orb::SelectionRule;
+  if (text == "plane_parallax") return SelectionRule::kPlaneParallax;
+  if (text == "score_ratio") return SelectionRule::kScoreRatio;
+  if (text == "gric") return SelectionRule::kGric;
+  if (text == "inlier_ratio") return SelectionRule::kInlierRatio;
+  throw py::value_error("rule must be \"plane_parallax\", \"score_ratio\", \"gric\" or \"inlier_ratio\", got \"" +
+                        text + "\"");
+}
+
 std::vector<cv::Point2f> point_list(const py::handle& object, const char* what) {
   const py::array_t<double, py::array::c_style | py::array::forcecast> array =
       py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(object);
@@ -257,10 +268,14 @@ PYBIND11_MODULE(affine_orb, m) {
   m.def(
       "select_model",
       [](const py::handle& points1, const py::handle& points2, double sigma, double homography_ratio_threshold,
-         int max_iterations, std::uint64_t seed) {
+         int max_iterations, std::uint64_t seed, const std::string& rule,
+         const std::optional<std::vector<int>>& octaves1, const std::optional<std::vector<int>>& octaves2) {
         affine_orb::ModelSelectionOptions options;
         options.sigma = sigma;
         options.homography_ratio_threshold = homography_ratio_threshold;
+        options.rule = selection_rule(rule);
+        if (octaves1.has_value() != octaves2.has_value())
+          throw py::value_error("octaves1 and octaves2 must be given together");
         options.ransac.max_iterations = max_iterations;
         options.ransac.min_iterations = std::min(options.ransac.min_iterations, max_iterations);
         options.ransac.seed = seed;
@@ -269,7 +284,8 @@ PYBIND11_MODULE(affine_orb, m) {
         affine_orb::ModelSelectionResult r;
         {
           py::gil_scoped_release release;
-          r = affine_orb::select_model(p1, p2, options);
+          r = octaves1 ? affine_orb::select_model(p1, p2, *octaves1, *octaves2, options)
+                       : affine_orb::select_model(p1, p2, options);
         }
         auto matrix = [](const Eigen::Matrix3d& e) {
           py::array_t<double> out({3, 3});
@@ -288,6 +304,7 @@ PYBIND11_MODULE(affine_orb, m) {
                        : r.model == affine_orb::GeometricModel::kFundamental ? "fundamental"
                                                                              : "none";
         out["homography_ratio"] = r.homography_ratio;
+        out["parallax_significance"] = r.parallax_significance;
         out["homography"] = r.homography_found ? py::object(matrix(r.homography)) : py::none();
         out["fundamental"] = r.fundamental_found ? py::object(matrix(r.fundamental)) : py::none();
         out["homography_inliers"] = flags(r.homography_inliers);
@@ -297,8 +314,13 @@ PYBIND11_MODULE(affine_orb, m) {
       py::arg("points1"), py::arg("points2"), py::arg("sigma") = affine_orb::ModelSelectionOptions{}.sigma,
       py::arg("homography_ratio_threshold") = affine_orb::ModelSelectionOptions{}.homography_ratio_threshold,
       py::arg("max_iterations") = affine_orb::RansacOptions{}.max_iterations,
-      py::arg("seed") = affine_orb::RansacOptions{}.seed,
+      py::arg("seed") = affine_orb::RansacOptions{}.seed, py::arg("rule") = "plane_parallax",
+      py::arg("octaves1") = py::none(), py::arg("octaves2") = py::none(),
       "Homography or fundamental matrix for N x 2 point arrays (paper eqs. 17-22, affine_orb::select_model): a "
       "dict with success, model (\"homography\", \"fundamental\" or \"none\"), homography_ratio (R_H), "
-      "homography and fundamental (3 x 3 arrays, x2 ~ H x1 and x2^T F x1 = 0, or None) and the inlier flags.");
+      "parallax_significance (the plane-and-parallax z-score), homography and fundamental (3 x 3 arrays, x2 ~ H "
+      "x1 and x2^T F x1 = 0, or None) and the inlier flags. rule: \"plane_parallax\" (the default), "
+      "\"score_ratio\" (eq. 22), \"gric\" or \"inlier_ratio\" (affine_orb::SelectionRule). octaves1, "
+      "octaves2: the keypoints' pyramid octaves (cv2.KeyPoint.octave), which scale each point's sigma by "
+      "1.2^octave; both or neither.");
 }

@@ -121,6 +121,22 @@ def test_cv2_interop_and_matching_graf():
     expected = truth @ corners
     error = np.linalg.norm(estimated[:2] / estimated[2] - expected[:2] / expected[2], axis=0)
     assert error.max() < 10.0  # the image corners: extrapolated beyond most matches (800 x 640 image)
+    # The default rule (plane and parallax) finds no parallax beyond chance on this plane; every rule
+    # is selectable, with or without the keypoints' octaves.
+    assert result["model"] == "homography"
+    assert result["parallax_significance"] <= 3.8
+    octaves1 = [ka[m.queryIdx].octave for m in ours]
+    octaves2 = [kb[m.trainIdx].octave for m in ours]
+    for rule in ("plane_parallax", "score_ratio", "gric", "inlier_ratio"):
+        chosen = affine_orb.select_model(p1, p2, rule=rule, octaves1=octaves1, octaves2=octaves2)
+        assert chosen["success"] and chosen["model"] in ("homography", "fundamental")
+        assert chosen["homography"] is not None and chosen["fundamental"] is not None
+    with pytest.raises(ValueError, match="rule"):
+        affine_orb.select_model(p1, p2, rule="ransac")
+    with pytest.raises(ValueError, match="together"):
+        affine_orb.select_model(p1, p2, octaves1=octaves1)
+    with pytest.raises(ValueError, match="octaves"):
+        affine_orb.select_model(p1, p2, octaves1=octaves1[1:], octaves2=octaves2)
 
 
 def test_bad_input():

@@ -291,14 +291,19 @@ class ParallaxEstimator {
 
   std::size_t size() const { return lines_.size(); }
 
+  /// [e']× H for the meeting point e' of the two sampled lines; none when they coincide (or a line
+  /// is undefined: x2 = H x1).
   ModelSet<Model, kMaxModels> generate(const std::array<int, kSampleSize>& sample) const {
     return from_epipole(lines_[static_cast<std::size_t>(sample[0])].cross(lines_[static_cast<std::size_t>(sample[1])]));
   }
 
+  /// FundamentalEstimator's epipolar score (paper eq. 21) of correspondence `index`.
   PointScore score(const Model& model, std::size_t index) const { return fundamental_.score(model, index); }
 
   double max_point_score() const { return fundamental_.max_point_score(); }
 
+  /// [e']× H with e' the least-squares meeting point of the inliers' lines (the eigenvector of the
+  /// smallest eigenvalue of Σ l lᵀ); nullopt with fewer than two inliers.
   std::optional<Model> refine(const Model&, const std::vector<std::uint8_t>& inliers) const {
     Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
     int count = 0;

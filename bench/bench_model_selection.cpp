@@ -424,7 +424,9 @@ void labelled_table() {
   std::printf("\nPer pair: parallax z-score of the default rule (H when <= %.1f), R_H of eq. 22 (H when > %.2f):\n\n",
               affine_orb::ModelSelectionOptions{}.parallax_significance,
               affine_orb::ModelSelectionOptions{}.homography_ratio_threshold);
-  std::printf("| pair | label | matches | parallax inliers | expected by chance | z | R_H |\n|---|---|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "| pair | label | matches | parallax inliers | expected by chance | z | R_H "
+      "|\n|---|---|---:|---:|---:|---:|---:|\n");
   for (const LabelledPair& p : pairs) {
     if (p.points1.size() < 8) continue;
     const affine_orb::ModelSelectionResult r = affine_orb::select_model(p.points1, p.points2);

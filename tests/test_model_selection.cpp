@@ -619,7 +619,8 @@ double naive_octave_score(const Eigen::Matrix3d& model, bool f_model, const Pair
     }
     const double threshold = f_model ? 3.841 : 5.991;
     double term = 0.0;
-    for (const auto& [squared, octave] : {std::make_pair(in2, pair.octaves2[i]), std::make_pair(in1, pair.octaves1[i])}) {
+    for (const auto& [squared, octave] :
+         {std::make_pair(in2, pair.octaves2[i]), std::make_pair(in1, pair.octaves1[i])}) {
       const double s = sigma * std::pow(kLevelScale, octave);
       const double chi2 = squared / (s * s);
       if (chi2 < threshold) term += 5.991 - chi2;
@@ -648,7 +649,8 @@ Pair octave_scene(const std::string& kind, std::uint64_t seed) {
     return make_pair(turn, Eigen::Vector3d(-0.5, 0.1, 0.2), depth, 800, 0.3, seed, 3);
   }
   if (kind == "rotation") return make_pair(turn, Eigen::Vector3d::Zero(), uniform(1.0, 20.0), 800, 0.3, seed, 3);
-  if (kind == "sideways") return make_pair(turn, Eigen::Vector3d(-0.6, 0.05, 0.1), uniform(2.0, 10.0), 800, 0.3, seed, 3);
+  if (kind == "sideways")
+    return make_pair(turn, Eigen::Vector3d(-0.6, 0.05, 0.1), uniform(2.0, 10.0), 800, 0.3, seed, 3);
   if (kind == "forward") {
     const Eigen::Matrix3d slight = Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY()).toRotationMatrix();
     return make_pair(slight, Eigen::Vector3d(0.0, 0.0, -1.5), uniform(4.0, 40.0), 800, 0.3, seed, 3);
@@ -743,8 +745,10 @@ TEST_CASE("every rule on a plane (H) and a 3-D scene (F); eq. 22 and the others 
     CAPTURE(static_cast<int>(rule));
     ModelSelectionOptions o;
     o.rule = rule;
-    const ModelSelectionResult h = affine_orb::select_model(plane.points1, plane.points2, plane.octaves1, plane.octaves2, o);
-    const ModelSelectionResult f = affine_orb::select_model(scene.points1, scene.points2, scene.octaves1, scene.octaves2, o);
+    const ModelSelectionResult h =
+        affine_orb::select_model(plane.points1, plane.points2, plane.octaves1, plane.octaves2, o);
+    const ModelSelectionResult f =
+        affine_orb::select_model(scene.points1, scene.points2, scene.octaves1, scene.octaves2, o);
     CHECK(h.model == GeometricModel::kHomography);
     CHECK(f.model == GeometricModel::kFundamental);
     // Each rule decides by its own statistic.
@@ -781,7 +785,8 @@ TEST_CASE("octave lists and sigma scales: std::invalid_argument for nonsense") {
   for (const int wrong : {-1, 32}) {
     octaves = pair.octaves1;
     octaves[3] = wrong;
-    CHECK_THROWS_AS(affine_orb::select_model(pair.points1, pair.points2, octaves, pair.octaves2), std::invalid_argument);
+    CHECK_THROWS_AS(affine_orb::select_model(pair.points1, pair.points2, octaves, pair.octaves2),
+                    std::invalid_argument);
   }
   affine_orb::SigmaScales scales;
   scales.image1.assign(pair.points1.size(), 1.0);

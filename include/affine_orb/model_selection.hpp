@@ -131,12 +131,12 @@ struct ModelSelectionOptions {
     detail::require(detail::positive_finite(homography_inlier_ratio_threshold),
                     "ModelSelectionOptions: homography_inlier_ratio_threshold must be positive and finite, got " +
                         std::to_string(homography_inlier_ratio_threshold));
-    detail::require(std::isfinite(parallax_significance),
-                    "ModelSelectionOptions: parallax_significance must be finite, got " +
-                        std::to_string(parallax_significance));
-    detail::require(std::isfinite(level_scale_factor) && level_scale_factor >= 1.0 && level_scale_factor <= 4.0,
-                    "ModelSelectionOptions: level_scale_factor must be in [1, 4], got " +
-                        std::to_string(level_scale_factor));
+    detail::require(
+        std::isfinite(parallax_significance),
+        "ModelSelectionOptions: parallax_significance must be finite, got " + std::to_string(parallax_significance));
+    detail::require(
+        std::isfinite(level_scale_factor) && level_scale_factor >= 1.0 && level_scale_factor <= 4.0,
+        "ModelSelectionOptions: level_scale_factor must be in [1, 4], got " + std::to_string(level_scale_factor));
     detail::require(std::isfinite(gric_sigma) && gric_sigma > 0.0,
                     "ModelSelectionOptions: gric_sigma must be positive and finite, got " + std::to_string(gric_sigma));
     detail::require(std::isfinite(homography_ratio_threshold) && homography_ratio_threshold > 0.0 &&
@@ -285,7 +285,8 @@ class ParallaxEstimator {
       const Eigen::Vector3d x2(points2[i].x, points2[i].y, 1.0);
       const Eigen::Vector3d line = x2.cross(h_ * Eigen::Vector3d(points1[i].x, points1[i].y, 1.0));
       const double normal = line.head<2>().norm();
-      lines_.push_back(normal > 0.0 && std::isfinite(normal) ? Eigen::Vector3d(line / normal) : Eigen::Vector3d::Zero());
+      lines_.push_back(normal > 0.0 && std::isfinite(normal) ? Eigen::Vector3d(line / normal)
+                                                             : Eigen::Vector3d::Zero());
     }
   }
 
@@ -480,8 +481,8 @@ inline ModelSelectionResult select_model_scaled(const std::vector<cv::Point2f>& 
     result.fundamental_inlier_count = f.inlier_count;
   }
   if (result.homography_found) {
-    result.homography_gric = gric(homography_gric_residuals(result.homography, points1, points2, inverse_scales),
-                                  options.gric_sigma, 2, 8);
+    result.homography_gric =
+        gric(homography_gric_residuals(result.homography, points1, points2, inverse_scales), options.gric_sigma, 2, 8);
   }
   if (result.fundamental_found) {
     result.fundamental_gric = gric(fundamental_gric_residuals(result.fundamental, points1, points2, inverse_scales),
@@ -489,12 +490,12 @@ inline ModelSelectionResult select_model_scaled(const std::vector<cv::Point2f>& 
   }
   if (result.homography_found && options.rule == SelectionRule::kPlaneParallax) {
     result.parallax_inlier_count = completion.inlier_count;
-    result.parallax_expected_count =
-        parallax_expected_count(result.homography, points1, points2, inverse_scales, result.homography_inliers, options);
+    result.parallax_expected_count = parallax_expected_count(result.homography, points1, points2, inverse_scales,
+                                                             result.homography_inliers, options);
     // The two correspondences of the sample that fixed e' agree with it by construction.
     const int beyond_sample = std::max(0, result.parallax_inlier_count - ParallaxEstimator::kSampleSize);
-    result.parallax_significance = (beyond_sample - result.parallax_expected_count) /
-                                   std::sqrt(std::max(1.0, result.parallax_expected_count));
+    result.parallax_significance =
+        (beyond_sample - result.parallax_expected_count) / std::sqrt(std::max(1.0, result.parallax_expected_count));
   }
   const double total = result.homography_score + result.fundamental_score;
   if (!(total > 0.0)) return result;
@@ -510,9 +511,9 @@ inline ModelSelectionResult select_model_scaled(const std::vector<cv::Point2f>& 
           result.homography_found && (!result.fundamental_found || result.homography_gric < result.fundamental_gric);
       break;
     case SelectionRule::kInlierRatio:
-      homography = result.homography_found &&
-                   result.homography_inlier_count >
-                       options.homography_inlier_ratio_threshold * result.fundamental_inlier_count;
+      homography =
+          result.homography_found &&
+          result.homography_inlier_count > options.homography_inlier_ratio_threshold * result.fundamental_inlier_count;
       break;
     case SelectionRule::kPlaneParallax:
       homography = result.homography_found && result.parallax_significance <= options.parallax_significance;
@@ -555,17 +556,18 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
 /// have one entry per correspondence or an octave is outside [0, 31].
 inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1,
                                          const std::vector<cv::Point2f>& points2, const std::vector<int>& octaves1,
-                                         const std::vector<int>& octaves2,
-                                         const ModelSelectionOptions& options = {}) {
+                                         const std::vector<int>& octaves2, const ModelSelectionOptions& options = {}) {
   detail::require(octaves1.size() == points1.size() && octaves2.size() == points2.size(),
                   "select_model: octaves1 and octaves2 must have one entry per correspondence (" +
                       std::to_string(points1.size()) + "), got " + std::to_string(octaves1.size()) + " and " +
                       std::to_string(octaves2.size()));
   options.check();
   SigmaScales scales;
-  for (const auto& [octaves, out] : {std::make_pair(&octaves1, &scales.image1), std::make_pair(&octaves2, &scales.image2)}) {
+  for (const auto& [octaves, out] :
+       {std::make_pair(&octaves1, &scales.image1), std::make_pair(&octaves2, &scales.image2)}) {
     for (const int octave : *octaves) {
-      detail::require(octave >= 0 && octave <= 31, "select_model: octaves must be in [0, 31], got " + std::to_string(octave));
+      detail::require(octave >= 0 && octave <= 31,
+                      "select_model: octaves must be in [0, 31], got " + std::to_string(octave));
       out->push_back(std::pow(options.level_scale_factor, octave));
     }
   }

@@ -12,12 +12,14 @@ What an install does to the fork (FORK below), and what --uninstall undoes byte 
   path, and src/ORBextractor.cc compiled as C++17.
 
 Why C++17 for that one file only, while ORB-SLAM sets -std=c++11 for everything: raising the whole
-fork changes how ORB-SLAM's own code compiles (GCC 12's strict modes reject ORB-SLAM2's LoopClosing.h
-map allocator; Eigen aligns differently in C++17, and ORB-SLAM2 mixed with a C++17 g2o crashed, see
-adapters/README.md). The adapter's translation unit includes no Eigen and no ORB-SLAM header but its
-own ORBextractor.h, which is valid C++11; what crosses the boundary (std::vector of cv::KeyPoint and
-cv::Mat, cv::InputArray) has the same layout in both modes: libstdc++'s ABI does not depend on -std.
-A -std option set on the source file comes after CMAKE_CXX_FLAGS on the command line, so it wins.
+fork changes how ORB-SLAM's own code compiles (GCC 12 in strict -std=c++17 rejects ORB-SLAM2's
+LoopClosing.h map allocator, and ORB-SLAM2 built as C++11 against a g2o built as C++17 crashed in its
+first bundle adjustment, probably Eigen allocating aligned types differently; see adapters/README.md).
+The adapter's translation unit includes no Eigen and no ORB-SLAM header but its own ORBextractor.h,
+which is valid C++11; what crosses the boundary (std::vector of cv::KeyPoint and cv::Mat,
+cv::InputArray) has the same layout in both modes: libstdc++'s ABI does not depend on -std. A -std
+option set on the source file comes after CMAKE_CXX_FLAGS on the command line, so it wins (the test
+checks the order in the compile command).
 
 Recognition (the files are read, nothing is built):
 - the fork: include/System.h declares `namespace ORB_SLAM2` / `namespace ORB_SLAM3`, and ORB-SLAM3

@@ -171,8 +171,8 @@ class InstallTest:
     def tearDown(self):
         self.temporary.cleanup()
 
-    def run_script(self, *args, fork=None):
-        script = PROJECT / "adapters" / (fork or self.fork) / "install.sh"
+    def run_script(self, *args):
+        script = PROJECT / "adapters" / self.fork / "install.sh"
         return subprocess.run([str(script)] + [str(arg) for arg in args], stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, universal_newlines=True, env=SCRIPT_ENVIRONMENT)
 
@@ -182,9 +182,9 @@ class InstallTest:
         self.assertIn(says, result.stdout)
         return result
 
-    def assert_refused(self, tree, says, *options, fork=None):
+    def assert_refused(self, tree, says, *options):
         before = snapshot(tree)
-        result = self.run_script(*options, tree, fork=fork)
+        result = self.run_script(*options, tree)
         self.assertEqual(result.returncode, 1, result.stdout + result.stderr)
         self.assertIn(says, result.stderr)
         self.assertEqual(snapshot(tree), before, "a refused run changed the tree")

@@ -47,7 +47,7 @@ echo "== libFuzzer"
 CC=clang CXX=clang++ cmake -S . -B "$root/fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
   -DAFFINE_ORB_BUILD_PYTHON=OFF -DAFFINE_ORB_BUILD_FUZZERS=ON
-fuzzers="fuzz_extract fuzz_fast fuzz_describe fuzz_matcher fuzz_model_selection fuzz_readers"
+fuzzers="fuzz_extract fuzz_fast fuzz_describe fuzz_matcher fuzz_model_selection fuzz_readers fuzz_two_view"
 cmake --build "$root/fuzz" -j "$jobs" --target $fuzzers
 # Each target runs from its checked-in seed corpus for a bounded time (the whole extraction
 # AFFINE_ORB_FUZZ_SECONDS, default 60; the stage targets AFFINE_ORB_FUZZ_STAGE_SECONDS, default

@@ -27,6 +27,7 @@
 #include "affine_orb/matcher.hpp"
 #include "affine_orb/model_selection.hpp"
 #include "affine_orb/rbrief.hpp"
+#include "affine_orb/version.hpp"
 
 namespace py = pybind11;
 
@@ -188,6 +189,8 @@ affine_orb::ExtractorOptions make_options(int features, double max_tilt, int thr
 
 PYBIND11_MODULE(affine_orb, m) {
   m.doc() = "Affine-ORB feature extraction, Hamming matching and H/F model selection (C++ library affine_orb).";
+  // The version of the headers the module was compiled with (include/affine_orb/version.hpp).
+  m.attr("__version__") = affine_orb::version();
   const affine_orb::ExtractorOptions defaults;
 
   py::class_<PyExtractor>(m, "Extractor",

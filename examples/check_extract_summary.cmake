@@ -1,0 +1,113 @@
+# affine_orb_extract's keypoint counts, checked against what it does (and affine_orb_match's stated
+# total, at the end). Run by ctest as
+# example_extract_summary:  cmake -DPROGRAM=<affine_orb_extract> -DIMAGE=<an image with many corners> -P ...
+#  - the summary line "N keypoints: A from the image + B from V tilted views" adds up (N = A + B) and
+#    agrees with the JSON output's counts and its keypoints per level;
+#  - A is what the image gives with no tilted views (--max-tilt 1), as the additive budget promises;
+#  - --features F --view-features R gives F + round(R·F);
+#  - the default total that --help states is the one the defaults give.
+function(run_extract out_var)
+  execute_process(COMMAND "${PROGRAM}" "${IMAGE}" ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(rc)
+    message(FATAL_ERROR "affine_orb_extract ${ARGN}: exit ${rc}: ${err}")
+  endif()
+  set(${out_var} "${out}" PARENT_SCOPE)
+endfunction()
+
+# summary(<output> <prefix>): <prefix>_total, _image, _views (keypoints) and _tilted (views).
+function(summary out prefix)
+  if(out MATCHES "([0-9]+) keypoints: ([0-9]+) from the image \\+ ([0-9]+) from ([0-9]+) tilted views?\n")
+    set(total ${CMAKE_MATCH_1})
+    set(image ${CMAKE_MATCH_2})
+    set(views ${CMAKE_MATCH_3})
+    set(tilted ${CMAKE_MATCH_4})
+  elseif(out MATCHES "([0-9]+) keypoints: ([0-9]+) from the image, no tilted views\n")
+    set(total ${CMAKE_MATCH_1})
+    set(image ${CMAKE_MATCH_2})
+    set(views 0)
+    set(tilted 0)
+  else()
+    message(FATAL_ERROR "no keypoint summary line in:\n${out}")
+  endif()
+  math(EXPR sum "${image} + ${views}")
+  if(NOT sum EQUAL total)
+    message(FATAL_ERROR "the summary's counts do not add up: ${out}")
+  endif()
+  foreach(v total image views tilted)
+    set(${prefix}_${v} ${${v}} PARENT_SCOPE)
+  endforeach()
+endfunction()
+
+function(expect what actual expected)
+  if(NOT "${actual}" EQUAL "${expected}")
+    message(FATAL_ERROR "${what}: ${actual}, expected ${expected}")
+  endif()
+endfunction()
+
+execute_process(COMMAND "${PROGRAM}" --help OUTPUT_VARIABLE help RESULT_VARIABLE rc)
+if(rc OR NOT help MATCHES "--features N +keypoints from the image itself \\(default ([0-9]+)\\)")
+  message(FATAL_ERROR "--help does not say what --features is:\n${help}")
+endif()
+set(help_features ${CMAKE_MATCH_1})
+if(NOT help MATCHES "--view-features x N more: ([0-9]+) keypoints in all by default")
+  message(FATAL_ERROR "--help does not state the default total:\n${help}")
+endif()
+set(help_total ${CMAKE_MATCH_1})
+if(NOT help MATCHES "default [0-9.]+ = ([0-9]+) tilted views")
+  message(FATAL_ERROR "--help does not state the default number of tilted views:\n${help}")
+endif()
+set(help_tilted ${CMAKE_MATCH_1})
+
+# The defaults.
+run_extract(out)
+summary("${out}" d)
+expect("default total" ${d_total} ${help_total})
+expect("default keypoints from the image" ${d_image} ${help_features})
+expect("default tilted views" ${d_tilted} ${help_tilted})
+run_extract(json --json)
+string(JSON json_total GET "${json}" keypoints)
+string(JSON json_image GET "${json}" image_keypoints)
+string(JSON json_views GET "${json}" views)
+string(JSON levels LENGTH "${json}" per_level)
+set(per_level_sum 0)
+math(EXPR last "${levels} - 1")
+foreach(l RANGE ${last})
+  string(JSON n GET "${json}" per_level ${l})
+  math(EXPR per_level_sum "${per_level_sum} + ${n}")
+endforeach()
+math(EXPR json_tilted "${json_views} - 1")
+expect("JSON keypoints" ${json_total} ${d_total})
+expect("JSON keypoints per level, summed" ${per_level_sum} ${d_total})
+expect("JSON image_keypoints" ${json_image} ${d_image})
+expect("JSON views - 1" ${json_tilted} ${d_tilted})
+
+# The image's share is the extraction without tilted views.
+run_extract(out --max-tilt 1)
+summary("${out}" plain)
+expect("--max-tilt 1: tilted views" ${plain_tilted} 0)
+expect("--max-tilt 1: keypoints" ${plain_total} ${d_image})
+
+# --features and --view-features.
+run_extract(out --features 300 --view-features 2.5 --max-tilt 2)
+summary("${out}" custom)
+expect("--features 300 --view-features 2.5: from the image" ${custom_image} 300)
+expect("--features 300 --view-features 2.5: from the views" ${custom_views} 750)
+expect("--max-tilt 2: tilted views" ${custom_tilted} 9)
+
+# affine_orb_match's --help states its per-image total the same way (-DMATCH_PROGRAM=<affine_orb_match>
+# -DIMAGE2=<a second image>).
+if(MATCH_PROGRAM)
+  execute_process(COMMAND "${MATCH_PROGRAM}" --help OUTPUT_VARIABLE help)
+  if(NOT help MATCHES "--features N +keypoints from each image itself \\(default ([0-9]+)\\)[^\n]*\n +again: ([0-9]+) keypoints per image in all")
+    message(FATAL_ERROR "affine_orb_match --help does not say what --features is and the total:\n${help}")
+  endif()
+  set(match_total ${CMAKE_MATCH_2})
+  execute_process(COMMAND "${MATCH_PROGRAM}" "${IMAGE}" "${IMAGE2}" --json RESULT_VARIABLE rc OUTPUT_VARIABLE json)
+  if(rc)
+    message(FATAL_ERROR "affine_orb_match failed (exit ${rc})")
+  endif()
+  string(JSON keypoints1 GET "${json}" keypoints1)
+  string(JSON keypoints2 GET "${json}" keypoints2)
+  expect("affine_orb_match: keypoints of image 1" ${keypoints1} ${match_total})
+  expect("affine_orb_match: keypoints of image 2" ${keypoints2} ${match_total})
+endif()

@@ -7,6 +7,9 @@
 #   cmake -DPREFIX=<prefix> ...           uses what is installed there (tests/package_check.sh: /usr).
 # Both with -DSOURCE_DIR=tests/consumer -DWORK_DIR=<scratch> -DGENERATOR=<cmake generator>
 # -DCXX=<C++ compiler> -DVERSION=<expected version> -P check.cmake.
+if(NOT WORK_DIR OR NOT (BINARY_DIR OR PREFIX))
+  message(FATAL_ERROR "usage: cmake -DBINARY_DIR=<build tree> | -DPREFIX=<prefix> -DWORK_DIR=<scratch> ... -P check.cmake")
+endif()
 file(REMOVE_RECURSE "${WORK_DIR}")
 if(BINARY_DIR)
   set(PREFIX "${WORK_DIR}/prefix")

@@ -34,28 +34,46 @@
 
 namespace {
 
-const char* const kUsage =
-    "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
-    "                        [--features N] [--threads K] [--spreading S] [--all-stages] [--min-inliers N]\n"
-    "                        [--one-shot] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]\n"
-    "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian opencv-doc),\n"
-    "             writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
-    "  views on demand (the default): stage 0 matches the images' own keypoints; while the pair is not\n"
-    "  verified (--min-inliers inliers of the chosen model), each next stage adds the views of stronger tilts\n"
-    "  --features N       keypoints of each image itself (default 2000; --one-shot: 1000); the views add\n"
-    "                     0.25 x N (tilts up to 2) and 0.5 x N more (up to 2.83), or N with --one-shot\n"
-    "  --max-tilt T       largest simulated tilt, 1 = no affine views (default 2.828: 18 views); the stages\n"
-    "                     stop there\n"
-    "  --all-stages       run every stage (the views on for every pair) instead of stopping when verified\n"
-    "  --min-inliers N    inliers that verify a pair and stop the escalation (default 15)\n"
-    "  --one-shot         extract every view at once (Extractor::extract) and match once\n"
-    "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
-    "  --spreading S      strongest (default: most repeatable) or quadtree (spread over the image, for SLAM)\n"
-    "  --out PNG          the matches side by side (green correct, red wrong; without ground truth:\n"
-    "                     green = inlier of the chosen model)\n"
-    "  --rectified PNG    image 1 next to image 2 warped into image 1's frame with the homography (the chosen\n"
-    "                     one, or the estimated one when F was chosen, which the output then says)\n"
-    "  --save-matches F   one line \"x1 y1 x2 y2\" per match, original pixel coordinates (exact floats)\n";
+/// The usage text, its keypoint counts computed from the defaults.
+std::string usage() {
+  const affine_orb::TwoViewOptions two_view;
+  const int n = two_view.extractor.features;
+  std::string stages;
+  int total = n;
+  for (const affine_orb::ViewStage& stage : two_view.stages) {
+    const int added = static_cast<int>(std::lround(stage.view_features * n));
+    stages += (stages.empty() ? "" : ", then ") + std::to_string(added) + " (tilts up to " +
+              std::to_string(stage.max_tilt).substr(0, 4) + ")";
+    total += added;
+  }
+  const affine_orb::ExtractorOptions one_shot;
+  return "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
+         "                        [--features N] [--threads K] [--spreading S] [--all-stages] [--min-inliers N]\n"
+         "                        [--one-shot] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]\n"
+         "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian\n"
+         "             opencv-doc), writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
+         "  views on demand (the default): stage 0 matches the images' own keypoints; while the pair is not\n"
+         "  verified (--min-inliers inliers of the chosen model), each next stage adds the views of stronger tilts\n"
+         "  --features N       keypoints from each image itself (default " + std::to_string(n) + "); while the pair is\n"
+         "                     not verified its tilted views add " + stages + ":\n"
+         "                     at most " + std::to_string(total) + " keypoints per image in all\n"
+         "  --max-tilt T       largest simulated tilt, 1 = no tilted views (default 2.828); the stages stop there\n"
+         "  --all-stages       run every stage (the views on for every pair) instead of stopping when verified\n"
+         "  --min-inliers N    inliers that verify a pair and end the escalation (default " +
+         std::to_string(two_view.min_inliers) + ")\n"
+         "  --one-shot         every view at once (Extractor::extract), matched once; --features then defaults to " +
+         std::to_string(one_shot.features) + "\n"
+         "                     and the 17 tilted views add as many again: " +
+         std::to_string(one_shot.features + static_cast<int>(std::lround(one_shot.view_features * one_shot.features))) +
+         " keypoints per image in all\n"
+         "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
+         "  --spreading S      strongest (default: most repeatable) or quadtree (spread over the image, for SLAM)\n"
+         "  --out PNG          the matches side by side (green correct, red wrong; without ground truth:\n"
+         "                     green = inlier of the chosen model)\n"
+         "  --rectified PNG    image 1 next to image 2 warped into image 1's frame with the homography (the chosen\n"
+         "                     one, or the estimated one when F was chosen, which the output then says)\n"
+         "  --save-matches F   one line \"x1 y1 x2 y2\" per match, original pixel coordinates (exact floats)\n";
+}
 
 const char* const kDefaultDir = "/usr/share/doc/opencv-doc/examples/data/";
 
@@ -254,7 +272,7 @@ int main(int argc, char** argv) {
     if (plan.one_shot) options.features = 1000;
     options.threads = 2;
     if (affine_orb::examples::parse_common(args, options)) {
-      std::fputs(kUsage, stdout);
+      std::fputs(usage().c_str(), stdout);
       return 0;
     }
     const std::string descriptor = args.value("--descriptor", "rbrief");
@@ -355,7 +373,7 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "affine_orb_match: %s\n%s", e.what(), kUsage);
+    std::fprintf(stderr, "affine_orb_match: %s\n%s", e.what(), usage().c_str());
     return 2;
   }
 }

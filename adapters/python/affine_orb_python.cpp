@@ -28,6 +28,7 @@
 #include "affine_orb/model_selection.hpp"
 #include "affine_orb/rbrief.hpp"
 #include "affine_orb/two_view.hpp"
+#include "affine_orb/version.hpp"
 
 namespace py = pybind11;
 
@@ -261,6 +262,8 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
 
 PYBIND11_MODULE(affine_orb, m) {
   m.doc() = "Affine-ORB feature extraction, Hamming matching and H/F model selection (C++ library affine_orb).";
+  // The version of the headers the module was compiled with (include/affine_orb/version.hpp).
+  m.attr("__version__") = affine_orb::version();
   const affine_orb::ExtractorOptions defaults;
 
   py::class_<PyExtractor>(m, "Extractor",

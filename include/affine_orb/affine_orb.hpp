@@ -24,3 +24,4 @@
 #include "affine_orb/rbrief.hpp"
 #include "affine_orb/relative_pose.hpp"
 #include "affine_orb/two_view.hpp"
+#include "affine_orb/version.hpp"

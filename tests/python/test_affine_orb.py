@@ -2,6 +2,7 @@
 cv2 interplay, bad input, thread counts. Run by ctest (test_python) with PYTHONPATH set to the
 build's python directory and AFFINE_ORB_TEST_PROBE naming the C++ probe program."""
 import os
+import re
 import subprocess
 import threading
 
@@ -48,6 +49,26 @@ def test_equals_the_cpp_extractor(descriptor, max_tilt, threads):
     assert np.array_equal(got.astype(np.float32), numbers.astype(np.float32))
     assert descriptors.dtype == np.uint8 and descriptors.shape == (len(keypoints), 32 if descriptor == "rbrief" else 64)
     assert np.array_equal(descriptors, want)
+
+
+def test_version_is_the_headers_and_cmakes():
+    """__version__ is the string of include/affine_orb/version.hpp and the version CMake configured
+    (AFFINE_ORB_EXPECTED_VERSION, set by ctest)."""
+    header = open(os.path.join(os.path.dirname(__file__), "../../include/affine_orb/version.hpp")).read()
+    parts = [re.search(r"^#define AFFINE_ORB_VERSION_%s (\d+)$" % p, header, re.M).group(1)
+             for p in ("MAJOR", "MINOR", "PATCH")]
+    assert affine_orb.__version__ == ".".join(parts)
+    expected = os.environ.get("AFFINE_ORB_EXPECTED_VERSION")
+    if expected is not None:
+        assert affine_orb.__version__ == expected
+
+
+def test_the_module_is_the_one_on_pythonpath():
+    """The module under test is the build tree's (ctest sets PYTHONPATH to it), not an installed copy
+    such as the Debian package's in /usr/lib/python3/dist-packages."""
+    path = os.environ.get("PYTHONPATH")
+    if path:
+        assert os.path.dirname(os.path.realpath(affine_orb.__file__)) == os.path.realpath(path.split(os.pathsep)[0])
 
 
 def test_views_and_defaults():

@@ -177,8 +177,8 @@ int main(int argc, char** argv) {
   try {
     affine_orb::examples::Args args(argc, argv);
     affine_orb::ExtractorOptions options;
-    // 1000 from each image and as many from its views (the additive budget): 2000 keypoints, as
-    // this example had before the views became additive.
+    // 1000 from each image and as many from its views (the additive budget): 2000 keypoints, the
+    // total of bench_affine_speed's and eval_viewpoint's affine rows.
     options.features = 1000;
     options.threads = 2;
     options.spreading = affine_orb::Spreading::kStrongest;  // matching two images, not tracking

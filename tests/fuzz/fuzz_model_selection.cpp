@@ -1,4 +1,4 @@
-// libFuzzer target (issue 16): RANSAC and H/F model selection on arbitrary correspondences. The
+// libFuzzer target: RANSAC and H/F model selection on arbitrary correspondences. The
 // bytes give up to 32 point pairs (coordinates from a 16-bit grid, plus NaN, infinities and
 // duplicates), σ, the iteration cap and the seed. select_model() must end in
 // std::invalid_argument exactly for non-finite coordinates, and otherwise in a result that keeps

@@ -157,7 +157,8 @@ Method peer(const std::string& name, cv::Ptr<cv::Feature2D> detector, const affi
               matches = affine_orb::match(d1, d2, affine_orb::MatcherOptions{});
             }
             for (const affine_orb::Match& m : matches) {
-              o.matches.emplace_back(k1[static_cast<std::size_t>(m.query)].pt, k2[static_cast<std::size_t>(m.train)].pt);
+              o.matches.emplace_back(k1[static_cast<std::size_t>(m.query)].pt,
+                                     k2[static_cast<std::size_t>(m.train)].pt);
             }
             verify(o, model);
             o.ms = since(start);
@@ -247,8 +248,9 @@ int main(int argc, char** argv) {
       methods.push_back(two_view("sweep: " + name, o));
     };
     variant("one stage up to 2.83, +1000", [](auto& o) { o.stages = {{2.0 * std::sqrt(2.0), 0.5}}; });
-    variant("stages 1.41 +250, 2 +250, 2.83 +500",
-            [](auto& o) { o.stages = {{std::sqrt(2.0), 0.125}, {2.0, 0.125}, {2.0 * std::sqrt(2.0), 0.25}}; });
+    variant("stages 1.41 +250, 2 +250, 2.83 +500", [](auto& o) {
+      o.stages = {{std::sqrt(2.0), 0.125}, {2.0, 0.125}, {2.0 * std::sqrt(2.0), 0.25}};
+    });
     variant("stages 2 +500, 2.83 +1000", [](auto& o) { o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}}; });
     variant("stages 2 +1000, 2.83 +2000", [](auto& o) { o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}}; });
     variant("stages up to 4: 2 +500, 2.83 +1000, 4 +1000", [](auto& o) {
@@ -256,9 +258,8 @@ int main(int argc, char** argv) {
       o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}, {4.0, 0.5}};
     });
     for (int n : {10, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
-    for (double r : {0.0, 0.05, 0.2}) variant("min_inlier_ratio " + std::to_string(r).substr(0, 4), [r](auto& o) {
-        o.min_inlier_ratio = r;
-      });
+    for (double r : {0.0, 0.05, 0.2})
+      variant("min_inlier_ratio " + std::to_string(r).substr(0, 4), [r](auto& o) { o.min_inlier_ratio = r; });
     variant("plain 1000 first", [](auto& o) {
       o.extractor.features = 1000;
       o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}};
@@ -287,14 +288,16 @@ int main(int argc, char** argv) {
       row.matches = row.outcome.matches.size();
       row.correct = affine_orb::bench::correct_matches(row.outcome.matches, pair.h);
       row.corner_error = judge_corner_error(row.outcome.matches, pair.h, a.size());
-      row.own_corner_error =
-          row.outcome.homography_found ? affine_orb::bench::corner_error(row.outcome.homography, pair.h, a.size()) : 1e9;
+      row.own_corner_error = row.outcome.homography_found
+                                 ? affine_orb::bench::corner_error(row.outcome.homography, pair.h, a.size())
+                                 : 1e9;
       row.solved = row.corner_error <= affine_orb::bench::kSolvedCornerError;
-      std::fprintf(stderr, "%-18s %-46s kp %5d/%5d matches %5zu distinct %5zu %s (%.1f px, own %.1f) stage %d %s%s %.0f ms\n",
+      std::fprintf(stderr,
+                   "%-18s %-46s kp %5d/%5d matches %5zu distinct %5zu %s (%.1f px, own %.1f) stage %d %s%s %.0f ms\n",
                    row.pair.c_str(), method.name.c_str(), row.outcome.keypoints1, row.outcome.keypoints2, row.matches,
                    row.correct.distinct, row.solved ? "solved" : "------", std::min(row.corner_error, 9999.0),
-                   std::min(row.own_corner_error, 9999.0),
-                   row.outcome.stage, row.outcome.verified ? "verified" : "", row.outcome.stages.c_str(), row.outcome.ms);
+                   std::min(row.own_corner_error, 9999.0), row.outcome.stage, row.outcome.verified ? "verified" : "",
+                   row.outcome.stages.c_str(), row.outcome.ms);
       rows.push_back(std::move(row));
     }
   }
@@ -347,7 +350,8 @@ int main(int argc, char** argv) {
                   m.matcher ? std::to_string(wrong).c_str() : "", stage_text.c_str());
     md << line;
   }
-  md << "\n| pair | method | kp1 | kp2 | matches | distinct correct | corner error px (judge / own) | solved | stage | ms |\n"
+  md << "\n| pair | method | kp1 | kp2 | matches | distinct correct | corner error px (judge / own) | solved | stage | "
+        "ms |\n"
      << "|---|---|---:|---:|---:|---:|---:|---|---:|---:|\n";
   std::ofstream csv(out_dir + "/eval_two_view.csv");
   csv << "pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,corner_error,own_corner_error,solved,"
@@ -357,10 +361,10 @@ int main(int argc, char** argv) {
     std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f | %s | %s | %.0f |\n",
                   r.pair.c_str(), r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches,
                   r.correct.distinct, std::min(r.corner_error, 9999.0), std::min(r.own_corner_error, 9999.0),
-                  r.solved ? "yes" : "no",
-                  r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "", r.outcome.ms);
+                  r.solved ? "yes" : "no", r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "",
+                  r.outcome.ms);
     md << line;
-    std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f\n", r.pair.c_str(),
+    std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f\n", r.pair.c_str(),
                   r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches, r.correct.correct,
                   r.correct.distinct, std::min(r.corner_error, 1e6), std::min(r.own_corner_error, 1e6), r.solved,
                   r.outcome.stage, r.outcome.verified, r.outcome.ms);

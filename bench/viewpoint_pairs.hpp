@@ -54,7 +54,8 @@ inline std::vector<ViewpointPair> viewpoint_pairs(const std::string& only = "") 
   for (const std::string sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
     if (!only.empty() && only.find("," + sequence + ",") == std::string::npos) continue;
     for (int n = 2; n <= 6; ++n) {
-      pairs.push_back({sequence, n, oxford + sequence + "/img1.png", oxford + sequence + "/img" + std::to_string(n) + ".png",
+      pairs.push_back({sequence, n, oxford + sequence + "/img1.png",
+                       oxford + sequence + "/img" + std::to_string(n) + ".png",
                        read_oxford_homography(oxford + sequence + "/H1to" + std::to_string(n) + "p")});
     }
   }
@@ -116,7 +117,8 @@ inline constexpr double kSolvedCornerError = 5.0;
 /// against the nearest train descriptor farther than 4 px from the best one's keypoint (none among
 /// the 32 nearest: accepted), then duplicate correspondences (both points within 2 px) removed,
 /// the smaller distance kept.
-inline std::vector<affine_orb::Match> match_float(const std::vector<cv::KeyPoint>& keypoints1, const cv::Mat& descriptors1,
+inline std::vector<affine_orb::Match> match_float(const std::vector<cv::KeyPoint>& keypoints1,
+                                                  const cv::Mat& descriptors1,
                                                   const std::vector<cv::KeyPoint>& keypoints2,
                                                   const cv::Mat& descriptors2) {
   if (descriptors1.empty() || descriptors2.empty()) return {};
@@ -137,7 +139,8 @@ inline std::vector<affine_orb::Match> match_float(const std::vector<cv::KeyPoint
       break;
     }
     // Distances scaled to integers for affine_orb::Match; only their order matters.
-    if (accepted) matches.push_back({best.queryIdx, best.trainIdx, static_cast<int>(std::lround(best.distance * 1000.0f))});
+    if (accepted)
+      matches.push_back({best.queryIdx, best.trainIdx, static_cast<int>(std::lround(best.distance * 1000.0f))});
   }
   std::vector<cv::Point2f> p1, p2;
   for (const auto& kp : keypoints1) p1.push_back(kp.pt);

@@ -54,15 +54,23 @@ std::string usage() {
          "             opencv-doc), writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
          "  views on demand (the default): stage 0 matches the images' own keypoints; while the pair is not\n"
          "  verified (--min-inliers inliers of the chosen model), each next stage adds the views of stronger tilts\n"
-         "  --features N       keypoints from each image itself (default " + std::to_string(n) + "); while the pair is\n"
-         "                     not verified its tilted views add " + stages + ":\n"
-         "                     at most " + std::to_string(total) + " keypoints per image in all\n"
+         "  --features N       keypoints from each image itself (default " +
+         std::to_string(n) +
+         "); while the pair is\n"
+         "                     not verified its tilted views add " +
+         stages +
+         ":\n"
+         "                     at most " +
+         std::to_string(total) +
+         " keypoints per image in all\n"
          "  --max-tilt T       largest simulated tilt, 1 = no tilted views (default 2.828); the stages stop there\n"
          "  --all-stages       run every stage (the views on for every pair) instead of stopping when verified\n"
          "  --min-inliers N    inliers that verify a pair and end the escalation (default " +
-         std::to_string(two_view.min_inliers) + ")\n"
+         std::to_string(two_view.min_inliers) +
+         ")\n"
          "  --one-shot         every view at once (Extractor::extract), matched once; --features then defaults to " +
-         std::to_string(one_shot.features) + "\n"
+         std::to_string(one_shot.features) +
+         "\n"
          "                     and the 17 tilted views add as many again: " +
          std::to_string(one_shot.features + static_cast<int>(std::lround(one_shot.view_features * one_shot.features))) +
          " keypoints per image in all\n"
@@ -343,10 +351,12 @@ int main(int argc, char** argv) {
       if (!plan.one_shot) {
         if (o.verified) {
           std::printf("verified at stage %d of %d (%s)\n", o.stage, o.stages,
-                      o.stage == 0 ? "the images' own keypoints" : ("views up to tilt " + std::to_string(o.stage_tilt).substr(0, 4)).c_str());
+                      o.stage == 0 ? "the images' own keypoints"
+                                   : ("views up to tilt " + std::to_string(o.stage_tilt).substr(0, 4)).c_str());
         } else {
-          std::printf("not verified after stage %d of %d (views up to tilt %.2f): fewer than %d inliers of the chosen model\n",
-                      o.stage, o.stages, o.stage_tilt, plan.min_inliers);
+          std::printf(
+              "not verified after stage %d of %d (views up to tilt %.2f): fewer than %d inliers of the chosen model\n",
+              o.stage, o.stages, o.stage_tilt, plan.min_inliers);
         }
       }
       std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
@@ -355,12 +365,14 @@ int main(int argc, char** argv) {
       std::printf("\nmodel %s (R_H = %.2f), %zu inliers\n", model_name(o.selection.model), o.selection.homography_ratio,
                   o.inliers);
       if (plan.one_shot) {
-        std::printf("time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
-                    o.ms_extract1, o.ms_extract2, o.ms_first_extract, o.ms_match, o.ms_model);
+        std::printf(
+            "time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
+            o.ms_extract1, o.ms_extract2, o.ms_first_extract, o.ms_match, o.ms_model);
       } else {
-        std::printf("time: extract %.1f ms (both images, every stage run), match %.1f ms, model %.1f ms (the matcher's "
-                    "first call: %.1f ms in all)\n",
-                    o.ms_extract1, o.ms_match, o.ms_model, o.ms_first_extract);
+        std::printf(
+            "time: extract %.1f ms (both images, every stage run), match %.1f ms, model %.1f ms (the matcher's "
+            "first call: %.1f ms in all)\n",
+            o.ms_extract1, o.ms_match, o.ms_model, o.ms_first_extract);
       }
       if (!out.empty()) std::printf("matches drawn to %s\n", out.c_str());
       if (o.rectified_from == "chosen homography") {

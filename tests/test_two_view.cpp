@@ -114,7 +114,8 @@ TEST_CASE("stage k's keypoints and descriptors are a superset of stage k-1's") {
   REQUIRE(full.stage == static_cast<int>(options.stages.size()));
   REQUIRE(full.stages.size() == options.stages.size() + 1);
   REQUIRE(part.stage == static_cast<int>(shorter.stages.size()));
-  for (const auto& [a, b] : {std::pair{&part.features1, &full.features1}, std::pair{&part.features2, &full.features2}}) {
+  for (const auto& [a, b] :
+       {std::pair{&part.features1, &full.features1}, std::pair{&part.features2, &full.features2}}) {
     REQUIRE(a->size() < b->size());
     int differences = 0;
     for (std::size_t i = 0; i < a->size(); ++i) {
@@ -178,7 +179,8 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
   const auto r = matcher.match(image1, image2, mask1);
   REQUIRE(r.features1.size() > 0);
   int masked = 0;
-  for (const cv::KeyPoint& k : r.features1.keypoints) masked += mask1.at<std::uint8_t>(cvRound(k.pt.y), cvRound(k.pt.x)) == 0;
+  for (const cv::KeyPoint& k : r.features1.keypoints)
+    masked += mask1.at<std::uint8_t>(cvRound(k.pt.y), cvRound(k.pt.x)) == 0;
   CHECK(masked == 0);
   CHECK_THROWS_AS(matcher.match(cv::Mat(), image2), std::invalid_argument);
   CHECK_THROWS_AS(matcher.match(image1, cv::Mat(10, 10, CV_32F)), std::invalid_argument);

@@ -203,7 +203,7 @@ py::array_t<bool> flag_array(const std::vector<std::uint8_t>& v) {
 const char* model_name(affine_orb::GeometricModel model) {
   return model == affine_orb::GeometricModel::kHomography    ? "homography"
          : model == affine_orb::GeometricModel::kFundamental ? "fundamental"
-                                                              : "none";
+                                                             : "none";
 }
 
 /// match_images() for one descriptor: the C++ TwoViewMatcher, its result as Python objects.
@@ -379,7 +379,8 @@ PYBIND11_MODULE(affine_orb, m) {
       "homography and fundamental (3 x 3 arrays, x2 ~ H x1 and x2^T F x1 = 0, or None) and the inlier flags.");
   const affine_orb::TwoViewOptions two_view;
   py::list default_stages;
-  for (const affine_orb::ViewStage& stage : two_view.stages) default_stages.append(py::make_tuple(stage.max_tilt, stage.view_features));
+  for (const affine_orb::ViewStage& stage : two_view.stages)
+    default_stages.append(py::make_tuple(stage.max_tilt, stage.view_features));
   m.def(
       "match_images",
       [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,

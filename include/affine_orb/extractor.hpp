@@ -306,7 +306,8 @@ class Extractor {
     const int first = staged_views_;
     int last = first;
     // The same 0.1 % tolerance as view_parameters(), so that 2.83 includes 2√2.
-    while (last < static_cast<int>(view_work_.size()) && tilts_[static_cast<std::size_t>(last)] <= up_to_tilt * (1.0 + 1e-3)) {
+    while (last < static_cast<int>(view_work_.size()) &&
+           tilts_[static_cast<std::size_t>(last)] <= up_to_tilt * (1.0 + 1e-3)) {
       ++last;
     }
     if (last == first) return {};
@@ -411,9 +412,8 @@ class Extractor {
   /// taking turns in view order), then the final selection of the shortlisted ones.
   void run_views(const cv::Mat& image, const cv::Mat& mask, int first, int last) {
     turns_->reset(first);
-    for_each(last - first, [&](int i, int w) {
-      process_view(first + i, image, mask, thread_work_[static_cast<std::size_t>(w)]);
-    });
+    for_each(last - first,
+             [&](int i, int w) { process_view(first + i, image, mask, thread_work_[static_cast<std::size_t>(w)]); });
     const int shortlisted = first == 0 && direct(0) ? 1 : first;
     if (shortlisted < last) select_shortlisted(image.size(), shortlisted, last);
   }

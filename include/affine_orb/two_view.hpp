@@ -85,15 +85,15 @@ struct TwoViewOptions {
                     "TwoViewOptions: views on demand need ExtractorOptions::view_budget = kAdditive");
     double previous = 1.0;
     for (const ViewStage& stage : stages) {
-      detail::require(std::isfinite(stage.max_tilt) && stage.max_tilt > previous * (1.0 + 1e-3),
-                      "TwoViewOptions: stage max_tilt values must increase from above 1, got " +
-                          std::to_string(stage.max_tilt));
+      detail::require(
+          std::isfinite(stage.max_tilt) && stage.max_tilt > previous * (1.0 + 1e-3),
+          "TwoViewOptions: stage max_tilt values must increase from above 1, got " + std::to_string(stage.max_tilt));
       detail::require(stage.max_tilt <= extractor.views.max_tilt * (1.0 + 1e-3),
                       "TwoViewOptions: a stage's max_tilt exceeds extractor.views.max_tilt (" +
                           std::to_string(stage.max_tilt) + " > " + std::to_string(extractor.views.max_tilt) + ")");
-      detail::require(std::isfinite(stage.view_features) && stage.view_features >= 0.0 && stage.view_features <= 16.0,
-                      "TwoViewOptions: a stage's view_features must be in [0, 16], got " +
-                          std::to_string(stage.view_features));
+      detail::require(
+          std::isfinite(stage.view_features) && stage.view_features >= 0.0 && stage.view_features <= 16.0,
+          "TwoViewOptions: a stage's view_features must be in [0, 16], got " + std::to_string(stage.view_features));
       previous = stage.max_tilt;
     }
     detail::require(min_inliers >= 8 && min_inliers <= 1000000,
@@ -105,17 +105,17 @@ struct TwoViewOptions {
 
 /// What one stage of TwoViewMatcher::match() did.
 struct TwoViewStageReport {
-  double max_tilt = 1.0;      ///< largest tilt extracted so far (1: the images alone)
-  int keypoints1 = 0;         ///< keypoints of image 1 so far
-  int keypoints2 = 0;         ///< keypoints of image 2 so far
-  int matches = 0;            ///< correspondences after the stage
-  int inliers = 0;            ///< inliers of the chosen model (0 when none was chosen)
+  double max_tilt = 1.0;        ///< largest tilt extracted so far (1: the images alone)
+  int keypoints1 = 0;           ///< keypoints of image 1 so far
+  int keypoints2 = 0;           ///< keypoints of image 2 so far
+  int matches = 0;              ///< correspondences after the stage
+  int inliers = 0;              ///< inliers of the chosen model (0 when none was chosen)
   int homography_inliers = 0;   ///< inliers of the estimated H (0 when none was found)
   int fundamental_inliers = 0;  ///< inliers of the estimated F (0 when none was found)
   GeometricModel model = GeometricModel::kNone;
-  double extract_ms = 0.0;    ///< the stage's extraction of both images, milliseconds
-  double match_ms = 0.0;      ///< matching, milliseconds
-  double verify_ms = 0.0;     ///< RANSAC and model selection, milliseconds
+  double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
+  double match_ms = 0.0;    ///< matching, milliseconds
+  double verify_ms = 0.0;   ///< RANSAC and model selection, milliseconds
 };
 
 /// The outcome of TwoViewMatcher::match().

@@ -57,12 +57,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::uint8_t b = bytes.next();
     options.stages.push_back({kTilts[b % 5], (b >> 3) * 0.125 - 0.25});  // view_features may be < 0
   }
-  options.min_inliers = bytes.next() % 40;  // < 8 is invalid
+  options.min_inliers = bytes.next() % 40;               // < 8 is invalid
   options.min_inlier_ratio = (bytes.next() % 12) * 0.1;  // > 1 is invalid
   options.all_stages = (flags & 1) != 0;
   if (flags & 2) options.extractor.spreading = affine_orb::Spreading::kQuadtree;
   options.model.ransac.max_iterations = 1 + bytes.next() % 64;
-  options.model.ransac.min_iterations = std::min(options.model.ransac.min_iterations, options.model.ransac.max_iterations);
+  options.model.ransac.min_iterations =
+      std::min(options.model.ransac.min_iterations, options.model.ransac.max_iterations);
 
   const int width1 = 1 + bytes.next() % 48;
   const int height1 = 1 + bytes.next() % 40;

@@ -163,8 +163,7 @@ class ViewBudgets {
   /// remainders; ties to the earlier view), and each view's share is split over its levels
   /// geometrically (level_budgets()). Exponent −1 weights by a view's area W·H/t, 0 gives equal
   /// shares. Other views keep their budgets.
-  void share(const std::vector<double>& tilts, int first, int last, int total, double exponent,
-             double scale_factor) {
+  void share(const std::vector<double>& tilts, int first, int last, int total, double exponent, double scale_factor) {
     require(first >= 0 && first <= last && static_cast<std::size_t>(last) <= per_view_.size() &&
                 tilts.size() == per_view_.size(),
             "ViewBudgets::share: bad view range");

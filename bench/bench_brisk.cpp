@@ -7,7 +7,8 @@
 //   image, the orientation and the descriptor. The keypoint size is 7.2 = 0.6 · 12, the size at which
 //   cv::BRISK samples its pattern at scale 1 (scale index 0: ring radii 0.85 · {0, …, 10.8}, as
 //   ours); it is also timed with size 12 (its pattern × 1.7) for reference.
-// OpenCV runs single-threaded (cv::setNumThreads(1)), like one extractor thread.
+// OpenCV runs single-threaded (cv::setNumThreads(1)), like one extractor thread. Prints a Markdown
+// table (the README's).
 //
 // Usage: bench_brisk [image] [runs]   (defaults: <AFFINE_ORB_DATA_DIR>/oxford/graf/img1.png, 51)
 
@@ -64,9 +65,6 @@ int main(int argc, char** argv) {
       keypoints.push_back(k);
     }
   }
-  std::printf("image %s resized to %dx%d; FAST-20 keypoints %zu, kept %zu (margin %d px)\n", path.c_str(),
-              image.cols, image.rows, detected.size(), keypoints.size(), margin);
-
   affine_orb::Brisk::LevelData data;
   std::vector<affine_orb::BinaryDescriptor<affine_orb::Brisk::kBits>> ours(keypoints.size());
   std::vector<float> angles(keypoints.size());
@@ -104,18 +102,9 @@ int main(int argc, char** argv) {
   const double ours_median = median(ours_ms);
   const double peer_median = median(peer_ms);
   const double peer12_median = median(peer12_ms);
-  std::printf("runs %d (medians)\n", runs);
-  std::printf("  affine_orb::Brisk prepare+orientation+describe: %zu keypoints, %.3f ms (%.2f us/keypoint)\n",
-              keypoints.size(), ours_median, 1000.0 * ours_median / static_cast<double>(keypoints.size()));
-  std::printf("    of which prepare() (integral image):          %.3f ms\n", median(prepare_ms));
-  std::printf("  cv::BRISK compute, size 7.2 (scale 1):          %zu keypoints kept, %.3f ms (%.2f us/keypoint)\n",
-              peer_keypoints.size(), peer_median, 1000.0 * peer_median / static_cast<double>(peer_keypoints.size()));
-  std::printf("  cv::BRISK compute, size 12 (scale 1.7):          %.3f ms\n", peer12_median);
-  std::printf("  ratio ours / cv::BRISK (size 7.2): %.3f; (size 12): %.3f\n", ours_median / peer_median,
-              ours_median / peer12_median);
-
   // Orientation agreement with cv::BRISK (same definition, different smoothing approximation):
   // cv::BRISK sums (I_i − I_j)(p_j − p_i), the opposite sign of eq. 5, hence the 180° offset.
+  std::string angles_note = "cv::BRISK dropped keypoints: no angle comparison";
   if (peer_keypoints.size() == keypoints.size()) {
     std::vector<double> difference;
     for (std::size_t i = 0; i < keypoints.size(); ++i) {
@@ -123,7 +112,22 @@ int main(int argc, char** argv) {
       const double d = std::fmod(std::abs(ours_degrees + 180.0 - peer_keypoints[i].angle), 360.0);
       difference.push_back(std::min(d, 360.0 - d));
     }
-    std::printf("  median |angle(ours) + 180 - angle(cv::BRISK)| (mod 360): %.2f deg\n", median(difference));
+    char text[128];
+    std::snprintf(text, sizeof(text), "median |angle(ours) + 180° − angle(cv::BRISK)|: %.2f°", median(difference));
+    angles_note = text;
   }
+  const std::size_t slash = path.find_last_of('/', path.find_last_of('/') - 1);
+  const std::string shown = slash == std::string::npos ? path : path.substr(slash + 1);
+  std::printf("%dx%d (%s resized), %zu FAST-20 keypoints at least %d px inside, medians of %d alternating runs; %s\n\n",
+              image.cols, image.rows, shown.c_str(), keypoints.size(), margin, runs, angles_note.c_str());
+  std::printf("| BRISK description, same keypoints | ms | µs per keypoint | ours / this |\n|---|---:|---:|---:|\n");
+  const double n = static_cast<double>(keypoints.size());
+  std::printf("| affine_orb::Brisk: integral image + orientation + descriptor | %.3f | %.2f | 1 |\n", ours_median,
+              1000.0 * ours_median / n);
+  std::printf("| … of which the integral image (prepare()) | %.3f | | |\n", median(prepare_ms));
+  std::printf("| cv::BRISK::compute, size 7.2 (its pattern at scale 1, as ours) | %.3f | %.2f | %.3f |\n", peer_median,
+              1000.0 * peer_median / static_cast<double>(peer_keypoints.size()), ours_median / peer_median);
+  std::printf("| cv::BRISK::compute, size 12 (its pattern x 1.7) | %.3f | | %.3f |\n", peer12_median,
+              ours_median / peer12_median);
   return 0;
 }

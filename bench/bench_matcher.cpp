@@ -2,8 +2,8 @@
 // with k = 2, side by side and interleaved in one run, on
 //   1. 2000 x 2000 random 256-bit descriptors,
 //   2. real ORB descriptors: cv::ORB (2000 features) on Oxford graf img1 and img3.
-// Prints the median time of each over the runs, the ratio ours / peer, and whether the two agree on
-// the nearest-neighbour distance (and the second-nearest distance) of every query.
+// Prints a Markdown table (the README's): the median time of each over the runs, the ratio ours /
+// peer, and for how many queries the two agree on the nearest and second-nearest distance.
 //
 // OpenCV's matcher runs on its parallel framework (all cores by default); it is also timed with
 // cv::setNumThreads(1) for a single-thread comparison. affine_orb's knn2 is single-threaded.
@@ -79,14 +79,9 @@ void run(const char* name, const cv::Mat& query_mat, const cv::Mat& train_mat, i
   const double ours_median = median(ours_ms);
   const double peer_median = median(peer_ms);
   const double peer1_median = median(peer1_ms);
-  std::printf("%s: %zu x %zu descriptors, %d runs\n", name, query.size(), train.size(), runs);
-  std::printf("  affine_orb::knn2 (1 thread)                   median %8.3f ms\n", ours_median);
-  std::printf("  cv::BFMatcher knnMatch k=2 (%d threads)         median %8.3f ms   ours/peer %.3f\n",
-              default_threads, peer_median, ours_median / peer_median);
-  std::printf("  cv::BFMatcher knnMatch k=2 (1 thread)         median %8.3f ms   ours/peer %.3f\n", peer1_median,
-              ours_median / peer1_median);
-  std::printf("  nearest distance agrees for %d / %zu queries, second-nearest for %d / %zu\n", nearest_agree,
-              ours.size(), second_agree, ours.size());
+  std::printf("| %s, %zu x %zu | %.3f | %.3f | %.3f | %.3f | %.3f | %d / %d of %zu |\n", name, query.size(),
+              train.size(), ours_median, peer1_median, peer_median, ours_median / peer1_median,
+              ours_median / peer_median, nearest_agree, second_agree, ours.size());
 }
 
 }  // namespace
@@ -94,12 +89,17 @@ void run(const char* name, const cv::Mat& query_mat, const cv::Mat& train_mat, i
 int main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 21;
   const std::string data_dir = argc > 2 ? argv[2] : AFFINE_ORB_DATA_DIR;
-  if (AFFINE_ORB_KNN2_VPOPCNTDQ) {
-    std::printf("knn2: AVX-512 VPOPCNTDQ search\n");
-  } else {
-    std::printf("knn2: bit-sliced search, %d-bit lanes\n", static_cast<int>(8 * sizeof(affine_orb::detail::LaneVector)));
-  }
-  std::printf("hardware popcount in hamming_distance: %s\n", AFFINE_ORB_HARDWARE_POPCOUNT ? "yes" : "no");
+  const std::string search = AFFINE_ORB_KNN2_VPOPCNTDQ
+                                 ? std::string("AVX-512 VPOPCNTDQ search")
+                                 : "bit-sliced search, " +
+                                       std::to_string(8 * sizeof(affine_orb::detail::LaneVector)) + "-bit lanes";
+  std::printf("knn2: %s; hardware popcount in hamming_distance: %s; medians of %d interleaved runs\n\n",
+              search.c_str(), AFFINE_ORB_HARDWARE_POPCOUNT ? "yes" : "no", runs);
+  std::printf(
+      "| k = 2 Hamming matching | affine_orb::knn2, 1 thread, ms | cv::BFMatcher knnMatch, 1 thread, ms | the same, %d "
+      "threads, ms | ours / peer, 1 thread | ours / peer, %d threads | nearest / second distances equal |\n"
+      "|---|---:|---:|---:|---:|---:|---:|\n",
+      cv::getNumThreads(), cv::getNumThreads());
 
   std::mt19937_64 rng(2024);
   cv::Mat random_query(2000, 32, CV_8U);

@@ -1,5 +1,5 @@
 // eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] [--sequences a,b,...]
-//                [--methods SUBSTRING] [--shortlist F] [--asift-sequences a,b,...|all]
+//                [--methods SUBSTRING] [--shortlist F] [--asift-sequences a,b,...|all] [--markdown]
 //
 // The SPEC §7 evaluation on image pairs with ground-truth homographies: every pair 1->2 ... 1->6 of
 // every sequence in ../shared/data/oxford, and Debian opencv-doc's graf1/graf3 pair, for every
@@ -22,7 +22,10 @@
 // 3 px after mapping), distinct correct per 1000 keypoints (of the mean of the two images' counts)
 // and extraction time per image (single thread unless --threads).
 // Writes DIR/eval_viewpoint.md, DIR/eval_viewpoint.csv and DIR/eval_viewpoint.png (distinct
-// correct matches per 1000 keypoints against the graf viewpoint angle per method).
+// correct matches per 1000 keypoints against the graf viewpoint angle per method) and prints the
+// full table; with --markdown it prints the summary table of the README instead: per method the
+// distinct correct matches of graf 1->2 ... 1->6, their sum over every pair of the run, and the
+// median extraction time per image relative to cv::ORB 2000 in the same run.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -295,6 +298,49 @@ void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, cons
   cv::imwrite(path, canvas);
 }
 
+/// The README's table: per method, distinct correct matches (per 1000 keypoints) on graf 1->2 ...
+/// 1->6, distinct correct matches summed over the `pairs` pairs of the run ("–" for a method that
+/// ran on fewer), and its median extraction time per image over cv::ORB 2000's.
+std::string summary_table(const std::vector<Row>& rows, const std::vector<Method>& methods, std::size_t pairs) {
+  auto median_ms = [&](const std::string& method) {
+    std::vector<double> times;
+    for (const Row& r : rows) {
+      if (r.method == method) times.push_back(r.ms);
+    }
+    return affine_orb::bench::median(times);
+  };
+  const double reference_ms = median_ms("cv::ORB 2000");
+  std::ostringstream out;
+  out << "| distinct correct matches (per 1000 keypoints) | graf 1→2 (20°) | 1→3 (30°) | 1→4 (40°) | 1→5 (50°) | "
+         "1→6 (60°) | all "
+      << pairs << " pairs | time / cv::ORB 2000 |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const Method& m : methods) {
+    out << "| " << m.name;
+    std::size_t total = 0, counted = 0;
+    for (int image = 2; image <= 6; ++image) {
+      const auto row = std::find_if(rows.begin(), rows.end(), [&](const Row& r) {
+        return r.sequence == "graf" && r.image == image && r.method == m.name;
+      });
+      char cell[64] = " | –";
+      if (row != rows.end()) std::snprintf(cell, sizeof(cell), " | %zu (%.0f)", row->distinct, row->per_1000());
+      out << cell;
+    }
+    for (const Row& r : rows) {
+      if (r.method != m.name) continue;
+      total += r.distinct;
+      ++counted;
+    }
+    char tail[96];
+    if (reference_ms > 0.0) {
+      std::snprintf(tail, sizeof(tail), " | %.2f |\n", median_ms(m.name) / reference_ms);
+    } else {
+      std::snprintf(tail, sizeof(tail), " | – |\n");
+    }
+    out << " | " << (counted == pairs ? std::to_string(total) : std::string("–")) << tail;
+  }
+  return out.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -306,9 +352,16 @@ int main(int argc, char** argv) {
   std::string only;
   std::string method_filter;
   std::string asift_only = ",graf,opencv-doc graf,";
-  for (int i = 1; i + 1 < argc; i += 2) {
+  bool summary = false;
+  for (int i = 1; i < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--out")
+    if (flag == "--markdown") {
+      summary = true;
+      --i;
+    } else if (i + 1 >= argc) {
+      std::fprintf(stderr, "eval_viewpoint: %s needs a value\n", argv[i]);
+      return 2;
+    } else if (flag == "--out")
       out_dir = argv[i + 1];
     else if (flag == "--features")
       features = std::atoi(argv[i + 1]);
@@ -327,7 +380,8 @@ int main(int argc, char** argv) {
     else {
       std::fprintf(stderr,
                    "usage: eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] "
-                   "[--sequences a,b] [--methods SUBSTRING] [--shortlist F] [--asift-sequences a,b|all]\n");
+                   "[--sequences a,b] [--methods SUBSTRING] [--shortlist F] [--asift-sequences a,b|all] "
+                   "[--markdown]\n");
       return 2;
     }
   }
@@ -479,6 +533,6 @@ int main(int argc, char** argv) {
   }
   std::ofstream(out_dir + "/eval_viewpoint.md") << md.str();
   plot(rows, methods, out_dir + "/eval_viewpoint.png");
-  std::fputs(md.str().c_str(), stdout);
+  std::fputs(summary ? summary_table(rows, methods, pairs.size()).c_str() : md.str().c_str(), stdout);
   return 0;
 }

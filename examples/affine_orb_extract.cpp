@@ -1,11 +1,13 @@
-// affine_orb_extract IMAGE [--features N] [--descriptor rbrief|brisk] [--max-tilt T] [--threads K]
-//                    [--repeat R] [--out PNG] [--json]
+// affine_orb_extract IMAGE [--features N] [--view-features F] [--descriptor rbrief|brisk] [--max-tilt T]
+//                    [--threads K] [--spreading quadtree|strongest] [--repeat R] [--out PNG] [--json]
 //
-// Extracts features from one image and reports how many were found and how long it took: the
+// Extracts features from one image and reports how many were found, from the image itself and from
+// its tilted views (--features 1000 gives 1000 + 1000 by default), and how long it took: the
 // extractor's first call (which sizes its workspace) is timed apart, then --repeat R further calls
 // with the same extractor give the steady-state time (the median);
 // --out draws the keypoints (circle = support size, line = orientation; green = level 0, orange =
 // coarser levels).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -21,15 +23,28 @@
 
 namespace {
 
-const char* const kUsage =
-    "usage: affine_orb_extract IMAGE [--features N] [--descriptor rbrief|brisk] [--max-tilt T] [--threads K]\n"
-    "                          [--spreading quadtree|strongest]\n"
-    "                          [--repeat R] [--out PNG] [--json]\n"
-    "  --max-tilt T  largest simulated tilt (1 = no affine views; default 2.828 = 18 views)\n";
+std::string usage() {
+  const affine_orb::ExtractorOptions defaults;
+  char options[1024];
+  std::snprintf(options, sizeof options,
+                "  --features N        keypoints from the image itself (default %d); the tilted views add\n"
+                "                      --view-features x N more: %d keypoints in all by default\n"
+                "  --view-features F   tilted views' keypoints as a multiple of --features (default %g, 0 = none)\n"
+                "  --max-tilt T        largest simulated tilt (1 = no tilted views; default %.3f = %d tilted views)\n",
+                defaults.features, affine_orb::examples::keypoint_budget(defaults), defaults.view_features,
+                defaults.views.max_tilt, affine_orb::examples::tilted_views(defaults.views));
+  return std::string(
+             "usage: affine_orb_extract IMAGE [--features N] [--view-features F] [--descriptor rbrief|brisk]\n"
+             "                          [--max-tilt T] [--threads K] [--spreading quadtree|strongest]\n"
+             "                          [--repeat R] [--out PNG] [--json]\n") +
+         options;
+}
 
 struct Report {
-  std::size_t views = 0;
+  std::size_t views = 0;  ///< simulated views, the image included
   std::size_t keypoints = 0;
+  std::size_t image_keypoints = 0;  ///< those from the image itself (view 0)
+  std::string summary;              ///< keypoint_summary()
   int descriptor_bytes = 0;
   double ms_first_extract = 0.0;  ///< the extractor's first call
   double ms_extract = 0.0;        ///< median of the calls after it
@@ -51,6 +66,8 @@ Report run(const cv::Mat& image, affine_orb::ExtractorOptions options, int repea
   Report report;
   report.views = extractor.views().size();
   report.keypoints = result.size();
+  report.image_keypoints = static_cast<std::size_t>(std::count(result.views.begin(), result.views.end(), 0));
+  report.summary = affine_orb::examples::keypoint_summary(result.views, report.views);
   report.descriptor_bytes = Descriptor::kBits / 8;
   report.ms_extract = affine_orb::examples::median(times);
   report.ms_first_extract = ms_first;
@@ -78,8 +95,10 @@ int main(int argc, char** argv) {
   try {
     affine_orb::examples::Args args(argc, argv);
     affine_orb::ExtractorOptions options;
-    if (affine_orb::examples::parse_common(args, options)) {
-      std::fputs(kUsage, stdout);
+    const bool help = affine_orb::examples::parse_common(args, options);
+    options.view_features = args.real("--view-features", options.view_features);
+    if (help) {
+      std::fputs(usage().c_str(), stdout);
       return 0;
     }
     const std::string descriptor = args.value("--descriptor", "rbrief");
@@ -103,23 +122,26 @@ int main(int argc, char** argv) {
     if (json) {
       std::printf(
           "{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"descriptor\": \"%s\", \"keypoints\": %zu, "
+          "\"image_keypoints\": %zu, "
           "\"descriptor_bytes\": %d, \"views\": %zu, \"max_tilt\": %.4f, \"threads\": %d, \"repeat\": %d, "
           "\"ms_first_extract\": %.3f, \"ms_extract\": %.3f, \"per_level\": [",
-          positional[0].c_str(), image.cols, image.rows, descriptor.c_str(), report.keypoints, report.descriptor_bytes,
-          report.views, options.views.max_tilt, options.threads, repeat, report.ms_first_extract, report.ms_extract);
+          positional[0].c_str(), image.cols, image.rows, descriptor.c_str(), report.keypoints, report.image_keypoints,
+          report.descriptor_bytes, report.views, options.views.max_tilt, options.threads, repeat,
+          report.ms_first_extract, report.ms_extract);
       for (std::size_t l = 0; l < report.per_level.size(); ++l) std::printf("%s%d", l ? ", " : "", report.per_level[l]);
       std::printf("]}\n");
     } else {
+      std::printf("%s: %dx%d, %s\n", positional[0].c_str(), image.cols, image.rows, report.summary.c_str());
       std::printf(
-          "%s: %dx%d, %zu keypoints from %zu views (%s, %d-byte descriptors), %.2f ms per extraction "
-          "(median of %d after the extractor's first call, %.2f ms; %d thread(s))\n",
-          positional[0].c_str(), image.cols, image.rows, report.keypoints, report.views, descriptor.c_str(),
-          report.descriptor_bytes, report.ms_extract, repeat, report.ms_first_extract, options.threads);
+          "%s, %d-byte descriptors: %.2f ms per extraction (median of %d after the extractor's first call, "
+          "%.2f ms; %d thread(s))\n",
+          descriptor.c_str(), report.descriptor_bytes, report.ms_extract, repeat, report.ms_first_extract,
+          options.threads);
       if (!out.empty()) std::printf("keypoints drawn to %s\n", out.c_str());
     }
     return 0;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "affine_orb_extract: %s\n%s", e.what(), kUsage);
+    std::fprintf(stderr, "affine_orb_extract: %s\n%s", e.what(), usage().c_str());
     return 2;
   }
 }

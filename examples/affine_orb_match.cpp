@@ -1,11 +1,15 @@
 // affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]
-//                  [--features N] [--threads K] [--spreading strongest|quadtree] [--out PNG]
-//                  [--rectified PNG] [--save-matches FILE] [--json]
+//                  [--features N] [--threads K] [--spreading strongest|quadtree] [--all-stages]
+//                  [--min-inliers N] [--one-shot] [--out PNG] [--rectified PNG] [--save-matches FILE]
+//                  [--json]
 //
-// Extracts Affine-ORB features from two images, matches them (SPEC §4), selects the homography or
-// the fundamental matrix (SPEC §5) and, with a ground-truth homography (x2 ~ H x1: the Oxford
-// plain-text format or OpenCV's XML/YAML), counts the correct matches (SPEC §7: ‖H x1 − x2‖ < 3 px).
-// With no image arguments it uses Debian opencv-doc's graf1.png, graf3.png and H1to3p.xml.
+// Matches two images with views on demand (TwoViewMatcher, two_view.hpp): plain Affine-ORB
+// keypoints first, the affine views of stronger tilts only while the pair is not verified; each
+// stage matches (SPEC §4) and selects the homography or the fundamental matrix (SPEC §5). With a
+// ground-truth homography (x2 ~ H x1: the Oxford plain-text format or OpenCV's XML/YAML) it counts
+// the correct matches (SPEC §7: ‖H x1 − x2‖ < 3 px). --one-shot extracts every view at once
+// instead (Extractor::extract). With no image arguments it uses Debian opencv-doc's graf1.png,
+// graf3.png and H1to3p.xml.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -30,21 +34,54 @@
 
 namespace {
 
-const char* const kUsage =
-    "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
-    "                        [--features N] [--threads K] [--spreading S] [--out PNG] [--rectified PNG]\n"
-    "                        [--save-matches FILE] [--json]\n"
-    "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian opencv-doc),\n"
-    "             writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
-    "  --features N       keypoints from each image (default 1000); the views add as many again\n"
-    "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
-    "  --max-tilt T       largest simulated tilt, 1 = no affine views (default 2.828: 18 views)\n"
-    "  --spreading S      strongest (default: most repeatable) or quadtree (spread over the image, for SLAM)\n"
-    "  --out PNG          the matches side by side (green correct, red wrong; without ground truth:\n"
-    "                     green = inlier of the chosen model)\n"
-    "  --rectified PNG    image 1 next to image 2 warped into image 1's frame with the homography (the chosen\n"
-    "                     one, or the estimated one when F was chosen, which the output then says)\n"
-    "  --save-matches F   one line \"x1 y1 x2 y2\" per match, original pixel coordinates (exact floats)\n";
+/// The usage text, its keypoint counts computed from the defaults.
+std::string usage() {
+  const affine_orb::TwoViewOptions two_view;
+  const int n = two_view.extractor.features;
+  std::string stages;
+  int total = n;
+  for (const affine_orb::ViewStage& stage : two_view.stages) {
+    const int added = static_cast<int>(std::lround(stage.view_features * n));
+    stages += (stages.empty() ? "" : ", then ") + std::to_string(added) + " (tilts up to " +
+              std::to_string(stage.max_tilt).substr(0, 4) + ")";
+    total += added;
+  }
+  const affine_orb::ExtractorOptions one_shot;
+  return "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
+         "                        [--features N] [--threads K] [--spreading S] [--all-stages] [--min-inliers N]\n"
+         "                        [--one-shot] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]\n"
+         "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian\n"
+         "             opencv-doc), writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
+         "  views on demand (the default): stage 0 matches the images' own keypoints; while the pair is not\n"
+         "  verified (--min-inliers inliers of the chosen model), each next stage adds the views of stronger tilts\n"
+         "  --features N       keypoints from each image itself (default " +
+         std::to_string(n) +
+         "); while the pair is\n"
+         "                     not verified its tilted views add " +
+         stages +
+         ":\n"
+         "                     at most " +
+         std::to_string(total) +
+         " keypoints per image in all\n"
+         "  --max-tilt T       largest simulated tilt, 1 = no tilted views (default 2.828); the stages stop there\n"
+         "  --all-stages       run every stage (the views on for every pair) instead of stopping when verified\n"
+         "  --min-inliers N    inliers that verify a pair and end the escalation (default " +
+         std::to_string(two_view.min_inliers) +
+         ")\n"
+         "  --one-shot         every view at once (Extractor::extract), matched once; --features then defaults to " +
+         std::to_string(one_shot.features) +
+         "\n"
+         "                     and the 17 tilted views add as many again: " +
+         std::to_string(one_shot.features + static_cast<int>(std::lround(one_shot.view_features * one_shot.features))) +
+         " keypoints per image in all\n"
+         "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
+         "  --spreading S      strongest (default: most repeatable) or quadtree (spread over the image, for SLAM)\n"
+         "  --out PNG          the matches side by side (green correct, red wrong; without ground truth:\n"
+         "                     green = inlier of the chosen model)\n"
+         "  --rectified PNG    image 1 next to image 2 warped into image 1's frame with the homography (the chosen\n"
+         "                     one, or the estimated one when F was chosen, which the output then says)\n"
+         "  --save-matches F   one line \"x1 y1 x2 y2\" per match, original pixel coordinates (exact floats)\n";
+}
 
 const char* const kDefaultDir = "/usr/share/doc/opencv-doc/examples/data/";
 
@@ -57,8 +94,14 @@ cv::Mat read_gray(const std::string& path) {
 struct Outcome {
   std::size_t keypoints1 = 0, keypoints2 = 0, views = 0, matches = 0, correct = 0, distinct = 0, inliers = 0;
   bool ground_truth = false;
-  /// The first extract() of a new Extractor (it sizes its workspace), then steady-state times.
+  /// The first call of a new Extractor or matcher (it sizes its workspace), then steady-state times
+  /// (views on demand: ms_extract1 is both images' extraction over every stage run).
   double ms_first_extract = 0, ms_extract1 = 0, ms_extract2 = 0, ms_match = 0, ms_model = 0;
+  /// Views on demand: the last stage run, of how many, the largest tilt it reached and whether the
+  /// pair was verified there.
+  int stage = -1, stages = 0;
+  double stage_tilt = 1.0;
+  bool verified = false;
   affine_orb::ModelSelectionResult selection;
   /// Where --rectified came from: "" (not written), "chosen homography", or "estimated homography"
   /// (select_model() chose F but had estimated H too).
@@ -76,39 +119,89 @@ const char* model_name(affine_orb::GeometricModel m) {
   }
 }
 
+/// How the images are matched: views on demand (TwoViewMatcher) or every view at once.
+struct Plan {
+  affine_orb::ExtractorOptions extractor;
+  bool one_shot = false;
+  bool all_stages = false;
+  int min_inliers = affine_orb::TwoViewOptions{}.min_inliers;
+};
+
+/// The matcher's options for `plan`: its stages up to the extractor's max_tilt (the cap).
+affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
+  affine_orb::TwoViewOptions options;
+  options.extractor = plan.extractor;
+  options.stages.erase(std::remove_if(options.stages.begin(), options.stages.end(),
+                                      [&](const affine_orb::ViewStage& stage) {
+                                        return stage.max_tilt > plan.extractor.views.max_tilt * (1.0 + 1e-3);
+                                      }),
+                       options.stages.end());
+  options.all_stages = plan.all_stages;
+  options.min_inliers = plan.min_inliers;
+  return options;
+}
+
 template <class Descriptor>
-Outcome run(const cv::Mat& image1, const cv::Mat& image2, const affine_orb::ExtractorOptions& options,
-            const cv::Matx33d* truth, const std::string& out, const std::string& rectified,
-            const std::string& save_matches) {
+Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, const cv::Matx33d* truth,
+            const std::string& out, const std::string& rectified, const std::string& save_matches) {
   using affine_orb::examples::ms_since;
-  affine_orb::Extractor<Descriptor> extractor(options);
   Outcome o;
-  auto start = std::chrono::steady_clock::now();
-  extractor.extract(image1);
-  o.ms_first_extract = ms_since(start);
-  start = std::chrono::steady_clock::now();
-  const auto f1 = extractor.extract(image1);
-  o.ms_extract1 = ms_since(start);
-  start = std::chrono::steady_clock::now();
-  const auto f2 = extractor.extract(image2);
-  o.ms_extract2 = ms_since(start);
-  o.views = extractor.views().size();
+  affine_orb::Features<Descriptor::kBits> f1, f2;
+  std::vector<affine_orb::Match> matches;
+  if (plan.one_shot) {
+    affine_orb::Extractor<Descriptor> extractor(plan.extractor);
+    auto start = std::chrono::steady_clock::now();
+    extractor.extract(image1);
+    o.ms_first_extract = ms_since(start);
+    start = std::chrono::steady_clock::now();
+    f1 = extractor.extract(image1);
+    o.ms_extract1 = ms_since(start);
+    start = std::chrono::steady_clock::now();
+    f2 = extractor.extract(image2);
+    o.ms_extract2 = ms_since(start);
+    o.views = extractor.views().size();
+    start = std::chrono::steady_clock::now();
+    matches = affine_orb::match_features(f1, f2);
+    o.ms_match = ms_since(start);
+    std::vector<cv::Point2f> p1, p2;
+    for (const auto& m : matches) {
+      p1.push_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt);
+      p2.push_back(f2.keypoints[static_cast<std::size_t>(m.train)].pt);
+    }
+    start = std::chrono::steady_clock::now();
+    if (p1.size() >= 8) o.selection = affine_orb::select_model(p1, p2);
+    o.ms_model = ms_since(start);
+  } else {
+    affine_orb::TwoViewMatcher<Descriptor> matcher(two_view_options(plan));
+    auto start = std::chrono::steady_clock::now();
+    matcher.match(image1, image2);
+    o.ms_first_extract = ms_since(start);
+    auto r = matcher.match(image1, image2);
+    f1 = std::move(r.features1);
+    f2 = std::move(r.features2);
+    matches = std::move(r.matches);
+    o.selection = std::move(r.model);
+    o.stage = r.stage;
+    o.verified = r.verified;
+    o.stage_tilt = r.stages.back().max_tilt;
+    o.stages = static_cast<int>(matcher.options().stages.size());
+    for (const affine_orb::TwoViewStageReport& s : r.stages) {
+      o.ms_extract1 += s.extract_ms;
+      o.ms_match += s.match_ms;
+      o.ms_model += s.verify_ms;
+    }
+    std::set<int> views(f1.views.begin(), f1.views.end());
+    views.insert(f2.views.begin(), f2.views.end());
+    o.views = views.size();
+  }
   o.keypoints1 = f1.size();
   o.keypoints2 = f2.size();
-
-  start = std::chrono::steady_clock::now();
-  const std::vector<affine_orb::Match> matches = affine_orb::match_features(f1, f2);
-  o.ms_match = ms_since(start);
   o.matches = matches.size();
-
   std::vector<cv::Point2f> p1, p2;
   for (const auto& m : matches) {
     p1.push_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt);
     p2.push_back(f2.keypoints[static_cast<std::size_t>(m.train)].pt);
   }
-  start = std::chrono::steady_clock::now();
-  if (p1.size() >= 8) o.selection = affine_orb::select_model(p1, p2);
-  o.ms_model = ms_since(start);
   const std::vector<std::uint8_t>& inlier_mask = o.selection.model == affine_orb::GeometricModel::kFundamental
                                                      ? o.selection.fundamental_inliers
                                                      : o.selection.homography_inliers;
@@ -176,14 +269,18 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const affine_orb::Extr
 int main(int argc, char** argv) {
   try {
     affine_orb::examples::Args args(argc, argv);
-    affine_orb::ExtractorOptions options;
-    // 1000 from each image and as many from its views (the additive budget): 2000 keypoints, as
-    // this example had before the views became additive.
-    options.features = 1000;
+    Plan plan;
+    plan.one_shot = args.flag("--one-shot");
+    plan.all_stages = args.flag("--all-stages");
+    plan.min_inliers = args.integer("--min-inliers", plan.min_inliers);
+    affine_orb::ExtractorOptions& options = plan.extractor;
+    // Views on demand: the matcher's extractor (2000 image keypoints, the strongest corners). One
+    // shot: 1000 from each image and as many from its views (the additive budget), 2000 in all.
+    options = affine_orb::TwoViewOptions::default_extractor();
+    if (plan.one_shot) options.features = 1000;
     options.threads = 2;
-    options.spreading = affine_orb::Spreading::kStrongest;  // matching two images, not tracking
     if (affine_orb::examples::parse_common(args, options)) {
-      std::fputs(kUsage, stdout);
+      std::fputs(usage().c_str(), stdout);
       return 0;
     }
     const std::string descriptor = args.value("--descriptor", "rbrief");
@@ -209,9 +306,9 @@ int main(int argc, char** argv) {
 
     Outcome o;
     if (descriptor == "rbrief") {
-      o = run<affine_orb::Rbrief>(image1, image2, options, truth_ptr, out, rectified, save_matches);
+      o = run<affine_orb::Rbrief>(image1, image2, plan, truth_ptr, out, rectified, save_matches);
     } else if (descriptor == "brisk") {
-      o = run<affine_orb::Brisk>(image1, image2, options, truth_ptr, out, rectified, save_matches);
+      o = run<affine_orb::Brisk>(image1, image2, plan, truth_ptr, out, rectified, save_matches);
     } else {
       throw std::invalid_argument("--descriptor must be rbrief or brisk, got " + descriptor);
     }
@@ -222,6 +319,12 @@ int main(int argc, char** argv) {
           "\"keypoints1\": %zu, \"keypoints2\": %zu, \"views\": %zu, \"matches\": %zu, ",
           images[0].c_str(), images[1].c_str(), descriptor.c_str(), options.views.max_tilt, options.threads,
           o.keypoints1, o.keypoints2, o.views, o.matches);
+      if (plan.one_shot) {
+        std::printf("\"stage\": null, \"verified\": null, ");
+      } else {
+        std::printf("\"stage\": %d, \"stage_max_tilt\": %.4f, \"verified\": %s, ", o.stage, o.stage_tilt,
+                    o.verified ? "true" : "false");
+      }
       if (o.ground_truth) {
         std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct,
                     precision);
@@ -245,13 +348,32 @@ int main(int argc, char** argv) {
     } else {
       std::printf("%s <-> %s (%s, %zu views, %d thread(s))\n", images[0].c_str(), images[1].c_str(), descriptor.c_str(),
                   o.views, options.threads);
+      if (!plan.one_shot) {
+        if (o.verified) {
+          std::printf("verified at stage %d of %d (%s)\n", o.stage, o.stages,
+                      o.stage == 0 ? "the images' own keypoints"
+                                   : ("views up to tilt " + std::to_string(o.stage_tilt).substr(0, 4)).c_str());
+        } else {
+          std::printf(
+              "not verified after stage %d of %d (views up to tilt %.2f): fewer than %d inliers of the chosen model\n",
+              o.stage, o.stages, o.stage_tilt, plan.min_inliers);
+        }
+      }
       std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
       if (o.ground_truth)
         std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
       std::printf("\nmodel %s (R_H = %.2f), %zu inliers\n", model_name(o.selection.model), o.selection.homography_ratio,
                   o.inliers);
-      std::printf("time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
-                  o.ms_extract1, o.ms_extract2, o.ms_first_extract, o.ms_match, o.ms_model);
+      if (plan.one_shot) {
+        std::printf(
+            "time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
+            o.ms_extract1, o.ms_extract2, o.ms_first_extract, o.ms_match, o.ms_model);
+      } else {
+        std::printf(
+            "time: extract %.1f ms (both images, every stage run), match %.1f ms, model %.1f ms (the matcher's "
+            "first call: %.1f ms in all)\n",
+            o.ms_extract1, o.ms_match, o.ms_model, o.ms_first_extract);
+      }
       if (!out.empty()) std::printf("matches drawn to %s\n", out.c_str());
       if (o.rectified_from == "chosen homography") {
         std::printf("image 2 rectified into image 1's frame: %s\n", rectified.c_str());
@@ -263,7 +385,7 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "affine_orb_match: %s\n%s", e.what(), kUsage);
+    std::fprintf(stderr, "affine_orb_match: %s\n%s", e.what(), usage().c_str());
     return 2;
   }
 }

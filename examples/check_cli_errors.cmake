@@ -3,7 +3,7 @@
 #   cmake -DBIN=<dir of the example programs> -DIMAGE=<a readable image> -DSEQUENCE=<a directory> -P ...
 set(cases
     "affine_orb_match,--features,--max-tilt,--threads"
-    "affine_orb_extract,--features,--max-tilt,--threads,--repeat"
+    "affine_orb_extract,--features,--view-features,--max-tilt,--threads,--repeat"
     "affine_orb_sequence,--step,--max-tilt,--features,--threads,--frames,--min-inliers,--keyframe-ratio,--max-lost")
 set(failures "")
 foreach(case ${cases})

@@ -17,6 +17,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "affine_orb/affine_views.hpp"
 #include "affine_orb/extractor.hpp"
 
 namespace affine_orb::examples {
@@ -113,6 +114,30 @@ inline bool parse_common(Args& args, ExtractorOptions& options) {
     throw std::invalid_argument("--spreading must be quadtree or strongest, got " + spreading);
   }
   return help;
+}
+
+/// Number of tilted views (all views but the image itself) that `options` simulate.
+inline int tilted_views(const AffineViewOptions& options) {
+  return static_cast<int>(view_parameters(options).size()) - 1;
+}
+
+/// The keypoints an extraction with `options` returns from an image with enough corners: `features`
+/// from the image itself, plus round(view_features · features) from the tilted views when there are
+/// any and the budget is additive (ExtractorOptions::view_features).
+inline int keypoint_budget(const ExtractorOptions& options) {
+  if (options.view_budget != ViewBudget::kAdditive || tilted_views(options.views) == 0) return options.features;
+  return options.features + static_cast<int>(std::lround(options.view_features * options.features));
+}
+
+/// "2000 keypoints: 1000 from the image + 1000 from 17 tilted views" for keypoints whose view
+/// indices are `views` (Features::views, 0 = the image) out of `view_count` simulated views.
+inline std::string keypoint_summary(const std::vector<int>& views, std::size_t view_count) {
+  const auto from_image = static_cast<std::size_t>(std::count(views.begin(), views.end(), 0));
+  const std::size_t tilted = view_count > 0 ? view_count - 1 : 0;
+  std::string text = std::to_string(views.size()) + " keypoints: " + std::to_string(from_image) + " from the image";
+  if (tilted == 0) return text + ", no tilted views";
+  return text + " + " + std::to_string(views.size() - from_image) + " from " + std::to_string(tilted) + " tilted view" +
+         (tilted == 1 ? "" : "s");
 }
 
 /// `text` shortened from the front ("..." + its tail, the informative end of a path) until it is at

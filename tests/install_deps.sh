@@ -3,7 +3,8 @@
 # they are missing. Runs apt-get as root, or through sudo when not root.
 set -euo pipefail
 packages=(cmake ninja-build g++ clang libclang-rt-14-dev pkg-config libopencv-dev libeigen3-dev doctest-dev opencv-doc
-          pybind11-dev python3-dev python3-numpy python3-opencv python3-pytest)
+          pybind11-dev python3-dev python3-numpy python3-opencv python3-pytest
+          dpkg-dev file)  # the last two for cpack's Debian packages (dpkg-shlibdeps, file)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

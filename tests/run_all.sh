@@ -2,17 +2,20 @@
 # The whole test suite, as CI runs it (.ci/run calls exactly this script):
 #   1. installs the Debian 12 packages it needs (when run as root and they are missing);
 #   2. Release build of the library, tests, examples, benchmarks and the Python module; ctest
-#      (which includes the install + find_package(affine_orb) consumer check and the module's
+#      (which includes the install + find_package(affine_orb)/pkg-config consumer check and the module's
 #      pytest suite);
-#   3. the test suite again under AddressSanitizer + UndefinedBehaviorSanitizer (all but the
+#   3. the Debian packages (tests/package_check.sh): built with cpack, installed with apt-get,
+#      used by a C++ consumer (find_package and pkg-config) and by /usr/bin/python3, removed again
+#      (skipped when not root and sudo needs a password);
+#   4. the test suite again under AddressSanitizer + UndefinedBehaviorSanitizer (all but the
 #      memory-flatness test, which ASan's quarantine would defeat);
-#   4. the threaded tests under ThreadSanitizer (clang);
-#   5. the libFuzzer targets, each for a bounded time from its checked-in seed corpus (clang, ASan +
+#   5. the threaded tests under ThreadSanitizer (clang);
+#   6. the libFuzzer targets, each for a bounded time from its checked-in seed corpus (clang, ASan +
 #      UBSan), with their executions per second;
-#   6. on a CPU with AVX2, the tests of the SIMD code again with -march=native
+#   7. on a CPU with AVX2, the tests of the SIMD code again with -march=native
 #      (AFFINE_ORB_NATIVE), so that the AVX2 paths, which the default build does not compile, are
 #      checked against their scalar references too.
-# Build trees go to ${AFFINE_ORB_BUILD_ROOT:-build}/{release,asan,tsan,fuzz,native}.
+# Build trees go to ${AFFINE_ORB_BUILD_ROOT:-build}/{release,package,asan,tsan,fuzz,native}.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,6 +28,9 @@ echo "== Release build and tests"
 cmake -S . -B "$root/release" -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build "$root/release" -j "$jobs"
 ctest --test-dir "$root/release" --output-on-failure -j "$jobs"
+
+echo "== Debian packages"
+bash tests/package_check.sh
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
@@ -47,7 +53,7 @@ echo "== libFuzzer"
 CC=clang CXX=clang++ cmake -S . -B "$root/fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
   -DAFFINE_ORB_BUILD_PYTHON=OFF -DAFFINE_ORB_BUILD_FUZZERS=ON
-fuzzers="fuzz_extract fuzz_fast fuzz_describe fuzz_matcher fuzz_model_selection fuzz_readers"
+fuzzers="fuzz_extract fuzz_fast fuzz_describe fuzz_matcher fuzz_model_selection fuzz_readers fuzz_two_view"
 cmake --build "$root/fuzz" -j "$jobs" --target $fuzzers
 # Each target runs from its checked-in seed corpus for a bounded time (the whole extraction
 # AFFINE_ORB_FUZZ_SECONDS, default 60; the stage targets AFFINE_ORB_FUZZ_STAGE_SECONDS, default

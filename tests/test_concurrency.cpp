@@ -1,4 +1,4 @@
-// Concurrency (issue 8): many extractor instances used from several threads at once give exactly
+// Concurrency: many extractor instances used from several threads at once give exactly
 // the results they give one after the other; an instance's own view threads do not change its
 // output. One Extractor instance is not shared between threads (its documentation says so: it
 // owns a workspace); separate instances share nothing. Also run under ThreadSanitizer.

@@ -1,4 +1,4 @@
-// Long run (issues 6 and 8): 1000 frames through one extractor with flat memory, and no allocation
+// Long run: 1000 frames through one extractor with flat memory, and no allocation
 // per frame once the workspace has grown. The workspace is reused across frames, so once the first
 // frames have sized it the resident set must stop growing and only the returned Features allocate.
 // Not run under AddressSanitizer, whose quarantine holds freed memory on purpose.

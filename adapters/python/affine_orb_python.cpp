@@ -27,6 +27,8 @@
 #include "affine_orb/matcher.hpp"
 #include "affine_orb/model_selection.hpp"
 #include "affine_orb/rbrief.hpp"
+#include "affine_orb/two_view.hpp"
+#include "affine_orb/version.hpp"
 
 namespace py = pybind11;
 
@@ -195,10 +197,84 @@ affine_orb::ExtractorOptions make_options(int features, double max_tilt, int thr
   return o;
 }
 
+/// A 3 x 3 float64 array of an Eigen matrix.
+py::array_t<double> matrix_array(const Eigen::Matrix3d& e) {
+  py::array_t<double> out({3, 3});
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) out.mutable_at(i, j) = e(i, j);
+  return out;
+}
+
+py::array_t<bool> flag_array(const std::vector<std::uint8_t>& v) {
+  py::array_t<bool> out(static_cast<py::ssize_t>(v.size()));
+  for (std::size_t i = 0; i < v.size(); ++i) out.mutable_at(static_cast<py::ssize_t>(i)) = v[i] != 0;
+  return out;
+}
+
+const char* model_name(affine_orb::GeometricModel model) {
+  return model == affine_orb::GeometricModel::kHomography    ? "homography"
+         : model == affine_orb::GeometricModel::kFundamental ? "fundamental"
+                                                             : "none";
+}
+
+/// match_images() for one descriptor: the C++ TwoViewMatcher, its result as Python objects.
+template <class Descriptor>
+py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const cv::Mat& mask1, const cv::Mat& mask2,
+                           const affine_orb::TwoViewOptions& options) {
+  affine_orb::TwoViewResult<Descriptor::kBits> r;
+  {
+    py::gil_scoped_release release;
+    r = affine_orb::TwoViewMatcher<Descriptor>(options).match(image1, image2, mask1, mask2);
+  }
+  const auto views = [](const std::vector<int>& v) {
+    py::array_t<int> out(static_cast<py::ssize_t>(v.size()));
+    if (!v.empty()) std::memcpy(out.mutable_data(), v.data(), v.size() * sizeof(int));
+    return out;
+  };
+  const py::object make_match = py::module_::import("cv2").attr("DMatch");
+  py::list matches(r.matches.size());
+  for (std::size_t i = 0; i < r.matches.size(); ++i)
+    matches[i] = make_match(r.matches[i].query, r.matches[i].train, static_cast<float>(r.matches[i].distance));
+  py::list stages;
+  for (const affine_orb::TwoViewStageReport& s : r.stages) {
+    py::dict stage;
+    stage["max_tilt"] = s.max_tilt;
+    stage["keypoints1"] = s.keypoints1;
+    stage["keypoints2"] = s.keypoints2;
+    stage["matches"] = s.matches;
+    stage["inliers"] = s.inliers;
+    stage["homography_inliers"] = s.homography_inliers;
+    stage["fundamental_inliers"] = s.fundamental_inliers;
+    stage["model"] = model_name(s.model);
+    stage["extract_ms"] = s.extract_ms;
+    stage["match_ms"] = s.match_ms;
+    stage["verify_ms"] = s.verify_ms;
+    stages.append(stage);
+  }
+  py::dict out;
+  out["verified"] = r.verified;
+  out["stage"] = r.stage;
+  out["keypoints1"] = keypoint_list(r.features1.keypoints);
+  out["descriptors1"] = descriptor_array(r.features1.descriptors);
+  out["views1"] = views(r.features1.views);
+  out["keypoints2"] = keypoint_list(r.features2.keypoints);
+  out["descriptors2"] = descriptor_array(r.features2.descriptors);
+  out["views2"] = views(r.features2.views);
+  out["matches"] = matches;
+  out["inliers"] = flag_array(r.inliers);
+  out["model"] = model_name(r.model.model);
+  out["homography"] = r.model.homography_found ? py::object(matrix_array(r.model.homography)) : py::none();
+  out["fundamental"] = r.model.fundamental_found ? py::object(matrix_array(r.model.fundamental)) : py::none();
+  out["stages"] = stages;
+  return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(affine_orb, m) {
   m.doc() = "Affine-ORB feature extraction, Hamming matching and H/F model selection (C++ library affine_orb).";
+  // The version of the headers the module was compiled with (include/affine_orb/version.hpp).
+  m.attr("__version__") = affine_orb::version();
   const affine_orb::ExtractorOptions defaults;
 
   py::class_<PyExtractor>(m, "Extractor",
@@ -323,4 +399,50 @@ PYBIND11_MODULE(affine_orb, m) {
       "\"score_ratio\" (eq. 22), \"gric\" or \"inlier_ratio\" (affine_orb::SelectionRule). octaves1, "
       "octaves2: the keypoints' pyramid octaves (cv2.KeyPoint.octave), which scale each point's sigma by "
       "1.2^octave; both or neither.");
+  const affine_orb::TwoViewOptions two_view;
+  py::list default_stages;
+  for (const affine_orb::ViewStage& stage : two_view.stages)
+    default_stages.append(py::make_tuple(stage.max_tilt, stage.view_features));
+  m.def(
+      "match_images",
+      [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
+         const std::vector<std::pair<double, double>>& stages, int min_inliers, double min_inlier_ratio,
+         bool all_stages, const std::string& descriptor, const std::string& spreading, int threads,
+         const py::handle& mask1, const py::handle& mask2) {
+        affine_orb::TwoViewOptions options;
+        options.extractor.features = features;
+        options.extractor.views.max_tilt = max_tilt;
+        options.extractor.threads = threads;
+        options.extractor.spreading = one_of(spreading, "spreading", "quadtree", affine_orb::Spreading::kQuadtree,
+                                             "strongest", affine_orb::Spreading::kStrongest);
+        options.stages.clear();
+        for (const auto& [tilt, view_features] : stages) options.stages.push_back({tilt, view_features});
+        options.min_inliers = min_inliers;
+        options.min_inlier_ratio = min_inlier_ratio;
+        options.all_stages = all_stages;
+        options.check();
+        py::array_t<std::uint8_t> s1, s2, s3, s4;
+        const cv::Mat a = as_gray(image1, "image1", s1);
+        const cv::Mat b = as_gray(image2, "image2", s2);
+        const cv::Mat ma = mask1.is_none() ? cv::Mat() : as_gray(mask1, "mask1", s3);
+        const cv::Mat mb = mask2.is_none() ? cv::Mat() : as_gray(mask2, "mask2", s4);
+        if (descriptor == "rbrief") return match_images_with<affine_orb::Rbrief>(a, b, ma, mb, options);
+        if (descriptor == "brisk") return match_images_with<affine_orb::Brisk>(a, b, ma, mb, options);
+        throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
+      },
+      py::arg("image1"), py::arg("image2"), py::arg("features") = two_view.extractor.features,
+      py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = default_stages,
+      py::arg("min_inliers") = two_view.min_inliers, py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
+      py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
+      py::arg("threads") = two_view.extractor.threads, py::arg("mask1") = py::none(), py::arg("mask2") = py::none(),
+      "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
+      "`features` keypoints; while the pair is not verified (min_inliers inliers of the chosen model, at least "
+      "min_inlier_ratio of the matches), each stage (max_tilt, view_features) adds the views of tilts up to "
+      "max_tilt with view_features x features keypoints per image, and matching and H/F selection run again. "
+      "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
+      "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
+      "into keypoints2), inliers (bool per match, of the chosen model), model (\"homography\", \"fundamental\" "
+      "or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, or None) and stages (one "
+      "dict per stage run: max_tilt, keypoints, matches, inliers, model, milliseconds). Invalid options raise "
+      "ValueError, wrong types TypeError.");
 }

@@ -26,15 +26,16 @@ struct AffineMatchOptions {
   /// farther than this from the best neighbour's keypoint. Affine views describe one scene point
   /// several times with nearly equal descriptors; without the exclusion a ratio test over all of
   /// them rejects its true match. 4 px covers the spread of one corner mapped back from several
-  /// views. 0: every other descriptor competes (the plain ratio test).
+  /// views. 0: every other descriptor competes (the plain ratio test). In [0, 1000];
+  /// bench/eval_viewpoint measures matching with it.
   double ratio_exclusion_radius = 4.0;
   /// Match each view of image 1 against each view of image 2 separately (ASIFT's scheme) instead of
   /// one search over all descriptors; ratio_exclusion_radius does not apply then. Per view pair the
   /// ratio test sees few competitors, which finds more correct matches at a much lower precision.
   bool per_view_pairs = false;
   /// Two correspondences are duplicates when their points are within this distance in image 1 and
-  /// in image 2 (pixels); the one with the smaller Hamming distance is kept. SPEC §4 says "within a
-  /// pixel or two": 2.
+  /// in image 2 (pixels, in [0, 1000]); the one with the smaller Hamming distance is kept. SPEC §4
+  /// says "within a pixel or two": 2.
   double duplicate_radius = 2.0;
 
   void check() const {

@@ -23,3 +23,5 @@
 #include "affine_orb/ransac.hpp"
 #include "affine_orb/rbrief.hpp"
 #include "affine_orb/relative_pose.hpp"
+#include "affine_orb/two_view.hpp"
+#include "affine_orb/version.hpp"

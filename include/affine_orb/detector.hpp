@@ -25,18 +25,20 @@ enum class ScoreType {
 
 /// Corner detection parameters.
 struct DetectorOptions {
-  /// FAST threshold in grey levels tried first in every grid cell; ORB-SLAM2's iniThFAST = 20.
+  /// FAST threshold in grey levels tried first in every grid cell, in [1, 254]; 20 is ORB-SLAM2's
+  /// iniThFAST. bench/eval_blur compares 20/7 with 10/4 on blurred frames.
   int initial_threshold = 20;
-  /// FAST threshold for cells that have no corner at initial_threshold; ORB-SLAM2's minThFAST = 7.
-  /// Needed in texture-poor regions. Must be in [1, initial_threshold].
+  /// FAST threshold in grey levels for cells that have no corner at initial_threshold (needed in
+  /// texture-poor regions), in [1, initial_threshold]; 7 is ORB-SLAM2's minThFAST.
   int min_threshold = 7;
-  /// Side of the grid cells in level pixels; ORB-SLAM2 uses 30.
+  /// Side of the grid cells in level pixels, in [4, 4096]; 30 is ORB-SLAM2's.
   int cell_size = 30;
   /// Ranking score for the budget and the spreading.
   ScoreType score = ScoreType::kFast;
-  /// Harris block side in pixels (odd) when score == kHarris; ORB uses 7.
+  /// Harris block side in pixels when score == kHarris, odd, in [3, 15]; 7 is ORB's.
   int harris_block_size = 7;
-  /// Harris k when score == kHarris; ORB and Harris & Stephens use 0.04.
+  /// Harris k (dimensionless) when score == kHarris, in [0, 0.25]; 0.04 is ORB's and Harris &
+  /// Stephens'.
   float harris_k = 0.04f;
 
   void check() const {

@@ -19,13 +19,13 @@ namespace affine_orb {
 /// Splits a budget of `total` features over `levels` pyramid levels geometrically with ratio
 /// 1/scale_factor, as ORB and ORB-SLAM2 do: level 0 gets round(N·(1−f)/(1−f^L)) with f = 1/s,
 /// each next level f times the previous (rounded), and the last level the remainder, so that the
-/// budgets sum to exactly `total`.
-inline std::vector<int> level_budgets(int total, double scale_factor, int levels) {
+/// budgets sum to exactly `total`. `budgets` (its buffer reused) receives one entry per level.
+inline void level_budgets(int total, double scale_factor, int levels, std::vector<int>& budgets) {
   detail::require(total >= 0, "level_budgets: total must be >= 0");
   detail::require(levels >= 1, "level_budgets: levels must be >= 1");
   detail::require(std::isfinite(scale_factor) && scale_factor > 1.0, "level_budgets: scale_factor must be > 1");
   // max(): GCC 12 does not see that require() threw for levels < 1 and warns about back().
-  std::vector<int> budgets(static_cast<std::size_t>(std::max(levels, 1)), 0);
+  budgets.assign(static_cast<std::size_t>(std::max(levels, 1)), 0);
   const double f = 1.0 / scale_factor;
   double per_level = total * (1.0 - f) / (1.0 - std::pow(f, levels));
   int assigned = 0;
@@ -36,6 +36,12 @@ inline std::vector<int> level_budgets(int total, double scale_factor, int levels
     per_level *= f;
   }
   budgets.back() = total - assigned;
+}
+
+/// level_budgets() returning the result.
+inline std::vector<int> level_budgets(int total, double scale_factor, int levels) {
+  std::vector<int> budgets;
+  level_budgets(total, scale_factor, levels, budgets);
   return budgets;
 }
 

@@ -9,10 +9,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
-#include <condition_variable>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <numeric>
 #include <optional>
 #include <string>
@@ -26,6 +24,7 @@
 #include "affine_orb/detail/check.hpp"
 #include "affine_orb/detail/row_spans.hpp"
 #include "affine_orb/detail/view_regions.hpp"
+#include "affine_orb/detail/view_schedule.hpp"
 #include "affine_orb/detail/worker_pool.hpp"
 #include "affine_orb/detector.hpp"
 #include "affine_orb/distribution.hpp"
@@ -72,10 +71,9 @@ struct RefineOptions {
   /// as an image keypoint would; keypoints without such a corner keep their mapped position. The
   /// descriptor and angle stay those of the view. Off by default, by measurement: FAST's peak in
   /// the original image is not the same scene point as its peak in a tilted view (the circle test
-  /// is not affine invariant), so snapping cost 4–25 % of the distinct correct matches on graf 1→2
-  /// … 1→6 (bench/eval_viewpoint) and raised the median KITTI 06 frame-to-frame rotation error at
-  /// K = 1 from 0.105° to 0.142° (affine_orb_sequence); the mapped position is already within
-  /// Features' stated precision.
+  /// is not affine invariant), so snapping loses distinct correct matches on the graf pairs
+  /// (bench/eval_viewpoint) and raises the KITTI 06 frame-to-frame rotation error
+  /// (affine_orb_sequence); the mapped position is already within Features' stated precision.
   bool enabled = false;
   /// Search radius in level-o pixels: 1 covers the mapped position's error of at most
   /// t·s^l / (2·s^o) ≈ √t / 2 <= 0.85 level-o pixels for tilts up to 2√2.
@@ -101,43 +99,36 @@ struct ExtractorOptions {
   ViewBudget view_budget = ViewBudget::kAdditive;
   /// ViewBudget::kAdditive: keypoints the tilted views add, as a fraction of `features` (the output
   /// has features + round(view_features · features) keypoints when there are enough corners).
-  /// Default 1, measured on the 31 Oxford pairs of bench/eval_viewpoint at 2000 keypoints in all:
-  /// 1000 + 1000 found 7515 distinct correct matches in all, 500 + 1500 (3) 7307, the area split
-  /// 6979; 3 does better only from about 40° of viewpoint change (graf 1→4 / 1→5 / 1→6: 147 / 72 /
-  /// 51 against 123 / 71 / 50) — figures of the whole-frame selection before shortlists (with
-  /// them the default finds 7352). Must be in [0, 16]; ignored with kAreaSplit or max_tilt < √2.
+  /// Range [0, 16]; ignored with kAreaSplit or max_tilt < √2. Default 1: at 2000 keypoints in all,
+  /// 1000 + 1000 finds more distinct correct matches over the Oxford pairs than 500 + 1500 (3),
+  /// which wins only from about 40° of viewpoint change (bench/eval_viewpoint).
   double view_features = 1.0;
   /// ViewBudget::kAdditive: the tilted views share the views' budget in proportion to t^e for this
-  /// exponent e. −1 is ASIFT's area weighting (a view of tilt t has 1/t of the image's pixels), 0
-  /// equal shares; 1 (the more tilted views, which find what the image cannot, get more) measured
-  /// best in bench/eval_viewpoint at 1000 + 1000 keypoints: 7515 distinct correct matches over the
-  /// 31 Oxford pairs against 7464 (0) and 7403 (−1), graf 1→4 / 1→5 / 1→6 123 / 71 / 50 against
-  /// 120 / 66 / 49 and 116 / 59 / 36, for 414 against 421 and 429 at 1→2 (whole-frame selection,
-  /// before shortlists). Must be in [−4, 4].
+  /// exponent e, in [−4, 4]. −1 is ASIFT's area weighting (a view of tilt t has 1/t of the image's
+  /// pixels), 0 equal shares; the default 1 gives the more tilted views, which find what the image
+  /// cannot, more, and finds the most distinct correct matches of the three over the Oxford pairs,
+  /// most clearly from 40° of viewpoint change on (bench/eval_viewpoint).
   double view_weight_exponent = 1.0;
   DuplicatePolicy duplicates = DuplicatePolicy::kMerge;
   /// DuplicatePolicy::kMerge: a candidate of view v, level l is a repeat, and dropped before its
   /// view's selection, when a keypoint chosen by an earlier view (lower index; the image is view 0)
   /// of a level l' with |l − l'| <= repeat_levels lies within merge_radius · s^max(l, l') original
   /// pixels. "Chosen" is the final keypoints for the image with kAdditive and, for a shortlist
-  /// (ExtractorOptions::shortlist), what it keeps at its nominal budget. 0 (the same level only):
-  /// measured best for matching two images in bench/eval_viewpoint at 1000 + 1000 keypoints: 1
-  /// found 7326 distinct correct matches over the 31 Oxford pairs against 7352, and 415 / 212 /
-  /// 111 / 65 / 40 on graf 1→2 … 1→6 against 440 / 215 / 116 / 62 / 49 (a corner's copy at the
-  /// next level is not a wasted keypoint there). Must be in [0, 4].
+  /// (ExtractorOptions::shortlist), what it keeps at its nominal budget. Range [0, 4]; the default
+  /// 0 (the same level only) finds more distinct correct matches on the graf pairs than 1 (a
+  /// corner's copy at the next level is not a wasted keypoint there; bench/eval_viewpoint).
   int repeat_levels = 0;
   /// Location of the tilted views' keypoints in the original image.
   RefineOptions refine;
   /// With several views: a view's pixels exist only while it is processed (one view's buffers per
-  /// thread, issue 16), so each (view, level) whose final share depends on the other views (every
+  /// thread), so each (view, level) whose final share depends on the other views (every
   /// tilted view with kAdditive, every view with kAreaSplit) describes a shortlist of up to
   /// ceil(shortlist · its nominal budget) of its candidates, spread as the final selection is;
   /// once every view is done, the carrying of shortfalls and the final spreading choose among the
   /// shortlists. Above 1 it leaves room for carried shortfalls; larger costs description time
-  /// and, with kQuadtree, moves the final choice away from the spreading of all candidates.
-  /// 1.25 measured in bench/eval_viewpoint (31 Oxford pairs, 1000 + 1000 keypoints): quadtree
-  /// spreading found 6043 distinct correct matches in all against 5995 with 2; with kStrongest
-  /// the value makes no difference (7352). Must be in [1, 64].
+  /// and, with kQuadtree, moves the final choice away from the spreading of all candidates. Range
+  /// [1, 64]; the default 1.25 finds more distinct correct matches with quadtree spreading than 2
+  /// and the same with kStrongest (bench/eval_viewpoint).
   double shortlist = 1.25;
   /// Radius in original pixels, times the level scale s^l, within which kMerge treats keypoints of
   /// different views as one (ExtractorOptions::repeat_levels); 2 px is the SPEC §7 duplicate cell
@@ -195,25 +186,32 @@ struct ExtractorOptions {
 ///    original image (detail::support_region()); a cell falls back to the minimum threshold when
 ///    its valid pixels hold no corner at the initial one. A candidate is kept if the mask pixel
 ///    nearest to its original position is non-zero;
-/// 3. ViewBudget::kAdditive: the image (view 0) keeps `features` of its candidates exactly as
-///    with max_tilt = 1 (step 4 on its own) and describes them; a tilted view, with
-///    DuplicatePolicy::kMerge, drops its candidates that repeat a keypoint the image kept
-///    (ExtractorOptions::repeat_levels), then describes a shortlist of each level
-///    (ExtractorOptions::shortlist). ViewBudget::kAreaSplit: every view describes shortlists;
-/// 4. once every view is done, with kMerge, shortlisted keypoints that repeat a stronger one of
-///    another view are dropped (kAdditive: ExtractorOptions::repeat_levels; kAreaSplit: the same
-///    level within merge_radius · s^l original pixels); then a budget is split over views
-///    (kAreaSplit: `features`, in proportion to their area 1/t; kAdditive: view_features ·
-///    features over the tilted views, in proportion to t^view_weight_exponent) and, within a view,
-///    over levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry());
-///    each (view, level) keeps its share by quadtree spreading (distribute_quadtree()) in original
-///    coordinates, or its strongest keypoints (select_strongest()), per ExtractorOptions::spreading;
-/// 5. keypoints are oriented and described in their view, then mapped back: position through the
-///    inverse view map, orientation by mapping the direction vector, scale s^l·√t (SPEC §1); a
-///    tilted view's keypoint is then snapped to a corner of the original image (RefineOptions).
+/// 3. in view order (detail::ViewTurns), with DuplicatePolicy::kMerge, a tilted view drops its
+///    candidates that repeat a keypoint chosen by an earlier view (detail::RepeatGrids,
+///    ExtractorOptions::repeat_levels); then each level chooses what it describes: the image with
+///    ViewBudget::kAdditive its final keypoints, exactly as with max_tilt = 1 (`features` of them,
+///    levels geometric, shortfalls carried); every other view a shortlist
+///    (ExtractorOptions::shortlist);
+/// 4. the chosen keypoints are oriented and described in their view, then mapped back: position
+///    through the inverse view map, orientation by mapping the direction vector, scale s^l·√t
+///    (SPEC §1); a tilted view's keypoint is then snapped to a corner of the original image
+///    (RefineOptions);
+/// 5. once every view is done, a budget is split over the shortlisted views (kAdditive:
+///    view_features · features over the tilted views, in proportion to t^view_weight_exponent;
+///    kAreaSplit: `features` over all views, in proportion to their area 1/t) and, within a view,
+///    over levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry(),
+///    detail::ViewBudgets); each (view, level) keeps its share of its shortlist by quadtree
+///    spreading (distribute_quadtree()) in original coordinates, or its strongest keypoints
+///    (select_strongest()), per ExtractorOptions::spreading.
 ///
 /// Output order: by octave (0 first), then by view, then by level, then raster order in the view.
 /// The output does not depend on ExtractorOptions::threads.
+///
+/// Views on demand: extract_image() is stage 0 (the image alone, exactly extract() with
+/// max_tilt = 1) and each extend() adds the views of further tilts, so that a caller pays for
+/// views only when it needs them (match_images() in two_view.hpp escalates this way). The stage
+/// {extract_image(), extend(views.max_tilt, round(view_features · features))} gives exactly
+/// extract()'s keypoints.
 ///
 /// An Extractor holds a workspace reused across calls (and, with ExtractorOptions::threads > 1, its
 /// worker threads): it can be moved, not copied. Its size is the image's pyramid plus, per thread,
@@ -231,26 +229,27 @@ class Extractor {
         descriptor_(descriptor_options),
         image_pyramid_(options_.pyramid),
         thread_work_(static_cast<std::size_t>(options_.threads), ThreadWork(options_.pyramid)),
-        turns_(std::make_unique<Turns>()) {}
+        turns_(std::make_unique<detail::ViewTurns>()) {}
 
   const ExtractorOptions& options() const { return options_; }
   const Descriptor& descriptor() const { return descriptor_; }
 
-  /// The views used for the last image passed to extract() (empty before the first call).
+  /// The views of ExtractorOptions::views for the last image passed to extract() or
+  /// extract_image() (empty before the first call), in view index order (Features::views).
   std::vector<AffineView> views() const {
     std::vector<AffineView> out;
     for (const ViewWork& w : view_work_) out.push_back(w.view);
     return out;
   }
 
-  /// The pyramid of the original (untilted) image of the last extract() call.
+  /// The pyramid of the original (untilted) image of the last extract() or extract_image() call.
   const Pyramid& pyramid() const {
     detail::require(!view_work_.empty() && !image_pyramid_.empty(), "Extractor::pyramid: extract() was not called yet");
     return image_pyramid_;
   }
 
   /// Keypoints (original pixel coordinates) and descriptors of a CV_8UC1 image (a ROI of a larger
-  /// matrix is fine); see Features for the keypoint fields.
+  /// matrix is fine), every view at once; see Features for the keypoint fields.
   ///
   /// `mask`: empty (everything allowed) or CV_8UC1 of the image size; a keypoint is kept only where
   /// the mask pixel nearest to its original position is non-zero.
@@ -259,16 +258,74 @@ class Extractor {
   /// wrong size or type. A valid image with no corners (flat, or smaller than the descriptor
   /// support on every level) gives an empty result.
   Features<kBits> extract(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
-    detail::require_gray8(image, "Extractor::extract");
-    detail::require_mask(mask, image.size(), "Extractor::extract");
-    prepare_views(image.size());
+    begin(image, mask);
     const int n_views = static_cast<int>(view_work_.size());
-    take_.assign(budgets_.size(), 0);
-    if (merging()) reset_repeat_grids(image.size());
-    turns_->reset();
-    for_each(n_views, [&](int v, int w) { process_view(v, image, mask, thread_work_[static_cast<std::size_t>(w)]); });
-    if (n_views > 1) select_across_views(image.size());
-    return assemble();
+    if (additive()) {
+      budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
+      budgets_.share(tilts_, 1, n_views, static_cast<int>(std::lround(options_.view_features * options_.features)),
+                     options_.view_weight_exponent, options_.pyramid.scale_factor);
+    } else {
+      budgets_.share(tilts_, 0, n_views, options_.features, -1.0, options_.pyramid.scale_factor);
+    }
+    run_views(image, mask, 0, n_views);
+    return assemble(0, n_views);
+  }
+
+  /// Views on demand, stage 0: the keypoints of the image alone, exactly extract()'s with
+  /// views.max_tilt = 1 (the image's `features` keypoints). The Extractor keeps `image` and `mask`
+  /// (cv::Mat headers, not copies) for extend(): their pixels must not change until the last
+  /// extend() of this image. Same arguments, checks and exceptions as extract(); also throws
+  /// std::invalid_argument unless ExtractorOptions::view_budget is ViewBudget::kAdditive.
+  Features<kBits> extract_image(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
+    detail::require(additive(), "Extractor::extract_image: views on demand need ViewBudget::kAdditive");
+    begin(image, mask);
+    budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
+    run_views(image, mask, 0, 1);
+    staged_image_ = image;
+    staged_mask_ = mask;
+    staged_views_ = 1;
+    return assemble(0, 1);
+  }
+
+  /// Views on demand, next stage: the keypoints that the tilted views of ExtractorOptions::views
+  /// with tilt in (extracted_tilt(), up_to_tilt] add to the image of the last extract_image(),
+  /// `features` of them in all when there are enough corners (shared over the stage's views in
+  /// proportion to t^view_weight_exponent, then over levels and with shortfalls carried as in
+  /// extract()). With DuplicatePolicy::kMerge a candidate is dropped when it repeats a keypoint
+  /// of an earlier stage or of an earlier view of this stage. Earlier stages' keypoints are not
+  /// changed: the union of the stages so far is a superset of the stages before. Returns only the
+  /// stage's keypoints (Features::views index views()); an empty result when no view is left up
+  /// to `up_to_tilt` (views beyond views.max_tilt do not exist).
+  ///
+  /// Throws std::invalid_argument before extract_image() (or after an extract(), which ends the
+  /// staged image), for up_to_tilt not finite, or features outside [0, 1000000].
+  Features<kBits> extend(double up_to_tilt, int features) {
+    detail::require(staged_views_ > 0, "Extractor::extend: call extract_image() first");
+    detail::require(std::isfinite(up_to_tilt), "Extractor::extend: up_to_tilt must be finite");
+    detail::require(features >= 0 && features <= 1000000, "Extractor::extend: features must be in [0, 1000000]");
+    const int first = staged_views_;
+    int last = first;
+    // The same 0.1 % tolerance as view_parameters(), so that 2.83 includes 2√2.
+    while (last < static_cast<int>(view_work_.size()) &&
+           tilts_[static_cast<std::size_t>(last)] <= up_to_tilt * (1.0 + 1e-3)) {
+      ++last;
+    }
+    if (last == first) return {};
+    // What the earlier stages finally kept is what this stage must not repeat.
+    if (merging()) {
+      repeats_.reset(staged_image_.size(), options_.pyramid, options_.merge_radius, options_.repeat_levels);
+      for (int v = 0; v < first; ++v) enter_kept(v);
+    }
+    budgets_.share(tilts_, first, last, features, options_.view_weight_exponent, options_.pyramid.scale_factor);
+    run_views(staged_image_, staged_mask_, first, last);
+    staged_views_ = last;
+    return assemble(first, last);
+  }
+
+  /// The largest tilt whose views the staged extraction of the current image has extracted: 1
+  /// after extract_image(), 0 when no staged extraction is under way.
+  double extracted_tilt() const {
+    return staged_views_ > 0 ? tilts_[static_cast<std::size_t>(staged_views_ - 1)] : 0.0;
   }
 
  private:
@@ -278,25 +335,6 @@ class Extractor {
     std::vector<float> responses;
     std::vector<int> kept;
     QuadtreeWorkspace quadtree;
-  };
-
-  /// A keypoint accepted by the repeat suppression, in the grid of its level.
-  struct RepeatKept {
-    cv::Point2f point;
-    int next;  ///< next accepted keypoint of the same cell, −1 at the end
-  };
-  /// Accepted keypoints of one level l on a grid of cells merge_radius · s^(l + repeat_levels)
-  /// wide: the largest radius a point of l is compared with, so a 3x3 block of cells holds them all.
-  struct RepeatGrid {
-    double radius_squared = 1.0;  ///< (merge_radius · s^l)², the repeat radius of level l squared
-    double cell = 1.0;
-    int columns = 0;
-    std::vector<int> head;  ///< per cell, the last accepted keypoint in it (−1: none)
-    std::size_t index(cv::Point2f p, int dx, int dy) const {
-      const int cx = static_cast<int>(std::floor(p.x / cell)) + 2 + dx;
-      const int cy = static_cast<int>(std::floor(p.y / cell)) + 2 + dy;
-      return static_cast<std::size_t>(cy) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(cx);
-    }
   };
 
   /// The candidates of one level of the view a thread is processing.
@@ -349,225 +387,59 @@ class Extractor {
     /// rendered, the others resized, within kRenderMargin level pixels of the image.
     std::vector<RowSpans> regions;
     std::vector<LevelWork> levels;
-    int budget = 0;  ///< the view's nominal budget, summed over its levels
   };
-
-  /// Gives the views their turn in index order for what depends on the views before them (the
-  /// repeat suppression, the image's pyramid for RefineOptions) while they render, detect and
-  /// describe in parallel. WorkerPool hands out views in increasing order, so a thread waiting
-  /// for its turn waits for views already being processed: no deadlock, and the output does not
-  /// depend on the number of threads.
-  struct Turns {
-    std::mutex mutex;
-    std::condition_variable changed;
-    int next = 0;         ///< the view whose turn it is
-    bool failed = false;  ///< a view threw: no turn comes any more
-
-    void reset() {
-      const std::lock_guard<std::mutex> lock(mutex);
-      next = 0;
-      failed = false;
-    }
-    /// Waits for view v's turn; false when a view failed (its exception is the one extract()
-    /// rethrows).
-    bool wait(int v) {
-      std::unique_lock<std::mutex> lock(mutex);
-      changed.wait(lock, [&] { return failed || next == v; });
-      return !failed;
-    }
-    void pass(int v) {
-      {
-        const std::lock_guard<std::mutex> lock(mutex);
-        next = v + 1;
-      }
-      changed.notify_all();
-    }
-    void fail() {
-      {
-        const std::lock_guard<std::mutex> lock(mutex);
-        failed = true;
-      }
-      changed.notify_all();
-    }
-  };
-
-  LevelWork& level_of(int v, int l) {
-    return view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
-  }
-
-  bool additive() const { return options_.view_budget == ViewBudget::kAdditive; }
-  bool merging() const { return options_.duplicates == DuplicatePolicy::kMerge; }
-
-  /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
-  /// only view), rather than a shortlist chosen from once every view is done.
-  bool direct(int v) const { return v == 0 && (additive() || view_work_.size() == 1); }
-
-  /// (Re)builds the view set, the renderers and the valid regions when the image size changes;
-  /// buffers are kept otherwise.
-  void prepare_views(cv::Size size) {
-    if (size == views_size_ && !view_work_.empty()) return;
-    const std::vector<AffineView> views = make_views(options_.views, size);
-    view_work_.clear();
-    view_work_.resize(views.size());
-    cv::Size largest_tilted;
-    for (std::size_t v = 0; v < views.size(); ++v) {
-      ViewWork& work = view_work_[v];
-      work.view = views[v];
-      work.renderer = detail::ViewRenderer(views[v], options_.views.antialias);
-      work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
-      work.regions.resize(static_cast<std::size_t>(options_.pyramid.levels));
-      for (int l = 0; l < options_.pyramid.levels; ++l) {
-        const cv::Size level_size = pyramid_level_size(work.view.size, options_.pyramid, l);
-        work.levels[static_cast<std::size_t>(l)].valid =
-            detail::support_region(work.view, size, level_size, support_border());
-        work.regions[static_cast<std::size_t>(l)] = detail::region_near_image(
-            detail::level_to_original(work.view, level_size), level_size, size, kRenderMargin);
-      }
-      if (v > 0) {
-        largest_tilted.width = std::max(largest_tilted.width, work.view.size.width);
-        largest_tilted.height = std::max(largest_tilted.height, work.view.size.height);
-      }
-    }
-    budgets_.clear();
-    std::vector<int> per_view;
-    if (additive()) {
-      per_view = view_budgets(1, static_cast<int>(std::lround(options_.view_features * options_.features)),
-                              options_.view_weight_exponent);
-      per_view.front() = options_.features;
-    } else {
-      per_view = view_budgets(0, options_.features, -1.0);
-    }
-    octave_shift_.clear();
-    for (const AffineView& view : views) {
-      // The level nearest (in log scale) to the scale s^l·√t is l + round(log √t / log s).
-      octave_shift_.push_back(
-          static_cast<int>(std::lround(0.5 * std::log(view.tilt) / std::log(options_.pyramid.scale_factor))));
-    }
-    for (std::size_t v = 0; v < views.size(); ++v) {
-      const std::vector<int> per_level =
-          level_budgets(per_view[v], options_.pyramid.scale_factor, options_.pyramid.levels);
-      budgets_.insert(budgets_.end(), per_level.begin(), per_level.end());
-      view_work_[v].budget = per_view[v];
-    }
-    // Every thread's buffers sized for the largest tilted view now, so that which thread gets
-    // which view in later frames never makes one allocate.
-    for (ThreadWork& work : thread_work_) {
-      work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
-      if (largest_tilted.area() > 0) {
-        work.pyramid.reserve(largest_tilted);
-        detail::fit_buffer(work.detector.scores, largest_tilted, CV_8UC1);
-      }
-    }
-    views_size_ = size;
-  }
 
   /// Margin in level pixels around the original image within which a view and its pyramid levels
   /// are computed: more than the reach beyond a valid keypoint's support of the rBRIEF smoothing
   /// (3 level pixels) and of the bilinear interpolation between levels.
   static constexpr double kRenderMargin = 8.0;
 
-  /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
-  int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }
+  // ---- The walk of one image ------------------------------------------------------------------
 
-  /// Runs fn(i, w) for every i in [0, n), on options_.threads threads (the calling thread
-  /// included, the others kept in pool_ from the first call on); w in [0, threads) numbers the
-  /// thread, for per-thread scratch buffers.
-  template <class Fn>
-  void for_each(int n, Fn fn) {
-    if (options_.threads <= 1 || n <= 1) {
-      for (int v = 0; v < n; ++v) fn(v, 0);
-      return;
-    }
-    if (!pool_) pool_ = std::make_unique<detail::WorkerPool>(options_.threads);
-    pool_->run(n, fn);
+  /// Checks the arguments, prepares the view set for the image size and empties the repeat grids;
+  /// ends any staged extraction.
+  void begin(const cv::Mat& image, const cv::Mat& mask) {
+    detail::require_gray8(image, "Extractor::extract");
+    detail::require_mask(mask, image.size(), "Extractor::extract");
+    prepare_views(image.size());
+    staged_views_ = 0;
+    staged_image_ = cv::Mat();
+    staged_mask_ = cv::Mat();
+    if (merging()) repeats_.reset(image.size(), options_.pyramid, options_.merge_radius, options_.repeat_levels);
   }
 
-  /// Budget of each view: views [first, n) share `total` in proportion to t^exponent (largest
-  /// remainders, ties to the earlier view); views before `first` get 0. Exponent −1 weights by
-  /// area W·H/t.
-  std::vector<int> view_budgets(std::size_t first, int total, double exponent) const {
-    const std::size_t n = view_work_.size();
-    std::vector<int> budgets(n, 0);
-    if (first >= n) return budgets;
-    double total_weight = 0.0;
-    for (std::size_t v = first; v < n; ++v) total_weight += std::pow(view_work_[v].view.tilt, exponent);
-    std::vector<std::pair<double, std::size_t>> remainders;
-    int assigned = 0;
-    for (std::size_t v = first; v < n; ++v) {
-      const double exact = total * std::pow(view_work_[v].view.tilt, exponent) / total_weight;
-      budgets[v] = static_cast<int>(std::floor(exact));
-      assigned += budgets[v];
-      remainders.emplace_back(exact - budgets[v], v);
-    }
-    std::stable_sort(remainders.begin(), remainders.end(),
-                     [](const auto& a, const auto& b) { return a.first > b.first; });
-    for (std::size_t i = 0; assigned < total; ++i, ++assigned) ++budgets[remainders[i % remainders.size()].second];
-    return budgets;
+  /// Steps 1–5 for views [first, last), whose budgets are set: every view processed (in parallel,
+  /// taking turns in view order), then the final selection of the shortlisted ones.
+  void run_views(const cv::Mat& image, const cv::Mat& mask, int first, int last) {
+    turns_->reset(first);
+    for_each(last - first,
+             [&](int i, int w) { process_view(first + i, image, mask, thread_work_[static_cast<std::size_t>(w)]); });
+    const int shortlisted = first == 0 && direct(0) ? 1 : first;
+    if (shortlisted < last) select_shortlisted(image.size(), shortlisted, last);
   }
 
-  /// take_[g] for the (view, level) groups g in [begin, end) (index v·levels + l): their budgets
-  /// with shortfalls carried among them (allocate_with_carry()), given available_[g − begin], what
-  /// each offers.
-  void take_range(int begin, int end) {
-    range_budgets_.assign(budgets_.begin() + begin, budgets_.begin() + end);
-    allocate_with_carry(range_budgets_, available_, range_take_);
-    std::copy(range_take_.begin(), range_take_.end(), take_.begin() + begin);
-  }
-
-  /// Steps 1–3 and 5 for view v on the thread owning `work`.
+  /// Steps 1–4 for view v on the thread owning `work`; a failure ends every turn still to come.
   void process_view(int v, const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
     try {
-      process(v, image, mask, work);
+      ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+      for (LevelWork& level : view.levels) level.clear();
+      const bool empty = v != 0 && budgets_.view(v) == 0;  // nothing of it could be kept
+      Pyramid& pyramid = v == 0 ? image_pyramid_ : work.pyramid;
+      if (!empty) {
+        view.renderer.render(image, &view.regions.front(), work.scratch, pyramid.level0(view.view.size));
+        pyramid.build_from_level0(view.view.is_identity() ? nullptr : &view.regions);
+        detect_view(v, image, mask, pyramid, work);
+      }
+      if (!turns_->wait(v)) return;
+      if (!empty) {
+        if (merging()) drop_repeats(v, work);
+        choose(v, image.size(), work);
+      }
+      turns_->pass(v);
+      if (!empty) describe_view(v, pyramid, mask, work);
     } catch (...) {
       turns_->fail();
       throw;
-    }
-  }
-
-  /// Render, pyramid and candidates; in view v's turn, the repeats dropped and the keypoints to
-  /// describe chosen (the final ones when direct(), else the shortlists), entered in the repeat
-  /// grids; after the turn, their description.
-  void process(int v, const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
-    ViewWork& view = view_work_[static_cast<std::size_t>(v)];
-    const int levels = options_.pyramid.levels;
-    for (LevelWork& level : view.levels) level.clear();
-    const bool empty = v != 0 && view.budget == 0;  // nothing of it could be kept
-    Pyramid& pyramid = v == 0 ? image_pyramid_ : work.pyramid;
-    if (!empty) {
-      view.renderer.render(image, &view.regions.front(), work.scratch, pyramid.level0(view.view.size));
-      pyramid.build_from_level0(view.view.is_identity() ? nullptr : &view.regions);
-      detect_view(v, image, mask, pyramid, work);
-    }
-    if (!turns_->wait(v)) return;
-    if (empty) {
-      turns_->pass(v);
-      return;
-    }
-    if (merging()) drop_repeats(v, work);
-    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(image.cols), static_cast<float>(image.rows));
-    if (direct(v)) {
-      available_.clear();
-      for (const LevelCandidates& c : work.levels) available_.push_back(static_cast<int>(c.responses.size()));
-      take_range(0, levels);
-    }
-    for (int l = 0; l < levels; ++l) {
-      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
-      const std::size_t g = static_cast<std::size_t>(v * levels + l);
-      const int target = direct(v) ? take_[g]
-                                   : static_cast<int>(std::min<double>(static_cast<double>(c.responses.size()),
-                                                                       std::ceil(options_.shortlist * budgets_[g])));
-      spread(c.original_points, c.responses, region, target, work.spread);
-      c.chosen = work.spread.kept;
-      if (merging()) enter_repeat_references(c, l, direct(v) ? target : budgets_[g], region, work.spread);
-    }
-    turns_->pass(v);
-    for (int l = 0; l < levels; ++l) {
-      describe_level(v, l, pyramid, mask, work);
-      if (direct(v)) {
-        LevelWork& level = view.levels[static_cast<std::size_t>(l)];
-        level.kept.resize(level.keypoints.size());
-        std::iota(level.kept.begin(), level.kept.end(), 0);
-      }
     }
   }
 
@@ -600,18 +472,63 @@ class Extractor {
     }
   }
 
-  /// Keeps take of `points` by quadtree spreading or strength (ExtractorOptions::spreading), into
-  /// spread.kept (ascending indices).
-  void spread(const std::vector<cv::Point2f>& points, const std::vector<float>& responses, const cv::Rect2f& region,
-              int target, SpreadWork& work) const {
-    if (options_.spreading == Spreading::kQuadtree) {
-      distribute_quadtree(points, responses, region, target, work.quadtree, work.kept);
-    } else {
-      select_strongest(responses, target, work.kept);
+  /// Step 3, in view v's turn, with DuplicatePolicy::kMerge: drops the candidates of a tilted view
+  /// that repeat a keypoint chosen by an earlier view.
+  void drop_repeats(int v, ThreadWork& work) const {
+    if (v == 0) return;
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+      std::size_t n = 0;
+      for (std::size_t i = 0; i < c.responses.size(); ++i) {
+        if (repeats_.repeats(c.original_points[i], l)) continue;
+        c.level_points[n] = c.level_points[i];
+        c.original_points[n] = c.original_points[i];
+        c.responses[n] = c.responses[i];
+        ++n;
+      }
+      c.level_points.resize(n);
+      c.original_points.resize(n);
+      c.responses.resize(n);
     }
   }
 
-  /// Step 5 for the chosen candidates of view v, level l: orientation and descriptor in
+  /// Step 3, in view v's turn: the candidates each level describes (its final keypoints when
+  /// direct(v), else its shortlist), entered in the repeat grids for the views after it.
+  void choose(int v, cv::Size size, ThreadWork& work) {
+    const int levels = options_.pyramid.levels;
+    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));
+    if (direct(v)) {
+      available_.clear();
+      for (const LevelCandidates& c : work.levels) available_.push_back(static_cast<int>(c.responses.size()));
+      budgets_.allocate(v * levels, (v + 1) * levels, available_);
+    }
+    for (int l = 0; l < levels; ++l) {
+      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+      const int g = v * levels + l;
+      const int target = direct(v) ? budgets_.take(g)
+                                   : detail::shortlist_size(static_cast<int>(c.responses.size()), budgets_.group(g),
+                                                            options_.shortlist);
+      spread(c.original_points, c.responses, region, target, work.spread);
+      c.chosen = work.spread.kept;
+      if (merging()) enter_repeat_references(c, l, direct(v) ? target : budgets_.group(g), region, work.spread);
+    }
+  }
+
+  /// Step 4 for view v: every level's chosen candidates described and mapped back; a direct view's
+  /// are its output as they are.
+  void describe_view(int v, const Pyramid& pyramid, const cv::Mat& mask, ThreadWork& work) {
+    ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      describe_level(v, l, pyramid, mask, work);
+      if (direct(v)) {
+        LevelWork& level = view.levels[static_cast<std::size_t>(l)];
+        level.kept.resize(level.keypoints.size());
+        std::iota(level.kept.begin(), level.kept.end(), 0);
+      }
+    }
+  }
+
+  /// Step 4 for the chosen candidates of view v, level l: orientation and descriptor in
   /// the view, keypoints mapped back (and, for a tilted view, refined on the original image:
   /// RefineOptions), appended to the level's record.
   void describe_level(int v, int l, const Pyramid& pyramid, const cv::Mat& mask, ThreadWork& work) {
@@ -647,46 +564,142 @@ class Extractor {
     }
   }
 
-  /// Step 4, once every view is done: the budget with carried shortfalls over the views whose
-  /// keypoints are shortlists, and each one's final selection among its shortlist.
-  void select_across_views(cv::Size size) {
-    const int n_views = static_cast<int>(view_work_.size());
+  /// Step 5 for the shortlisted views [first, last): their budgets with shortfalls carried among
+  /// all their (view, level) groups, and each group's final selection among its shortlist.
+  void select_shortlisted(cv::Size size, int first, int last) {
     const int levels = options_.pyramid.levels;
-    const int first = additive() ? 1 : 0;
     available_.clear();
-    for (int g = first * levels; g < n_views * levels; ++g) {
+    for (int g = first * levels; g < last * levels; ++g) {
       available_.push_back(static_cast<int>(level_of(g / levels, g % levels).keypoints.size()));
     }
-    take_range(first * levels, n_views * levels);
+    budgets_.allocate(first * levels, last * levels, available_);
     const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));
-    for_each(n_views - first, [&](int i, int w) {
+    for_each(last - first, [&](int i, int w) {
       ThreadWork& work = thread_work_[static_cast<std::size_t>(w)];
       for (int l = 0; l < levels; ++l) {
         LevelWork& level = level_of(i + first, l);
-        spread(level.original_points, level.responses, region,
-               take_[static_cast<std::size_t>((i + first) * levels + l)], work.spread);
+        spread(level.original_points, level.responses, region, budgets_.take((i + first) * levels + l), work.spread);
         level.kept = work.spread.kept;
       }
     });
   }
 
-  /// DuplicatePolicy::kMerge: empties the repeat grids, one per level l with cells
-  /// merge_radius · s^(l + repeat_levels) wide over the original image.
-  void reset_repeat_grids(cv::Size size) {
+  /// The output of views [first, last): keypoints grouped by octave (0 first), then by view, then
+  /// level, then raster order in the view.
+  Features<kBits> assemble(int first, int last) {
     const int levels = options_.pyramid.levels;
-    const int reach = options_.repeat_levels;
-    repeat_grids_.resize(static_cast<std::size_t>(levels));
-    for (int l = 0; l < levels; ++l) {
-      RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(l)];
-      const double radius = options_.merge_radius * options_.pyramid.scale(l);
-      grid.radius_squared = radius * radius;
-      grid.cell = options_.merge_radius * options_.pyramid.scale(std::min(l + reach, levels - 1));
-      // Points lie in [−0.5, W − 0.5) x [−0.5, H − 0.5): cells floor(x / cell) + 2 ± 1 stay inside.
-      grid.columns = static_cast<int>(std::floor(size.width / grid.cell)) + 5;
-      const int rows = static_cast<int>(std::floor(size.height / grid.cell)) + 5;
-      grid.head.assign(static_cast<std::size_t>(grid.columns) * static_cast<std::size_t>(rows), -1);
+    octave_start_.assign(static_cast<std::size_t>(levels) + 1, 0);
+    for (int v = first; v < last; ++v) {
+      for (const LevelWork& level : view_work_[static_cast<std::size_t>(v)].levels) {
+        for (int i : level.kept) {
+          ++octave_start_[static_cast<std::size_t>(level.keypoints[static_cast<std::size_t>(i)].octave) + 1];
+        }
+      }
     }
-    repeat_kept_.clear();
+    for (int o = 0; o < levels; ++o)
+      octave_start_[static_cast<std::size_t>(o) + 1] += octave_start_[static_cast<std::size_t>(o)];
+    const std::size_t total = static_cast<std::size_t>(octave_start_.back());
+    Features<kBits> features;
+    features.keypoints.resize(total);
+    features.descriptors.resize(total);
+    features.views.resize(total);
+    for (int v = first; v < last; ++v) {
+      for (const LevelWork& level : view_work_[static_cast<std::size_t>(v)].levels) {
+        for (int i : level.kept) {
+          const cv::KeyPoint& kp = level.keypoints[static_cast<std::size_t>(i)];
+          const std::size_t slot = static_cast<std::size_t>(octave_start_[static_cast<std::size_t>(kp.octave)]++);
+          features.keypoints[slot] = kp;
+          features.descriptors[slot] = level.descriptors[static_cast<std::size_t>(i)];
+          features.views[slot] = v;
+        }
+      }
+    }
+    return features;
+  }
+
+  // ---- The pieces the walk uses ---------------------------------------------------------------
+
+  LevelWork& level_of(int v, int l) {
+    return view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
+  }
+
+  bool additive() const { return options_.view_budget == ViewBudget::kAdditive; }
+  bool merging() const { return options_.duplicates == DuplicatePolicy::kMerge; }
+
+  /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
+  /// only view), rather than a shortlist chosen from once every view is done.
+  bool direct(int v) const { return v == 0 && (additive() || view_work_.size() == 1); }
+
+  /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
+  int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }
+
+  /// (Re)builds the view set, the renderers and the valid regions when the image size changes;
+  /// buffers are kept otherwise.
+  void prepare_views(cv::Size size) {
+    if (size == views_size_ && !view_work_.empty()) return;
+    const std::vector<AffineView> views = make_views(options_.views, size);
+    view_work_.clear();
+    view_work_.resize(views.size());
+    tilts_.clear();
+    octave_shift_.clear();
+    cv::Size largest_tilted;
+    for (std::size_t v = 0; v < views.size(); ++v) {
+      ViewWork& work = view_work_[v];
+      work.view = views[v];
+      work.renderer = detail::ViewRenderer(views[v], options_.views.antialias);
+      work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      work.regions.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      for (int l = 0; l < options_.pyramid.levels; ++l) {
+        const cv::Size level_size = pyramid_level_size(work.view.size, options_.pyramid, l);
+        work.levels[static_cast<std::size_t>(l)].valid =
+            detail::support_region(work.view, size, level_size, support_border());
+        work.regions[static_cast<std::size_t>(l)] = detail::region_near_image(
+            detail::level_to_original(work.view, level_size), level_size, size, kRenderMargin);
+      }
+      if (v > 0) {
+        largest_tilted.width = std::max(largest_tilted.width, work.view.size.width);
+        largest_tilted.height = std::max(largest_tilted.height, work.view.size.height);
+      }
+      tilts_.push_back(views[v].tilt);
+      // The level nearest (in log scale) to the scale s^l·√t is l + round(log √t / log s).
+      octave_shift_.push_back(
+          static_cast<int>(std::lround(0.5 * std::log(views[v].tilt) / std::log(options_.pyramid.scale_factor))));
+    }
+    budgets_.resize(views.size(), options_.pyramid.levels);
+    // Every thread's buffers sized for the largest tilted view now, so that which thread gets
+    // which view in later frames never makes one allocate.
+    for (ThreadWork& work : thread_work_) {
+      work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      if (largest_tilted.area() > 0) {
+        work.pyramid.reserve(largest_tilted);
+        detail::fit_buffer(work.detector.scores, largest_tilted, CV_8UC1);
+      }
+    }
+    views_size_ = size;
+  }
+
+  /// Runs fn(i, w) for every i in [0, n), on options_.threads threads (the calling thread
+  /// included, the others kept in pool_ from the first call on); w in [0, threads) numbers the
+  /// thread, for per-thread scratch buffers. Indices are handed out in increasing order.
+  template <class Fn>
+  void for_each(int n, Fn fn) {
+    if (options_.threads <= 1 || n <= 1) {
+      for (int v = 0; v < n; ++v) fn(v, 0);
+      return;
+    }
+    if (!pool_) pool_ = std::make_unique<detail::WorkerPool>(options_.threads);
+    pool_->run(n, fn);
+  }
+
+  /// Keeps take of `points` by quadtree spreading or strength (ExtractorOptions::spreading), into
+  /// spread.kept (ascending indices).
+  void spread(const std::vector<cv::Point2f>& points, const std::vector<float>& responses, const cv::Rect2f& region,
+              int target, SpreadWork& work) const {
+    if (options_.spreading == Spreading::kQuadtree) {
+      distribute_quadtree(points, responses, region, target, work.quadtree, work.kept);
+    } else {
+      select_strongest(responses, target, work.kept);
+    }
   }
 
   /// Enters in the repeat grid of level l what later views must not repeat of the chosen
@@ -694,15 +707,9 @@ class Extractor {
   /// the final keypoints; for a shortlist, its nominal budget: the final selection when no
   /// shortfall is carried, so that the rest of the shortlist suppresses nothing).
   void enter_repeat_references(const LevelCandidates& c, int l, int take, const cv::Rect2f& region, SpreadWork& work) {
-    RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(l)];
-    const auto enter = [&](cv::Point2f p) {
-      int& head = grid.head[grid.index(p, 0, 0)];
-      repeat_kept_.push_back({p, head});
-      head = static_cast<int>(repeat_kept_.size()) - 1;
-    };
     // Both selections keep exactly min(take, n) of n: with take >= n, every chosen candidate.
     if (take >= static_cast<int>(c.chosen.size())) {
-      for (int i : c.chosen) enter(c.original_points[static_cast<std::size_t>(i)]);
+      for (int i : c.chosen) repeats_.enter(c.original_points[static_cast<std::size_t>(i)], l);
       return;
     }
     work.points.clear();
@@ -712,49 +719,14 @@ class Extractor {
       work.responses.push_back(c.responses[static_cast<std::size_t>(i)]);
     }
     spread(work.points, work.responses, region, take, work);
-    for (int k : work.kept) enter(work.points[static_cast<std::size_t>(k)]);
+    for (int k : work.kept) repeats_.enter(work.points[static_cast<std::size_t>(k)], l);
   }
 
-  /// Whether a candidate of level l at p (original pixels) repeats a keypoint chosen by an
-  /// earlier view: one of a level l' with |l − l'| <= repeat_levels within merge_radius ·
-  /// s^max(l, l').
-  bool repeats(cv::Point2f p, int l) const {
-    const int levels = options_.pyramid.levels;
-    const int reach = options_.repeat_levels;
-    for (int q = std::max(l - reach, 0); q <= std::min(l + reach, levels - 1); ++q) {
-      const RepeatGrid& grid = repeat_grids_[static_cast<std::size_t>(q)];
-      const double radius_squared = repeat_grids_[static_cast<std::size_t>(std::max(l, q))].radius_squared;
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          for (int k = grid.head[grid.index(p, dx, dy)]; k >= 0; k = repeat_kept_[static_cast<std::size_t>(k)].next) {
-            const cv::Point2f e = repeat_kept_[static_cast<std::size_t>(k)].point;
-            const double ex = e.x - p.x;
-            const double ey = e.y - p.y;
-            if (ex * ex + ey * ey < radius_squared) return true;
-          }
-        }
-      }
-    }
-    return false;
-  }
-
-  /// DuplicatePolicy::kMerge, in view v's turn: drops its candidates that repeat a keypoint chosen
-  /// by an earlier view (repeats()).
-  void drop_repeats(int v, ThreadWork& work) const {
-    if (v == 0) return;
+  /// Enters the final keypoints of view v (its kept ones, unrefined positions) in the repeat grids.
+  void enter_kept(int v) {
     for (int l = 0; l < options_.pyramid.levels; ++l) {
-      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
-      std::size_t n = 0;
-      for (std::size_t i = 0; i < c.responses.size(); ++i) {
-        if (repeats(c.original_points[i], l)) continue;
-        c.level_points[n] = c.level_points[i];
-        c.original_points[n] = c.original_points[i];
-        c.responses[n] = c.responses[i];
-        ++n;
-      }
-      c.level_points.resize(n);
-      c.original_points.resize(n);
-      c.responses.resize(n);
+      const LevelWork& level = level_of(v, l);
+      for (int i : level.kept) repeats_.enter(level.original_points[static_cast<std::size_t>(i)], l);
     }
   }
 
@@ -796,64 +768,32 @@ class Extractor {
     return refined;
   }
 
-  /// The output: keypoints grouped by octave (0 first), then by view, then level, then raster order
-  /// in the view.
-  Features<kBits> assemble() {
-    const int levels = options_.pyramid.levels;
-    octave_start_.assign(static_cast<std::size_t>(levels) + 1, 0);
-    for (const ViewWork& w : view_work_) {
-      for (const LevelWork& level : w.levels) {
-        for (int i : level.kept) {
-          ++octave_start_[static_cast<std::size_t>(level.keypoints[static_cast<std::size_t>(i)].octave) + 1];
-        }
-      }
-    }
-    for (int o = 0; o < levels; ++o)
-      octave_start_[static_cast<std::size_t>(o) + 1] += octave_start_[static_cast<std::size_t>(o)];
-    const std::size_t total = static_cast<std::size_t>(octave_start_.back());
-    Features<kBits> features;
-    features.keypoints.resize(total);
-    features.descriptors.resize(total);
-    features.views.resize(total);
-    for (std::size_t v = 0; v < view_work_.size(); ++v) {
-      for (const LevelWork& level : view_work_[v].levels) {
-        for (int i : level.kept) {
-          const cv::KeyPoint& kp = level.keypoints[static_cast<std::size_t>(i)];
-          const std::size_t slot = static_cast<std::size_t>(octave_start_[static_cast<std::size_t>(kp.octave)]++);
-          features.keypoints[slot] = kp;
-          features.descriptors[slot] = level.descriptors[static_cast<std::size_t>(i)];
-          features.views[slot] = static_cast<int>(v);
-        }
-      }
-    }
-    return features;
-  }
-
   ExtractorOptions options_;
   Descriptor descriptor_;
-  /// Budget of each (view, level), index v·levels + l: views as ExtractorOptions::view_budget
-  /// says, levels geometric within a view (fixed for a view set, computed by prepare_views()).
-  std::vector<int> budgets_;
-  /// Per frame: what each (view, level) takes (allocate_with_carry()); the candidates offered,
-  /// budgets and result of the groups take_range() allocates.
-  std::vector<int> take_;
-  std::vector<int> available_;
-  std::vector<int> range_budgets_;
-  std::vector<int> range_take_;
-  /// Per view (fixed for a view set, prepare_views()): a keypoint of its level l has the octave
-  /// min(l + octave_shift_, levels − 1), the level nearest to its scale s^l·√t.
+  /// Per view (fixed for a view set, prepare_views()): its tilt, and the octave shift: a keypoint
+  /// of its level l has the octave min(l + shift, levels − 1), the level nearest to its scale
+  /// s^l·√t.
+  std::vector<double> tilts_;
   std::vector<int> octave_shift_;
-  /// The repeat grids (kMerge) and the buffer of assemble().
-  std::vector<RepeatKept> repeat_kept_;
-  std::vector<RepeatGrid> repeat_grids_;
-  std::vector<int> octave_start_;
+  /// Nominal budget and final take of every (view, level), set per run.
+  detail::ViewBudgets budgets_;
+  /// Per run: what each (view, level) of the groups being allocated offers.
+  std::vector<int> available_;
+  /// DuplicatePolicy::kMerge: the keypoints chosen by the views processed so far.
+  detail::RepeatGrids repeats_;
+  std::vector<int> octave_start_;  ///< buffer of assemble()
   cv::Size views_size_;
   std::vector<ViewWork> view_work_;
   /// The image's pyramid, kept until the next call (pyramid(), RefineOptions).
   Pyramid image_pyramid_;
+  /// Views on demand: the image and mask of extract_image() and how many views are extracted (0:
+  /// no staged extraction under way).
+  cv::Mat staged_image_;
+  cv::Mat staged_mask_;
+  int staged_views_ = 0;
   /// Per worker thread: the buffers views are processed in.
   std::vector<ThreadWork> thread_work_;
-  std::unique_ptr<Turns> turns_;
+  std::unique_ptr<detail::ViewTurns> turns_;
   /// The worker threads when options_.threads > 1, started by the first extract().
   std::unique_ptr<detail::WorkerPool> pool_;
 };

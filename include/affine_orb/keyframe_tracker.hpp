@@ -48,13 +48,13 @@ struct KeyframeTrackerOptions {
   /// A frame is lost when fewer of its matches to the last keyframe than this are inliers of the
   /// chosen model. 30: ORB-SLAM2 declares tracking lost when fewer than 30 matched map points
   /// remain inliers after tracking the local map (Mur-Artal & Tardós, ORB-SLAM2, IEEE T-RO 2017;
-  /// Tracking::TrackLocalMap). Must be >= 8, the sample size of select_model().
+  /// Tracking::TrackLocalMap). In [8, 1000000]: at least the sample size of select_model().
   int min_inliers = 30;
   /// A tracked frame becomes the new keyframe when its inliers fall below this share of the
   /// keyframe's features. 0.1: at 1000 features (ORB-SLAM2's TUM setting) a keyframe is taken
   /// before fewer than 100 of its features are verified, the match count ORB-SLAM2 requires of a
   /// new two-view reconstruction (Tracking::MonocularInitialization). Measured with
-  /// affine_orb_sequence on KITTI 06 (1000 plain features, default model selection): a frame
+  /// examples/affine_orb_sequence on KITTI 06 (1000 plain features, default model selection): a frame
   /// shares 17–21 % of the features as inliers with the frame before, 11–13 % two frames apart and
   /// 7–10 % three apart, so at 10 Hz a keyframe is taken every 2–3 frames. In (0, 1].
   double keyframe_inlier_ratio = 0.1;

@@ -66,13 +66,14 @@ struct MatcherOptions {
   /// of `ratio` (in double precision, exact for distances below 2^29). So a ratio <= 1 rejects ties
   /// (d1 = d2), ratio = 1 means "strictly closer than the second", a ratio > 1 also accepts ties,
   /// except d1 = d2 = 0, which no ratio accepts. With a single train descriptor the test passes.
-  /// Must be finite and > 0.
+  /// Must be finite and > 0. bench/eval_viewpoint matches every method at 0.8.
   float ratio = 0.8f;
   /// Mutual nearest neighbours: keep i -> j1 only when query i is also the nearest query descriptor
   /// of train descriptor j1 (smallest distance, ties to the smallest query index). Runs the search a
   /// second time in the reverse direction.
   bool cross_check = false;
-  /// Keep only matches with d1 <= max_distance (bits). The default is no limit. Must be >= 0.
+  /// Keep only matches with d1 <= max_distance (bits), >= 0. The default is no limit: the ratio
+  /// test decides.
   int max_distance = std::numeric_limits<int>::max();
 
   /// Throws std::invalid_argument for a ratio that is not finite and > 0 or a negative

@@ -18,9 +18,11 @@ namespace affine_orb {
 
 /// Scale pyramid parameters. Defaults are ORB-SLAM2's (SPEC §2: factor 1.2, 8 levels).
 struct PyramidOptions {
-  /// Ratio s between the sizes of consecutive levels; level l is s^l times smaller. Must be > 1.
+  /// Ratio s between the sizes of consecutive levels, in (1, 4]; level l is s^l times smaller. 1.2
+  /// is ORB's and ORB-SLAM2's.
   double scale_factor = 1.2;
-  /// Number of levels including the full-resolution level 0; in [1, 32].
+  /// Number of levels including the full-resolution level 0, in [1, 32]; 8 is ORB's and
+  /// ORB-SLAM2's.
   int levels = 8;
 
   void check() const {

@@ -37,11 +37,13 @@ namespace affine_orb {
 
 /// rBRIEF parameters. Changing any of them breaks bit compatibility with ORB.
 struct RbriefOptions {
-  /// Radius in level pixels of the intensity-centroid disc; ORB uses half its 31-pixel patch: 15.
+  /// Radius in level pixels of the intensity-centroid disc, in [3, 64]; 15, half ORB's 31-pixel
+  /// patch, is ORB's.
   int orientation_radius = 15;
-  /// Side of the Gaussian smoothing kernel in pixels (odd); ORB and ORB-SLAM2 use 7.
+  /// Side of the Gaussian smoothing kernel in pixels, odd, in [1, 31]; 7 is ORB's and ORB-SLAM2's.
   int blur_kernel = 7;
-  /// σ of the Gaussian smoothing in pixels; ORB and ORB-SLAM2 use 2.
+  /// σ of the Gaussian smoothing in pixels, in (0, 16]; 2 is ORB's and ORB-SLAM2's. With these
+  /// three defaults the bits equal cv::ORB's (bench/bench_extract counts the equal rows).
   double blur_sigma = 2.0;
 
   void check() const {

@@ -1,4 +1,5 @@
-// Extracts features from a synthetic image through the installed umbrella header.
+// Extracts features from a synthetic image through the installed umbrella header and prints the
+// version of the headers it was compiled with.
 #include <affine_orb/affine_orb.hpp>
 
 #include <cstdio>
@@ -11,6 +12,6 @@ int main() {
   affine_orb::ExtractorOptions options;
   options.features = 100;
   const auto features = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
-  std::printf("%zu features\n", features.size());
+  std::printf("affine_orb %s: %zu features\n", affine_orb::version(), features.size());
   return features.empty() ? 1 : 0;
 }

@@ -1,4 +1,4 @@
-// libFuzzer target (issue 16): descriptor computation at arbitrary keypoints, through the
+// libFuzzer target: descriptor computation at arbitrary keypoints, through the
 // cv::Feature2D compute() of opencv_feature2d.hpp (the entry point that takes keypoints from the
 // caller). The bytes give a small image, the descriptor (rBRIEF or BRISK) and up to 24 keypoints
 // whose position, octave and angle are arbitrary (raw float bits included: NaN, infinities, huge

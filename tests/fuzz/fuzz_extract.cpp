@@ -1,4 +1,4 @@
-// libFuzzer target (issues 8 and 16): the input bytes choose an image size (up to 48x40, so that
+// libFuzzer target: the input bytes choose an image size (up to 48x40, so that
 // about a thousand inputs run a second), the pixels and the options, then extraction (rBRIEF or
 // BRISK, plain or affine views, with or without a mask) and matching of the result against itself
 // run. Invalid options must end in std::invalid_argument, valid ones in a result that keeps every

@@ -1,4 +1,4 @@
-// libFuzzer target (issue 16): FAST scoring and non-maximum suppression on small images. The bytes
+// libFuzzer target: FAST scoring and non-maximum suppression on small images. The bytes
 // give a size (up to 24 x 24), a threshold, a region of interest and the pixels; the score map
 // (SIMD where the target has it) must equal fast_score() evaluated pixel by pixel, and the corners
 // must be exactly the pixels that the suppression rule, evaluated naively, keeps.

@@ -1,4 +1,4 @@
-// libFuzzer target (issue 16): Hamming matching. The bytes give two descriptor sets of 256 bits
+// libFuzzer target: Hamming matching. The bytes give two descriptor sets of 256 bits
 // (up to 40 query and 40 train descriptors, few distinct values so that ties are common), a ratio,
 // a maximum distance and the cross-check flag; knn2() must equal a brute-force search (ties to the
 // smaller train index) and match() must keep exactly the queries its documented tests accept.

@@ -1,4 +1,4 @@
-// libFuzzer target (issue 16): the text readers of the examples (examples/homography_io.hpp,
+// libFuzzer target: the text readers of the examples (examples/homography_io.hpp,
 // examples/sequence_io.hpp). The first byte picks the reader, the rest is the file's text. A
 // reader must either throw std::runtime_error or return what its documentation promises; any other
 // exception, a crash or a sanitizer report is a finding.

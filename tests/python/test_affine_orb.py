@@ -2,6 +2,7 @@
 cv2 interplay, bad input, thread counts. Run by ctest (test_python) with PYTHONPATH set to the
 build's python directory and AFFINE_ORB_TEST_PROBE naming the C++ probe program."""
 import os
+import re
 import subprocess
 import threading
 
@@ -48,6 +49,91 @@ def test_equals_the_cpp_extractor(descriptor, max_tilt, threads):
     assert np.array_equal(got.astype(np.float32), numbers.astype(np.float32))
     assert descriptors.dtype == np.uint8 and descriptors.shape == (len(keypoints), 32 if descriptor == "rbrief" else 64)
     assert np.array_equal(descriptors, want)
+
+
+def cpp_match(path1, path2, features, min_inliers):
+    """The C++ TwoViewMatcher's result: stage, verified, both images' keypoint rows and descriptors,
+    and the matches (query, train, distance, inlier)."""
+    out = subprocess.run([PROBE, "--match", path1, path2, str(features), str(min_inliers)], check=True,
+                         capture_output=True, text=True).stdout.split("\n")
+    stage, verified = int(out[0].split()[1]), out[0].split()[3] == "1"
+    blocks, current = [], []
+    for line in out[1:]:
+        if line == "--":
+            blocks.append(current)
+            current = []
+        elif line:
+            current.append(line.split())
+    blocks.append(current)
+
+    def features(rows):
+        return (np.array([[float(v) for v in r[:7]] for r in rows]),
+                np.array([bytearray.fromhex(r[7]) for r in rows], dtype=np.uint8))
+
+    matches = np.array([[int(v) for v in r] for r in blocks[2]])
+    return stage, verified, features(blocks[0]), features(blocks[1]), matches
+
+
+@pytest.mark.skipif(PROBE is None, reason="needs the C++ probe (run through ctest)")
+@pytest.mark.parametrize("pair,min_inliers", [(2, 15), (5, 15), (3, 1000)])
+def test_match_images_equals_the_cpp_matcher(pair, min_inliers):
+    """match_images() gives the C++ TwoViewMatcher's stage, keypoints, descriptors, matches and inlier
+    flags: on graf 1->2 (verified at stage 0), 1->5 (escalates to the views) and 1->3 with an
+    unreachable min_inliers (every stage runs)."""
+    path1 = os.path.join(DATA, "oxford", "graf", "img1.png")
+    path2 = os.path.join(DATA, "oxford", "graf", "img%d.png" % pair)
+    stage, verified, (numbers1, want1), (numbers2, want2), matches = cpp_match(path1, path2, 1000, min_inliers)
+    r = affine_orb.match_images(cv2.imread(path1, cv2.IMREAD_GRAYSCALE), cv2.imread(path2, cv2.IMREAD_GRAYSCALE),
+                                features=1000, min_inliers=min_inliers)
+    assert (r["stage"], r["verified"]) == (stage, verified)
+    assert len(r["stages"]) == stage + 1
+    if min_inliers == 1000:
+        assert stage == len(r["stages"]) - 1 == 2 and not verified
+    for keypoints, views, descriptors, numbers, want in ((r["keypoints1"], r["views1"], r["descriptors1"], numbers1, want1),
+                                                         (r["keypoints2"], r["views2"], r["descriptors2"], numbers2, want2)):
+        got = np.array([[k.pt[0], k.pt[1], k.size, k.angle, k.response, k.octave, v] for k, v in zip(keypoints, views)])
+        assert np.array_equal(got.astype(np.float32), numbers.astype(np.float32))
+        assert np.array_equal(descriptors, want)
+    got = np.array([[m.queryIdx, m.trainIdx, int(m.distance), int(i)] for m, i in zip(r["matches"], r["inliers"])])
+    assert np.array_equal(got, matches)
+    assert r["model"] in ("homography", "fundamental")
+    assert r["homography"].shape == (3, 3)
+
+
+def test_match_images_refuses_bad_input():
+    image = np.zeros((64, 64), np.uint8)
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image, image, stages=[(2.0, 0.5), (2.0, 0.5)])  # tilts not increasing
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image, image, min_inliers=3)
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image, image, descriptor="sift")
+    with pytest.raises(TypeError):
+        affine_orb.match_images(image.astype(np.float32), image)
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image, image, mask1=np.zeros((3, 3), np.uint8))
+    r = affine_orb.match_images(image, image)  # a flat image: no keypoints, documented empty result
+    assert not r["verified"] and r["matches"] == [] and r["model"] == "none"
+
+
+def test_version_is_the_headers_and_cmakes():
+    """__version__ is the string of include/affine_orb/version.hpp and the version CMake configured
+    (AFFINE_ORB_EXPECTED_VERSION, set by ctest)."""
+    header = open(os.path.join(os.path.dirname(__file__), "../../include/affine_orb/version.hpp")).read()
+    parts = [re.search(r"^#define AFFINE_ORB_VERSION_%s (\d+)$" % p, header, re.M).group(1)
+             for p in ("MAJOR", "MINOR", "PATCH")]
+    assert affine_orb.__version__ == ".".join(parts)
+    expected = os.environ.get("AFFINE_ORB_EXPECTED_VERSION")
+    if expected is not None:
+        assert affine_orb.__version__ == expected
+
+
+def test_the_module_is_the_one_on_pythonpath():
+    """The module under test is the build tree's (ctest sets PYTHONPATH to it), not an installed copy
+    such as the Debian package's in /usr/lib/python3/dist-packages."""
+    path = os.environ.get("PYTHONPATH")
+    if path:
+        assert os.path.dirname(os.path.realpath(affine_orb.__file__)) == os.path.realpath(path.split(os.pathsep)[0])
 
 
 def test_views_and_defaults():

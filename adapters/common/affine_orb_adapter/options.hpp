@@ -59,21 +59,23 @@ enum class AdapterDuplicates {
 struct AdapterOptions {
   /// Largest simulated tilt t (views t = √2^k <= max_tilt, SPEC §1); 1 = plain ORB extraction.
   /// A value between two tilts keeps the tilts below it: write 1.42 for √2, 2.83 for 2√2.
-  /// Default 1 (views off): the choice measured with ORB-SLAM2 mono_kitti on KITTI 06
-  /// (adapters/README.md, "Measurements").
+  /// In [1, 16]. Default 1 (views off): inside ORB-SLAM2 the views cost more tracking time than
+  /// they bring (adapters/README.md, "Measurements", measured with ../shared/slam/run.sh).
   double max_tilt = 1.0;
   AdapterDescriptor descriptor = AdapterDescriptor::kRbrief;
-  /// Worker threads for the views of one frame (ExtractorOptions::threads); results do not depend
-  /// on it. 1 because ORB-SLAM already runs tracking, local mapping and loop closing in parallel.
+  /// Worker threads for the views of one frame (ExtractorOptions::threads), in [1, 256]; results
+  /// do not depend on it. 1 because ORB-SLAM already runs tracking, local mapping and loop closing
+  /// in parallel.
   int threads = 1;
   AdapterDuplicates duplicates = AdapterDuplicates::kMerge;
-  /// Merge radius in original pixels times the level scale (ExtractorOptions::merge_radius): 2 px is
-  /// the SPEC §7 duplicate cell.
+  /// Merge radius in original pixels times the level scale (ExtractorOptions::merge_radius), in
+  /// (0, 64]: 2 px is the SPEC §7 duplicate cell.
   double merge_radius = 2.0;
   /// Keypoints the tilted views add to ORB-SLAM's nfeatures keypoints of the image, as a fraction
   /// of nfeatures (affine_orb::ExtractorOptions::view_features: view_features · nfeatures when the
   /// views have enough corners, fewer where keypoints near the border are dropped); 0 adds none.
-  /// The image's own keypoints never change, so that monocular initialisation keeps them.
+  /// The image's own keypoints never change, so that monocular initialisation keeps them. In
+  /// [0, 16]; 1, as many from the views as from the image, is the library's default.
   double view_features = 1.0;
 
   void check() const {

@@ -1,0 +1,357 @@
+"""Tests of adapters/orbslam2/install.sh and adapters/orbslam3/install.sh (common/install_adapter.py) on
+stand-in trees with the layout of each fork: install, reinstall, refresh, uninstall byte for byte,
+the refusals, and the installed CMake lines compiling the adapter as C++17 in a C++11 project.
+
+The stand-in files are written here: each holds only the identifiers the installer looks at (the
+namespace in include/System.h, include/Atlas.h for ORB-SLAM3, ComputeKeyPointsOctTree in the fork's
+own ORBextractor) and a CMakeLists.txt shaped like the forks' (-std=c++11 in CMAKE_CXX_FLAGS, an
+include_directories() block, add_library() listing src/ORBextractor.cc). Run by ctest
+(test_adapter_install) with AFFINE_ORB_CMAKE, AFFINE_ORB_CMAKE_GENERATOR and AFFINE_ORB_CXX naming
+the build's CMake, generator and C++ compiler, which the compile check uses; without them it is
+skipped."""
+import json
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+from pathlib import Path
+
+PROJECT = Path(__file__).resolve().parents[2]
+BACKUP = ".affine_orb_backup"
+# install.sh runs `python3`: this interpreter, not a wrapper that may stand first on PATH (pyenv's).
+SCRIPT_ENVIRONMENT = dict(os.environ, PATH=os.pathsep.join([str(Path(sys.executable).parent),
+                                                            os.environ.get("PATH", "")]))
+
+CMAKELISTS = """\
+cmake_minimum_required(VERSION 3.16)
+project({project})
+
+set(CMAKE_CXX_FLAGS "${{CMAKE_CXX_FLAGS}} -Wall -std=c++11")
+add_definitions(-DCOMPILEDWITHC11)
+
+find_package(OpenCV 4 REQUIRED COMPONENTS core)
+
+include_directories(
+${{PROJECT_SOURCE_DIR}}
+${{PROJECT_SOURCE_DIR}}/include
+)
+
+set(CMAKE_LIBRARY_OUTPUT_DIRECTORY ${{PROJECT_SOURCE_DIR}}/lib)
+
+add_library(${{PROJECT_NAME}} SHARED
+src/System.cc
+src/ORBextractor.cc
+src/Frame.cc{headers}
+)
+
+target_link_libraries(${{PROJECT_NAME}}
+${{OpenCV_LIBS}}
+)
+
+add_executable(example_tool src/System.cc)
+"""
+
+STOCK_HEADER = """\
+// Stand-in for the fork's own extractor header: the identifier its installer recognises.
+#pragma once
+#include <vector>
+#include <opencv2/core.hpp>
+namespace {namespace} {{
+class ORBextractor {{
+ public:
+  ORBextractor(int nfeatures, float scaleFactor, int nlevels, int iniThFAST, int minThFAST);
+ protected:
+  void ComputeKeyPointsOctTree(std::vector<std::vector<cv::KeyPoint> >& allKeypoints);
+}};
+}}
+"""
+
+STOCK_SOURCE = """\
+// Stand-in for the fork's own extractor source.
+#include "ORBextractor.h"
+namespace {namespace} {{
+void ORBextractor::ComputeKeyPointsOctTree(std::vector<std::vector<cv::KeyPoint> >&) {{}}
+}}
+"""
+
+FOREIGN_HEADER = """\
+// A different extractor with ORB-SLAM's class name (a learned detector, say).
+#pragma once
+#include <opencv2/core.hpp>
+namespace {namespace} {{
+class ORBextractor {{
+ public:
+  void operator()(cv::InputArray image, cv::InputArray mask, std::vector<cv::KeyPoint>& keypoints,
+                  cv::OutputArray descriptors);
+}};
+}}
+"""
+
+FOREIGN_SOURCE = """\
+#include "ORBextractor.h"
+namespace {namespace} {{
+void ORBextractor::operator()(cv::InputArray, cv::InputArray, std::vector<cv::KeyPoint>&, cv::OutputArray) {{}}
+}}
+"""
+
+# Frame.cc is compiled as C++11 like every fork file that includes ORBextractor.h through Frame.h.
+FRAME_HEADER = """\
+#pragma once
+#include "ORBextractor.h"
+namespace {namespace} {{
+class Frame {{
+ public:
+  explicit Frame(ORBextractor* extractor) : mpORBextractorLeft(extractor) {{}}
+  int Levels() const;
+  ORBextractor* mpORBextractorLeft;
+}};
+}}
+"""
+
+FRAME_SOURCE = """\
+#include "Frame.h"
+namespace {namespace} {{
+int Frame::Levels() const {{ return mpORBextractorLeft->GetLevels(); }}
+}}
+"""
+
+
+def write(path, text, newline="\n"):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(text.replace("\n", newline).encode())
+
+
+def make_standin(root, fork, newline="\n"):
+    """An ORB-SLAM2 or ORB-SLAM3 stand-in tree in root (fork 'orbslam2' or 'orbslam3')."""
+    namespace = "ORB_SLAM2" if fork == "orbslam2" else "ORB_SLAM3"
+    headers = "" if fork == "orbslam2" else "\ninclude/System.h\ninclude/ORBextractor.h\ninclude/Frame.h"
+    write(root / "CMakeLists.txt", CMAKELISTS.format(project=namespace, headers=headers), newline)
+    write(root / "include/System.h", "#pragma once\nnamespace %s {\nclass System {};\n}\n" % namespace)
+    write(root / "include/Map.h", "#pragma once\nnamespace %s {\nclass Map {};\n}\n" % namespace)
+    if fork == "orbslam3":
+        write(root / "include/Atlas.h", "#pragma once\nnamespace ORB_SLAM3 {\nclass Atlas {};\n}\n")
+    write(root / "include/Frame.h", FRAME_HEADER.format(namespace=namespace))
+    write(root / "src/Frame.cc", FRAME_SOURCE.format(namespace=namespace))
+    write(root / "src/System.cc", '#include "System.h"\nint main() { return 0; }\n')
+    write(root / "include/ORBextractor.h", STOCK_HEADER.format(namespace=namespace))
+    write(root / "src/ORBextractor.cc", STOCK_SOURCE.format(namespace=namespace))
+    (root / "src/ORBextractor.cc").chmod(0o755)  # a mode the round trip must keep
+
+
+def snapshot(root):
+    """Every file under root (hidden ones included): relative path -> (bytes, mode)."""
+    files = {}
+    for path in sorted(root.rglob("*")):
+        if path.is_file():
+            files[path.relative_to(root).as_posix()] = (path.read_bytes(), path.stat().st_mode)
+    return files
+
+
+def mtimes(root):
+    return {path: path.stat().st_mtime_ns for path in root.rglob("*") if path.is_file()}
+
+
+class InstallTest:
+    """The checks for one fork; the subclasses below name it."""
+
+    fork = None
+    other_fork = None
+
+    def setUp(self):
+        self.temporary = tempfile.TemporaryDirectory()
+        self.work = Path(self.temporary.name)
+        self.tree = self.work / "fork"
+        make_standin(self.tree, self.fork)
+        self.adapter = PROJECT / "adapters" / self.fork
+
+    def tearDown(self):
+        self.temporary.cleanup()
+
+    def run_script(self, *args):
+        script = PROJECT / "adapters" / self.fork / "install.sh"
+        return subprocess.run([str(script)] + [str(arg) for arg in args], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, universal_newlines=True, env=SCRIPT_ENVIRONMENT)
+
+    def assert_succeeds(self, *args, says):
+        result = self.run_script(*args)
+        self.assertEqual(result.returncode, 0, result.stdout + result.stderr)
+        self.assertIn(says, result.stdout)
+        return result
+
+    def assert_refused(self, tree, says, *options):
+        before = snapshot(tree)
+        result = self.run_script(*options, tree)
+        self.assertEqual(result.returncode, 1, result.stdout + result.stderr)
+        self.assertIn(says, result.stderr)
+        self.assertEqual(snapshot(tree), before, "a refused run changed the tree")
+
+    def cmake_lines(self):
+        return (self.tree / "CMakeLists.txt").read_text().split("\n")
+
+    def test_install_reinstall_uninstall(self):
+        original = snapshot(self.tree)
+        self.assert_succeeds(self.tree, says="installed affine_orb's adapter")
+        for name, relative in (("ORBextractor.h", "include/ORBextractor.h"),
+                               ("ORBextractor.cc", "src/ORBextractor.cc")):
+            self.assertEqual((self.tree / relative).read_bytes(), (self.adapter / name).read_bytes())
+            self.assertEqual((self.tree / BACKUP / relative).read_bytes(), original[relative][0])
+            self.assertEqual((self.tree / relative).stat().st_mode, original[relative][1])
+        lines = self.cmake_lines()
+        begin = lines.index(next(line for line in lines if line.startswith("# >>> affine_orb adapter")))
+        end = lines.index("# <<< affine_orb adapter")
+        block = lines[begin:end + 1]
+        self.assertIn('set(AFFINE_ORB_DIR "%s")' % PROJECT.as_posix(), block)
+        self.assertIn('include_directories("${AFFINE_ORB_DIR}/include" "${AFFINE_ORB_DIR}/adapters/common")',
+                      block)
+        self.assertIn("set_source_files_properties(src/ORBextractor.cc PROPERTIES COMPILE_OPTIONS -std=c++17)",
+                      block)
+        self.assertEqual(lines[end + 1], "add_library(${PROJECT_NAME} SHARED")
+        self.assertEqual("\n".join(lines[:begin] + lines[end + 1:]).encode(), original["CMakeLists.txt"][0])
+
+        installed, times = snapshot(self.tree), mtimes(self.tree)
+        self.assert_succeeds(self.tree, says="already installed and up to date")
+        self.assertEqual(snapshot(self.tree), installed)
+        self.assertEqual(mtimes(self.tree), times, "a second install rewrote files (the fork would rebuild)")
+
+        self.assert_succeeds("--uninstall", self.tree, says="uninstalled")
+        self.assertEqual(snapshot(self.tree), original)
+        self.assert_succeeds("--uninstall", self.tree, says="not installed; nothing changed")
+        self.assertEqual(snapshot(self.tree), original)
+
+    def test_crlf_cmakelists_round_trip(self):
+        shutil.rmtree(str(self.tree))
+        make_standin(self.tree, self.fork, newline="\r\n")
+        original = snapshot(self.tree)
+        self.assert_succeeds(self.tree, says="installed")
+        text = (self.tree / "CMakeLists.txt").read_bytes()
+        self.assertIn(b"# <<< affine_orb adapter\r\nadd_library(", text)
+        self.assertNotIn(b"\n", text.replace(b"\r\n", b""))
+        self.assert_succeeds("--uninstall", self.tree, says="uninstalled")
+        self.assertEqual(snapshot(self.tree), original)
+
+    def test_refresh_after_the_project_changed(self):
+        checkout = self.work / "affine_orb"
+        (checkout / "adapters" / self.fork).mkdir(parents=True)
+        (checkout / "include").symlink_to(PROJECT / "include")
+        (checkout / "adapters" / "common").symlink_to(PROJECT / "adapters" / "common")
+        for name in ("ORBextractor.h", "ORBextractor.cc"):
+            shutil.copy(str(self.adapter / name), str(checkout / "adapters" / self.fork / name))
+        original = snapshot(self.tree)
+        self.assert_succeeds("--affine-orb", checkout, self.tree, says="installed")
+        self.assertIn('set(AFFINE_ORB_DIR "%s")' % checkout.as_posix(), self.cmake_lines())
+
+        changed = (self.adapter / "ORBextractor.cc").read_bytes() + b"// a newer adapter\n"
+        (checkout / "adapters" / self.fork / "ORBextractor.cc").write_bytes(changed)
+        cmake_before = (self.tree / "CMakeLists.txt").read_bytes()
+        self.assert_succeeds("--affine-orb", checkout, self.tree,
+                             says="updated src/ORBextractor.cc by adapters/%s/ORBextractor.cc" % self.fork)
+        self.assertEqual((self.tree / "src/ORBextractor.cc").read_bytes(), changed)
+        self.assertEqual((self.tree / "CMakeLists.txt").read_bytes(), cmake_before)
+        self.assertEqual((self.tree / BACKUP / "src/ORBextractor.cc").read_bytes(),
+                         original["src/ORBextractor.cc"][0])
+
+        result = self.assert_succeeds(self.tree, says="CMakeLists.txt: updated the affine_orb lines")
+        self.assertIn("updated src/ORBextractor.cc", result.stdout)
+        self.assertIn('set(AFFINE_ORB_DIR "%s")' % PROJECT.as_posix(), self.cmake_lines())
+        self.assertEqual(sum(line.startswith("# >>> affine_orb adapter") for line in self.cmake_lines()), 1)
+
+        self.assert_succeeds("--uninstall", self.tree, says="uninstalled")
+        self.assertEqual(snapshot(self.tree), original)
+
+    def test_refuses_what_is_not_this_fork(self):
+        empty = self.work / "empty"
+        empty.mkdir()
+        self.assert_refused(empty, "is not an %s checkout" % self.name)
+        self.assert_refused(empty, "is not an %s checkout" % self.name, "--uninstall")
+        self.assert_refused(self.tree, "%s is not an affine_orb checkout" % empty, "--affine-orb", empty)
+        (self.tree / "src/ORBextractor.cc").unlink()
+        self.assert_refused(self.tree, "src/ORBextractor.cc is missing")
+
+        other = self.work / "other"
+        make_standin(other, self.other_fork)
+        self.assert_refused(other, "use adapters/%s/install.sh" % self.other_fork)
+        self.assert_refused(other, "use adapters/%s/install.sh" % self.other_fork, "--uninstall")
+
+    def test_refuses_a_foreign_extractor(self):
+        namespace = self.name.replace("-", "_")
+        write(self.tree / "include/ORBextractor.h", FOREIGN_HEADER.format(namespace=namespace))
+        self.assert_refused(self.tree, "another extractor is installed: include/ORBextractor.h")
+        write(self.tree / "src/ORBextractor.cc", FOREIGN_SOURCE.format(namespace=namespace))
+        self.assert_refused(self.tree, "another extractor is installed")
+
+        make_standin(self.tree, self.fork)
+        original = snapshot(self.tree)
+        self.assert_succeeds(self.tree, says="installed")
+        write(self.tree / "include/ORBextractor.h", FOREIGN_HEADER.format(namespace=namespace))
+        self.assert_refused(self.tree, "another extractor is installed", "--uninstall")
+        shutil.copy(str(self.adapter / "ORBextractor.h"), str(self.tree / "include/ORBextractor.h"))
+        self.assert_succeeds("--uninstall", self.tree, says="uninstalled")
+        self.assertEqual(snapshot(self.tree), original)
+
+    def test_refuses_a_hand_made_install(self):
+        for name, relative in (("ORBextractor.h", "include/ORBextractor.h"),
+                               ("ORBextractor.cc", "src/ORBextractor.cc")):
+            shutil.copy(str(self.adapter / name), str(self.tree / relative))
+        self.assert_refused(self.tree, "holds no copy of the fork's own file")
+        self.assert_refused(self.tree, "holds no copy of the fork's own file", "--uninstall")
+
+        make_standin(self.tree, self.fork)
+        cmake = self.tree / "CMakeLists.txt"
+        cmake.write_text(cmake.read_text().replace(
+            "add_library(", "include_directories(${AFFINE_ORB}/include)\nadd_library(", 1))
+        self.assert_refused(self.tree, "line 16, mentions affine_orb outside the lines this script manages")
+
+    def test_refuses_damaged_markers_and_a_missing_library(self):
+        self.assert_succeeds(self.tree, says="installed")
+        cmake = self.tree / "CMakeLists.txt"
+        cmake.write_text(cmake.read_text().replace("# <<< affine_orb adapter\n", ""))
+        self.assert_refused(self.tree, "are damaged (1 begin and 0 end markers)")
+        self.assert_refused(self.tree, "are damaged", "--uninstall")
+
+        make_standin(self.tree, self.fork)
+        shutil.rmtree(str(self.tree / BACKUP))
+        cmake.write_text(re.sub(r"add_library\(\$\{PROJECT_NAME\}.*?\n\)\n",
+                                "file(GLOB sources src/*.cc)\nadd_library(${PROJECT_NAME} SHARED ${sources})\n",
+                                cmake.read_text(), count=1, flags=re.DOTALL))
+        self.assert_refused(self.tree, "has no add_library(...) that compiles src/ORBextractor.cc")
+
+    @unittest.skipUnless(os.environ.get("AFFINE_ORB_CMAKE") and os.environ.get("AFFINE_ORB_CXX"),
+                         "AFFINE_ORB_CMAKE and AFFINE_ORB_CXX name no CMake and compiler")
+    def test_installed_fork_compiles_the_adapter_as_cxx17(self):
+        self.assert_succeeds(self.tree, says="installed")
+        build = self.work / "build"
+        configure = [os.environ["AFFINE_ORB_CMAKE"], "-S", str(self.tree), "-B", str(build),
+                     "-DCMAKE_CXX_COMPILER=" + os.environ["AFFINE_ORB_CXX"], "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"]
+        if os.environ.get("AFFINE_ORB_CMAKE_GENERATOR"):
+            configure += ["-G", os.environ["AFFINE_ORB_CMAKE_GENERATOR"]]
+        result = subprocess.run(configure, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                universal_newlines=True)
+        self.assertEqual(result.returncode, 0, result.stdout)
+        commands = {Path(entry["file"]).name: entry
+                    for entry in json.loads((build / "compile_commands.json").read_text())}
+        for name, standard in (("ORBextractor.cc", "-std=c++17"), ("Frame.cc", "-std=c++11")):
+            entry = commands[name]
+            arguments = entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
+            self.assertEqual([argument for argument in arguments if argument.startswith("-std=")][-1], standard,
+                             "%s: %s" % (name, " ".join(arguments)))
+            # The compiler with the fork's own flags for this file: the adapter's headers are found, the
+            # adapter compiles as C++17 and the fork's C++11 files compile with the adapter's header.
+            result = subprocess.run(arguments + ["-fsyntax-only"], cwd=entry["directory"], stdout=subprocess.PIPE,
+                                    stderr=subprocess.STDOUT, universal_newlines=True)
+            self.assertEqual(result.returncode, 0, result.stdout)
+
+
+class OrbSlam2(InstallTest, unittest.TestCase):
+    fork, other_fork, name = "orbslam2", "orbslam3", "ORB-SLAM2"
+
+
+class OrbSlam3(InstallTest, unittest.TestCase):
+    fork, other_fork, name = "orbslam3", "orbslam2", "ORB-SLAM3"
+
+
+if __name__ == "__main__":
+    unittest.main()

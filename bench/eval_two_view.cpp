@@ -1,0 +1,376 @@
+// eval_two_view [--out DIR] [--sequences a,b,...] [--methods SUBSTRING] [--asift-sequences a,b,...|all]
+//               [--sweep]
+//
+// Two-view matching judged where users feel it: on every Oxford pair 1->2 ... 1->6 and opencv-doc's
+// graf 1->3 (ground-truth homographies), per pair and method, whether the pair is solved (the
+// homography that one judge, cv::findHomography with RANSAC at 3 px, estimates from the method's
+// matches puts image 1's corners within 5 px of the ground truth's, mean of the four), its
+// distinct correct matches (within 3 px, image-1 points in distinct 2-px cells) and the total
+// time: both extractions, matching and verification by the method's own select_model(), single
+// thread, peers in the same run, pair after pair. The corner error of the method's own homography
+// is reported beside the judge's.
+//
+// Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
+// keypoints), the two-view matcher with views on demand (TwoViewMatcher's defaults, and with
+// min_inliers 200 for users who want many matches), cv::AffineFeature(cv::ORB) with the same 18
+// views, cv::SIFT, and ASIFT (cv::AffineFeature(cv::SIFT); graf and opencv-doc only unless
+// --asift-sequences says otherwise: its float matching takes tens of seconds a pair). Every method
+// but the matcher is verified by select_model() with the matcher's ModelSelectionOptions, so the
+// own homographies come from the same estimator. --sweep adds matcher variants (stages, min_inliers,
+// min_inlier_ratio), the measurement behind TwoViewOptions' defaults.
+//
+// Writes DIR/eval_two_view.md (the summary table the README shows, then every pair) and
+// DIR/eval_two_view.csv, and prints the Markdown.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "affine_orb/affine_orb.hpp"
+#include "bench_common.hpp"
+#include "viewpoint_pairs.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using PointPairs = std::vector<std::pair<cv::Point2f, cv::Point2f>>;
+
+/// What a method made of a pair.
+struct Outcome {
+  PointPairs matches;
+  bool homography_found = false;
+  cv::Matx33d homography;
+  double ms = 0.0;
+  int keypoints1 = 0, keypoints2 = 0;
+  int stage = -1;         ///< matcher only: the stage it stopped at
+  bool verified = false;  ///< matcher only
+  std::string stages;     ///< matcher only: per stage run, matches / inliers and the model chosen
+};
+
+struct Method {
+  std::string name;
+  std::function<Outcome(const cv::Mat&, const cv::Mat&)> run;
+  bool matcher = false;
+};
+
+double since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+cv::Matx33d to_matx(const Eigen::Matrix3d& h) {
+  cv::Matx33d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = h(r, c);
+  return m;
+}
+
+/// Verification shared by every method but the matcher: select_model() on the matched points.
+void verify(Outcome& o, const affine_orb::ModelSelectionOptions& model) {
+  if (o.matches.size() < 8) return;
+  std::vector<cv::Point2f> p1, p2;
+  for (const auto& [a, b] : o.matches) {
+    p1.push_back(a);
+    p2.push_back(b);
+  }
+  const affine_orb::ModelSelectionResult r = affine_orb::select_model(p1, p2, model);
+  o.homography_found = r.homography_found;
+  if (r.homography_found) o.homography = to_matx(r.homography);
+}
+
+/// Ours, one-shot extraction of both images with `options`, matched by match_features().
+Method ours(const std::string& name, const affine_orb::ExtractorOptions& options,
+            const affine_orb::ModelSelectionOptions& model) {
+  auto extractor = std::make_shared<affine_orb::Extractor<affine_orb::Rbrief>>(options);
+  return {name, [extractor, model](const cv::Mat& a, const cv::Mat& b) {
+            Outcome o;
+            const auto start = Clock::now();
+            const auto f1 = extractor->extract(a);
+            const auto f2 = extractor->extract(b);
+            for (const affine_orb::Match& m : affine_orb::match_features(f1, f2)) {
+              o.matches.emplace_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt,
+                                     f2.keypoints[static_cast<std::size_t>(m.train)].pt);
+            }
+            verify(o, model);
+            o.ms = since(start);
+            o.keypoints1 = static_cast<int>(f1.size());
+            o.keypoints2 = static_cast<int>(f2.size());
+            return o;
+          }};
+}
+
+/// The two-view matcher with views on demand.
+Method two_view(const std::string& name, const affine_orb::TwoViewOptions& options) {
+  auto matcher = std::make_shared<affine_orb::TwoViewMatcher<affine_orb::Rbrief>>(options);
+  return {name,
+          [matcher](const cv::Mat& a, const cv::Mat& b) {
+            Outcome o;
+            const auto start = Clock::now();
+            const auto r = matcher->match(a, b);
+            o.ms = since(start);
+            for (const affine_orb::Match& m : r.matches) {
+              o.matches.emplace_back(r.features1.keypoints[static_cast<std::size_t>(m.query)].pt,
+                                     r.features2.keypoints[static_cast<std::size_t>(m.train)].pt);
+            }
+            o.homography_found = r.model.homography_found;
+            if (r.model.homography_found) o.homography = to_matx(r.model.homography);
+            o.keypoints1 = static_cast<int>(r.features1.size());
+            o.keypoints2 = static_cast<int>(r.features2.size());
+            o.stage = r.stage;
+            o.verified = r.verified;
+            for (const affine_orb::TwoViewStageReport& s : r.stages) {
+              o.stages += " " + std::to_string(s.matches) + "/" + std::to_string(s.homography_inliers) + "/" +
+                          std::to_string(s.fundamental_inliers) +
+                          (s.model == affine_orb::GeometricModel::kHomography    ? "H"
+                           : s.model == affine_orb::GeometricModel::kFundamental ? "F"
+                                                                                 : "-");
+            }
+            return o;
+          },
+          true};
+}
+
+/// An OpenCV Feature2D peer: binary descriptors matched by match_features(), float ones by the
+/// same rules on L2 (match_float()).
+Method peer(const std::string& name, cv::Ptr<cv::Feature2D> detector, const affine_orb::ModelSelectionOptions& model) {
+  return {name, [detector, model](const cv::Mat& a, const cv::Mat& b) {
+            Outcome o;
+            const auto start = Clock::now();
+            std::vector<cv::KeyPoint> k1, k2;
+            cv::Mat d1, d2;
+            detector->detectAndCompute(a, cv::noArray(), k1, d1);
+            detector->detectAndCompute(b, cv::noArray(), k2, d2);
+            std::vector<affine_orb::Match> matches;
+            if (d1.type() == CV_32F) {
+              matches = affine_orb::bench::match_float(k1, d1, k2, d2);
+            } else if (!d1.empty() && !d2.empty()) {
+              matches = affine_orb::match(d1, d2, affine_orb::MatcherOptions{});
+            }
+            for (const affine_orb::Match& m : matches) {
+              o.matches.emplace_back(k1[static_cast<std::size_t>(m.query)].pt,
+                                     k2[static_cast<std::size_t>(m.train)].pt);
+            }
+            verify(o, model);
+            o.ms = since(start);
+            o.keypoints1 = static_cast<int>(k1.size());
+            o.keypoints2 = static_cast<int>(k2.size());
+            return o;
+          }};
+}
+
+/// The judge, the same for every method: cv::findHomography (RANSAC, 3 px, 2000 iterations,
+/// confidence 0.995) on the method's matches; the mean corner error of its homography against the
+/// ground truth (1e9 when it finds none).
+double judge_corner_error(const PointPairs& matches, const cv::Matx33d& truth, cv::Size size1) {
+  if (matches.size() < 4) return 1e9;
+  std::vector<cv::Point2f> p1, p2;
+  for (const auto& [a, b] : matches) {
+    p1.push_back(a);
+    p2.push_back(b);
+  }
+  const cv::Mat h = cv::findHomography(p1, p2, cv::RANSAC, 3.0, cv::noArray(), 2000, 0.995);
+  return h.empty() ? 1e9 : affine_orb::bench::corner_error(cv::Matx33d(h), truth, size1);
+}
+
+struct Row {
+  std::string pair;
+  std::string method;
+  bool solved = false;
+  double corner_error = 0.0;      ///< the judge's homography
+  double own_corner_error = 0.0;  ///< the method's own (select_model()'s) homography
+  affine_orb::bench::CorrectMatches correct;
+  std::size_t matches = 0;
+  Outcome outcome;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out_dir = ".";
+  std::string only;
+  std::string method_filter;
+  std::string asift_only = ",graf,opencv-doc graf,";
+  bool sweep = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (flag == "--sweep") {
+      sweep = true;
+    } else if (flag == "--out" && has_value) {
+      out_dir = argv[++i];
+    } else if (flag == "--sequences" && has_value) {
+      only = std::string(",") + argv[++i] + ",";
+    } else if (flag == "--methods" && has_value) {
+      method_filter = argv[++i];
+    } else if (flag == "--asift-sequences" && has_value) {
+      const std::string value = argv[++i];
+      asift_only = value == "all" ? "" : "," + value + ",";
+    } else {
+      std::fprintf(stderr,
+                   "usage: eval_two_view [--out DIR] [--sequences a,b] [--methods SUBSTRING] "
+                   "[--asift-sequences a,b|all] [--sweep]\n");
+      return 2;
+    }
+  }
+  cv::setNumThreads(1);
+  const affine_orb::TwoViewOptions defaults;
+  const affine_orb::ModelSelectionOptions& model = defaults.model;
+
+  affine_orb::ExtractorOptions plain = affine_orb::TwoViewOptions::default_extractor();
+  plain.views.max_tilt = 1.0;
+  affine_orb::ExtractorOptions affine;
+  affine.spreading = affine_orb::Spreading::kStrongest;
+  affine_orb::TwoViewOptions many = defaults;
+  many.min_inliers = 200;
+  std::vector<Method> methods = {
+      ours("ours plain 2000", plain, model),
+      ours("ours affine default 1000 + 1000", affine, model),
+      two_view("ours views on demand", defaults),
+      two_view("ours views on demand, min_inliers 200", many),
+      peer("cv::AffineFeature(ORB)", cv::AffineFeature::create(cv::ORB::create(112), 3, 0, std::sqrt(2.0), 72), model),
+      peer("cv::SIFT", cv::SIFT::create(), model),
+      peer("ASIFT", cv::AffineFeature::create(cv::SIFT::create(), 3, 0, std::sqrt(2.0), 72), model),
+  };
+  if (sweep) {
+    const auto variant = [&](const std::string& name, const std::function<void(affine_orb::TwoViewOptions&)>& change) {
+      affine_orb::TwoViewOptions o = defaults;
+      change(o);
+      methods.push_back(two_view("sweep: " + name, o));
+    };
+    variant("one stage up to 2.83, +1000", [](auto& o) { o.stages = {{2.0 * std::sqrt(2.0), 0.5}}; });
+    variant("stages 1.41 +250, 2 +250, 2.83 +500", [](auto& o) {
+      o.stages = {{std::sqrt(2.0), 0.125}, {2.0, 0.125}, {2.0 * std::sqrt(2.0), 0.25}};
+    });
+    variant("stages 2 +500, 2.83 +1000", [](auto& o) { o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}}; });
+    variant("stages 2 +1000, 2.83 +2000", [](auto& o) { o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}}; });
+    variant("stages up to 4: 2 +500, 2.83 +1000, 4 +1000", [](auto& o) {
+      o.extractor.views.max_tilt = 4.0;
+      o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}, {4.0, 0.5}};
+    });
+    for (int n : {10, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
+    for (double r : {0.0, 0.05, 0.2})
+      variant("min_inlier_ratio " + std::to_string(r).substr(0, 4), [r](auto& o) { o.min_inlier_ratio = r; });
+    variant("plain 1000 first", [](auto& o) {
+      o.extractor.features = 1000;
+      o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}};
+    });
+  }
+  if (!method_filter.empty()) {
+    methods.erase(std::remove_if(methods.begin(), methods.end(),
+                                 [&](const Method& m) { return m.name.find(method_filter) == std::string::npos; }),
+                  methods.end());
+  }
+  const auto runs_on = [&](const Method& m, const std::string& sequence) {
+    return m.name != "ASIFT" || asift_only.empty() || asift_only.find("," + sequence + ",") != std::string::npos;
+  };
+
+  const std::vector<affine_orb::bench::ViewpointPair> pairs = affine_orb::bench::viewpoint_pairs(only);
+  std::vector<Row> rows;
+  for (const auto& pair : pairs) {
+    const cv::Mat a = affine_orb::bench::read_gray(pair.path1);
+    const cv::Mat b = affine_orb::bench::read_gray(pair.path2);
+    for (const Method& method : methods) {
+      if (!runs_on(method, pair.sequence)) continue;
+      Row row;
+      row.pair = pair.name();
+      row.method = method.name;
+      row.outcome = method.run(a, b);
+      row.matches = row.outcome.matches.size();
+      row.correct = affine_orb::bench::correct_matches(row.outcome.matches, pair.h);
+      row.corner_error = judge_corner_error(row.outcome.matches, pair.h, a.size());
+      row.own_corner_error = row.outcome.homography_found
+                                 ? affine_orb::bench::corner_error(row.outcome.homography, pair.h, a.size())
+                                 : 1e9;
+      row.solved = row.corner_error <= affine_orb::bench::kSolvedCornerError;
+      std::fprintf(stderr,
+                   "%-18s %-46s kp %5d/%5d matches %5zu distinct %5zu %s (%.1f px, own %.1f) stage %d %s%s %.0f ms\n",
+                   row.pair.c_str(), method.name.c_str(), row.outcome.keypoints1, row.outcome.keypoints2, row.matches,
+                   row.correct.distinct, row.solved ? "solved" : "------", std::min(row.corner_error, 9999.0),
+                   std::min(row.own_corner_error, 9999.0), row.outcome.stage, row.outcome.verified ? "verified" : "",
+                   row.outcome.stages.c_str(), row.outcome.ms);
+      rows.push_back(std::move(row));
+    }
+  }
+
+  // Per method: pairs solved; total time over all pairs and over the pairs plain 2000 solves,
+  // against plain 2000 and the affine default in the same run; pairs verified with a wrong model.
+  const auto find = [&](const std::string& pair, const std::string& method) -> const Row* {
+    for (const Row& r : rows) {
+      if (r.pair == pair && r.method == method) return &r;
+    }
+    return nullptr;
+  };
+  std::ostringstream md;
+  md << "| method | pairs solved | distinct correct matches | total ms | vs affine default, all pairs | "
+        "vs plain 2000, pairs it solves | stopped early, unsolved | stages run (matcher) |\n"
+     << "|---|---:|---:|---:|---:|---:|---:|---|\n";
+  for (const Method& m : methods) {
+    int solved = 0, pairs_run = 0, wrong = 0;
+    std::size_t distinct = 0;
+    double ms = 0.0, ms_default = 0.0, ms_easy = 0.0, ms_plain_easy = 0.0;
+    std::map<int, int> stages;
+    for (const Row& r : rows) {
+      if (r.method != m.name) continue;
+      ++pairs_run;
+      solved += r.solved;
+      distinct += r.correct.distinct;
+      ms += r.outcome.ms;
+      if (const Row* d = find(r.pair, "ours affine default 1000 + 1000")) ms_default += d->outcome.ms;
+      const Row* p = find(r.pair, "ours plain 2000");
+      if (p && p->solved) {
+        ms_easy += r.outcome.ms;
+        ms_plain_easy += p->outcome.ms;
+      }
+      if (m.matcher) {
+        ++stages[r.outcome.stage];
+        // Stopped early on a wrong model: verified before the last stage, and the matches do not
+        // solve the pair.
+        wrong += r.outcome.verified && !r.solved && r.outcome.stage < static_cast<int>(defaults.stages.size());
+      }
+    }
+    std::string stage_text;
+    for (const auto& [stage, count] : stages) {
+      stage_text += (stage_text.empty() ? "" : ", ") + std::to_string(count) + "× " + std::to_string(stage);
+    }
+    char line[512];
+    std::snprintf(line, sizeof(line), "| %s | %d / %d | %zu | %.0f | %s | %s | %s | %s |\n", m.name.c_str(), solved,
+                  pairs_run, distinct, ms,
+                  ms_default > 0 ? (std::to_string(ms / ms_default).substr(0, 4) + "x").c_str() : "",
+                  ms_plain_easy > 0 ? (std::to_string(ms_easy / ms_plain_easy).substr(0, 4) + "x").c_str() : "",
+                  m.matcher ? std::to_string(wrong).c_str() : "", stage_text.c_str());
+    md << line;
+  }
+  md << "\n| pair | method | kp1 | kp2 | matches | distinct correct | corner error px (judge / own) | solved | stage | "
+        "ms |\n"
+     << "|---|---|---:|---:|---:|---:|---:|---|---:|---:|\n";
+  std::ofstream csv(out_dir + "/eval_two_view.csv");
+  csv << "pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,corner_error,own_corner_error,solved,"
+         "stage,verified,ms\n";
+  for (const Row& r : rows) {
+    char line[512];
+    std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f | %s | %s | %.0f |\n",
+                  r.pair.c_str(), r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches,
+                  r.correct.distinct, std::min(r.corner_error, 9999.0), std::min(r.own_corner_error, 9999.0),
+                  r.solved ? "yes" : "no", r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "",
+                  r.outcome.ms);
+    md << line;
+    std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f\n", r.pair.c_str(),
+                  r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches, r.correct.correct,
+                  r.correct.distinct, std::min(r.corner_error, 1e6), std::min(r.own_corner_error, 1e6), r.solved,
+                  r.outcome.stage, r.outcome.verified, r.outcome.ms);
+    csv << line;
+  }
+  std::ofstream(out_dir + "/eval_two_view.md") << md.str();
+  std::fputs(md.str().c_str(), stdout);
+  return 0;
+}

@@ -1,0 +1,130 @@
+// libFuzzer target: two-view matching with views on demand (TwoViewMatcher). The input bytes choose
+// two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
+// masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
+// min_inlier_ratio, all_stages. Invalid options must end in std::invalid_argument, valid ones in a
+// result that keeps every documented invariant: stage reports, the stopping rule, inlier flags,
+// match indices, keypoints inside their image and mask, each stage's keypoints a superset of the
+// stage before; anything else (a crash, a sanitizer report, another exception, a broken
+// invariant) is a finding.
+//   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/two_view.hpp"
+#include "fuzz_input.hpp"
+
+namespace {
+
+using affine_orb::fuzz::Bytes;
+using affine_orb::fuzz::require;
+
+void check_features(const affine_orb::Features<256>& f, const cv::Mat& image, const cv::Mat& mask) {
+  require(f.descriptors.size() == f.size() && f.views.size() == f.size());
+  for (const cv::KeyPoint& k : f.keypoints) {
+    require(std::isfinite(k.pt.x) && std::isfinite(k.pt.y));
+    require(k.pt.x >= 0 && k.pt.y >= 0 && k.pt.x <= image.cols - 1 && k.pt.y <= image.rows - 1);
+    if (!mask.empty()) require(mask.at<std::uint8_t>(cvRound(k.pt.y), cvRound(k.pt.x)) != 0);
+  }
+}
+
+cv::Mat read_image(Bytes& bytes, int width, int height) {
+  cv::Mat image(height, width, CV_8UC1);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) image.at<std::uint8_t>(y, x) = bytes.next();
+  }
+  return image;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  Bytes bytes(data, size);
+  const std::uint8_t flags = bytes.next();
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = static_cast<int>(bytes.next()) * 2 - 4;  // may be <= 0: invalid
+  // Tilts: 0.9 is invalid (not above 1), 4 exceeds the default max_tilt unless flag 32 raises it;
+  // the stages may also not increase.
+  constexpr double kTilts[] = {0.9, 1.42, 2.01, 2.83, 4.01};
+  if (flags & 32) options.extractor.views.max_tilt = 4.01;
+  options.stages.clear();
+  const int stages = bytes.next() % 4;
+  for (int s = 0; s < stages; ++s) {
+    const std::uint8_t b = bytes.next();
+    options.stages.push_back({kTilts[b % 5], (b >> 3) * 0.125 - 0.25});  // view_features may be < 0
+  }
+  options.min_inliers = bytes.next() % 40;               // < 8 is invalid
+  options.min_inlier_ratio = (bytes.next() % 12) * 0.1;  // > 1 is invalid
+  options.all_stages = (flags & 1) != 0;
+  if (flags & 2) options.extractor.spreading = affine_orb::Spreading::kQuadtree;
+  options.model.ransac.max_iterations = 1 + bytes.next() % 64;
+  options.model.ransac.min_iterations =
+      std::min(options.model.ransac.min_iterations, options.model.ransac.max_iterations);
+
+  const int width1 = 1 + bytes.next() % 48;
+  const int height1 = 1 + bytes.next() % 40;
+  const cv::Mat image1 = read_image(bytes, width1, height1);
+  cv::Mat image2;
+  if (flags & 4) {
+    // The first image shifted: the pair has a true homography (a translation).
+    const int dx = bytes.next() % 5;
+    const int dy = bytes.next() % 5;
+    image2 = cv::Mat(height1, width1, CV_8UC1, cv::Scalar(0));
+    image1(cv::Rect(0, 0, width1 - std::min(dx, width1 - 1), height1 - std::min(dy, height1 - 1)))
+        .copyTo(image2(cv::Rect(std::min(dx, width1 - 1), std::min(dy, height1 - 1), width1 - std::min(dx, width1 - 1),
+                                height1 - std::min(dy, height1 - 1))));
+  } else {
+    const int width2 = 1 + bytes.next() % 48;
+    const int height2 = 1 + bytes.next() % 40;
+    image2 = read_image(bytes, width2, height2);
+  }
+  cv::Mat mask1;
+  cv::Mat mask2;
+  if (flags & 8) {
+    mask1 = cv::Mat(image1.size(), CV_8UC1, cv::Scalar(0));
+    mask1(cv::Rect(0, 0, (image1.cols + 1) / 2, image1.rows)).setTo(255);
+  }
+  if (flags & 16) mask2 = cv::Mat(image1.size(), CV_8UC1, cv::Scalar(255));  // wrong size unless the images agree
+
+  try {
+    affine_orb::TwoViewMatcher<affine_orb::Rbrief> matcher(options);
+    const auto r = matcher.match(image1, image2, mask1, mask2);
+    const int n_stages = static_cast<int>(options.stages.size());
+    require(r.stage >= 0 && r.stage <= n_stages);
+    require(r.stages.size() == static_cast<std::size_t>(r.stage) + 1);
+    // The stopping rule: a verified stage ends the escalation unless all_stages; an unverified
+    // result has run out of stages.
+    if (!r.verified || options.all_stages) require(r.stage == n_stages);
+    if (r.verified) {
+      require(r.inlier_count >= options.min_inliers);
+      require(r.inlier_count >= options.min_inlier_ratio * static_cast<double>(r.matches.size()));
+    }
+    require(r.inliers.size() == r.matches.size());
+    require(std::count(r.inliers.begin(), r.inliers.end(), 1) == r.inlier_count);
+    for (const affine_orb::Match& m : r.matches) {
+      require(m.query >= 0 && static_cast<std::size_t>(m.query) < r.features1.size());
+      require(m.train >= 0 && static_cast<std::size_t>(m.train) < r.features2.size());
+    }
+    check_features(r.features1, image1, mask1);
+    check_features(r.features2, image2, mask2);
+    // Stage k's keypoints are a superset of stage k − 1's; each stage adds at most its budget.
+    long bound = options.extractor.features;
+    require(std::count(r.features1.views.begin(), r.features1.views.end(), 0) <= bound);
+    for (std::size_t k = 0; k < r.stages.size(); ++k) {
+      if (k > 0) {
+        require(r.stages[k].keypoints1 >= r.stages[k - 1].keypoints1);
+        require(r.stages[k].max_tilt >= r.stages[k - 1].max_tilt);
+        bound += std::lround(options.stages[k - 1].view_features * options.extractor.features);
+      }
+      require(r.stages[k].keypoints1 <= bound && r.stages[k].keypoints2 <= bound);
+    }
+    require(r.stages.back().keypoints1 == static_cast<int>(r.features1.size()));
+  } catch (const std::invalid_argument&) {
+    // Rejected options or input: the documented outcome.
+  }
+  return 0;
+}

@@ -1,0 +1,215 @@
+// Two-view matching with views on demand (two_view.hpp): the stopping rule, stage supersets, the
+// recovered homography against ground truth, masks and bad input.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "affine_orb/two_view.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+/// Mean distance, pixels of image 2, between the four corners of image 1 mapped by the estimate
+/// and by the ground truth (the "solved" judge of bench/eval_two_view: <= 5 px).
+double corner_error(const Eigen::Matrix3d& estimate, const cv::Matx33d& truth, cv::Size size) {
+  double sum = 0.0;
+  for (const cv::Point2d c : {cv::Point2d(0, 0), cv::Point2d(size.width - 1, 0), cv::Point2d(0, size.height - 1),
+                              cv::Point2d(size.width - 1, size.height - 1)}) {
+    const Eigen::Vector3d e = estimate * Eigen::Vector3d(c.x, c.y, 1.0);
+    const cv::Point2d t = affine_orb::test::apply_homography(truth, c);
+    sum += std::hypot(e.x() / e.z() - t.x, e.y() / e.z() - t.y);
+  }
+  return sum / 4.0;
+}
+
+/// Inliers that the ground truth maps within 3 px of their match.
+int correct_inliers(const affine_orb::TwoViewResult<256>& r, const cv::Matx33d& truth) {
+  int correct = 0;
+  for (std::size_t i = 0; i < r.matches.size(); ++i) {
+    if (!r.inliers[i]) continue;
+    const cv::Point2f p = r.features1.keypoints[static_cast<std::size_t>(r.matches[i].query)].pt;
+    const cv::Point2f q = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)].pt;
+    const cv::Point2d m = affine_orb::test::apply_homography(truth, cv::Point2d(p.x, p.y));
+    correct += std::hypot(m.x - q.x, m.y - q.y) < 3.0;
+  }
+  return correct;
+}
+
+/// Share of the inliers that the ground truth maps within 3 px of their match.
+double inlier_precision(const affine_orb::TwoViewResult<256>& r, const cv::Matx33d& truth) {
+  int inliers = 0;
+  int correct = 0;
+  for (std::size_t i = 0; i < r.matches.size(); ++i) {
+    if (!r.inliers[i]) continue;
+    ++inliers;
+    const cv::Point2f p = r.features1.keypoints[static_cast<std::size_t>(r.matches[i].query)].pt;
+    const cv::Point2f q = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)].pt;
+    const cv::Point2d m = affine_orb::test::apply_homography(truth, cv::Point2d(p.x, p.y));
+    correct += std::hypot(m.x - q.x, m.y - q.y) < 3.0;
+  }
+  return inliers > 0 ? static_cast<double>(correct) / inliers : 0.0;
+}
+
+/// Image 1 of graf seen by a camera turned by `degrees` about the vertical axis through the image
+/// centre (focal length 800 px): x2 ~ K R K⁻¹ x1, a homography of known geometry.
+cv::Matx33d turned_camera(double degrees, cv::Size size) {
+  const double f = 800.0;
+  const cv::Matx33d k(f, 0, size.width / 2.0, 0, f, size.height / 2.0, 0, 0, 1);
+  const double a = degrees * CV_PI / 180.0;
+  const cv::Matx33d r(std::cos(a), 0, std::sin(a), 0, 1, 0, -std::sin(a), 0, std::cos(a));
+  return k * r * k.inv();
+}
+
+}  // namespace
+
+TEST_CASE("an easy pair is verified by plain keypoints and stops at stage 0") {
+  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image2 = affine_orb::test::oxford_image("graf", 2);  // 20° of viewpoint change
+  const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 2);
+  affine_orb::TwoViewMatcher<affine_orb::Rbrief> matcher;
+  const auto r = matcher.match(image1, image2);
+  REQUIRE(r.verified);
+  CHECK(r.stage == 0);
+  REQUIRE(r.stages.size() == 1);
+  CHECK(r.stages[0].max_tilt == 1.0);
+  CHECK(std::count(r.features1.views.begin(), r.features1.views.end(), 0) == static_cast<long>(r.features1.size()));
+  CHECK(r.features1.size() == 2000);
+  CHECK(r.model.model == affine_orb::GeometricModel::kHomography);
+  CHECK(corner_error(r.model.homography, truth, image1.size()) < 5.0);
+  CHECK(inlier_precision(r, truth) > 0.95);
+  CHECK(r.inlier_count >= matcher.options().min_inliers);
+  CHECK(r.inlier_count == std::count(r.inliers.begin(), r.inliers.end(), 1));
+}
+
+TEST_CASE("a wide-baseline pair escalates to the views and is solved there") {
+  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image2 = affine_orb::test::oxford_image("graf", 5);  // 50°: plain keypoints fail
+  const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 5);
+  const auto r = affine_orb::match_images(image1, image2);
+  REQUIRE(r.verified);
+  CHECK(r.stage >= 1);
+  const affine_orb::TwoViewStageReport& first = r.stages.front();
+  const bool first_verified = first.inliers >= 15 && first.inliers >= 0.1 * first.matches;
+  CHECK_FALSE(first_verified);  // stage 0 did not verify it
+  CHECK(std::count_if(r.features1.views.begin(), r.features1.views.end(), [](int v) { return v > 0; }) > 0);
+  CHECK(corner_error(r.model.homography, truth, image1.size()) < 5.0);
+  CHECK(correct_inliers(r, truth) >= 20);
+}
+
+TEST_CASE("stage k's keypoints and descriptors are a superset of stage k-1's") {
+  const cv::Mat image1 = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat image2 = affine_orb::test::oxford_image("boat", 3);
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 600;
+  options.all_stages = true;
+  affine_orb::TwoViewOptions shorter = options;
+  shorter.stages.pop_back();
+  const auto full = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image2);
+  const auto part = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(shorter).match(image1, image2);
+  REQUIRE(full.stage == static_cast<int>(options.stages.size()));
+  REQUIRE(full.stages.size() == options.stages.size() + 1);
+  REQUIRE(part.stage == static_cast<int>(shorter.stages.size()));
+  for (const auto& [a, b] :
+       {std::pair{&part.features1, &full.features1}, std::pair{&part.features2, &full.features2}}) {
+    REQUIRE(a->size() < b->size());
+    int differences = 0;
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      differences += a->keypoints[i].pt != b->keypoints[i].pt || a->keypoints[i].angle != b->keypoints[i].angle ||
+                     a->keypoints[i].octave != b->keypoints[i].octave || a->descriptors[i] != b->descriptors[i] ||
+                     a->views[i] != b->views[i];
+    }
+    CHECK(differences == 0);
+  }
+  // Each stage adds its budget (boat has corners enough) and reports what it had.
+  CHECK(full.stages[0].keypoints1 == 600);
+  CHECK(full.stages[1].keypoints1 == 600 + static_cast<int>(std::lround(options.stages[0].view_features * 600)));
+  CHECK(full.stages[2].keypoints1 == static_cast<int>(full.features1.size()));
+  CHECK(full.stages[2].max_tilt == doctest::Approx(options.stages[1].max_tilt));
+}
+
+TEST_CASE("the escalation stops only on enough inliers making up enough of the matches") {
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Matx33d truth = turned_camera(15.0, image.size());
+  cv::Mat turned;
+  cv::warpPerspective(image, turned, cv::Mat(truth), image.size());
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 800;
+  SUBCASE("a pair verified at stage 0 with the recovered homography of the known rotation") {
+    const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
+    REQUIRE(r.verified);
+    CHECK(r.stage == 0);
+    CHECK(corner_error(r.model.homography, truth, image.size()) < 3.0);
+  }
+  SUBCASE("an unreachable min_inliers runs every stage and reports not verified") {
+    options.min_inliers = 1000000;
+    const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
+    CHECK_FALSE(r.verified);
+    CHECK(r.stage == static_cast<int>(options.stages.size()));
+    CHECK(r.inlier_count > 100);  // the pair is easy: only the rule kept it going
+  }
+  SUBCASE("an unreachable inlier ratio likewise") {
+    options.min_inlier_ratio = 1.0;
+    const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
+    CHECK(r.stage == static_cast<int>(options.stages.size()));
+    CHECK(r.verified == (r.inlier_count == static_cast<int>(r.matches.size())));
+  }
+  SUBCASE("no stages: plain matching only") {
+    options.stages.clear();
+    options.min_inliers = 1000000;
+    const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
+    CHECK(r.stage == 0);
+    CHECK(r.stages.size() == 1);
+  }
+}
+
+TEST_CASE("two-view matching honours masks and refuses bad input") {
+  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image2 = affine_orb::test::oxford_image("graf", 2);
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 500;
+  options.all_stages = true;
+  affine_orb::TwoViewMatcher<affine_orb::Rbrief> matcher(options);
+  cv::Mat mask1(image1.size(), CV_8UC1, cv::Scalar(255));
+  mask1.colRange(0, image1.cols / 2).setTo(0);
+  const auto r = matcher.match(image1, image2, mask1);
+  REQUIRE(r.features1.size() > 0);
+  int masked = 0;
+  for (const cv::KeyPoint& k : r.features1.keypoints)
+    masked += mask1.at<std::uint8_t>(cvRound(k.pt.y), cvRound(k.pt.x)) == 0;
+  CHECK(masked == 0);
+  CHECK_THROWS_AS(matcher.match(cv::Mat(), image2), std::invalid_argument);
+  CHECK_THROWS_AS(matcher.match(image1, cv::Mat(10, 10, CV_32F)), std::invalid_argument);
+  CHECK_THROWS_AS(matcher.match(image1, image2, cv::Mat(5, 5, CV_8UC1)), std::invalid_argument);
+  const cv::Mat flat(200, 200, CV_8UC1, cv::Scalar(128));
+  const auto none = matcher.match(flat, flat);
+  CHECK_FALSE(none.verified);
+  CHECK(none.matches.empty());
+
+  affine_orb::TwoViewOptions bad;
+  bad.stages = {{2.0, 0.5}, {2.0, 0.5}};  // not increasing
+  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
+  bad = {};
+  bad.stages = {{4.0, 0.5}};  // beyond extractor.views.max_tilt (2√2)
+  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
+  bad = {};
+  bad.stages = {{1.0, 0.5}};
+  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
+  bad = {};
+  bad.stages.front().view_features = -1.0;
+  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
+  bad = {};
+  bad.min_inliers = 7;
+  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
+  bad = {};
+  bad.min_inlier_ratio = 1.5;
+  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
+  bad = {};
+  bad.extractor.view_budget = affine_orb::ViewBudget::kAreaSplit;
+  CHECK_THROWS_AS(affine_orb::TwoViewMatcher<affine_orb::Rbrief>{bad}, std::invalid_argument);
+  CHECK_NOTHROW(affine_orb::TwoViewOptions{}.check());
+}

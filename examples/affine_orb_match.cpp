@@ -247,8 +247,8 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
   }
   if (!rectified.empty()) {
     // The paper's image correction with the chosen homography; when F was chosen but a homography
-    // was estimated too (a planar scene with some matches off the plane lands just under the R_H
-    // threshold), the picture is still made from that homography and the output says so.
+    // was estimated too (a scene with parallax off a dominant plane), the picture is still made
+    // from that homography and the output says so.
     if (o.selection.homography_found) {
       const affine_orb::CorrectedImage corrected =
           affine_orb::warp_to_first_image(image2, o.selection.homography, image1.size());
@@ -332,10 +332,10 @@ int main(int argc, char** argv) {
         std::printf("\"correct\": null, \"distinct_correct\": null, \"precision\": null, ");
       }
       std::printf(
-          "\"model\": \"%s\", \"homography_ratio\": %.4f, \"homography_ratio_threshold\": %.2f, "
-          "\"inliers\": %zu, ",
-          model_name(o.selection.model), o.selection.homography_ratio,
-          affine_orb::ModelSelectionOptions{}.homography_ratio_threshold, o.inliers);
+          "\"model\": \"%s\", \"parallax_significance\": %.3f, \"parallax_significance_threshold\": %.2f, "
+          "\"homography_ratio\": %.4f, \"inliers\": %zu, ",
+          model_name(o.selection.model), o.selection.parallax_significance,
+          affine_orb::ModelSelectionOptions{}.parallax_significance, o.selection.homography_ratio, o.inliers);
       if (o.rectified_from.empty()) {
         std::printf("\"rectified\": null, \"rectified_from\": null, ");
       } else {
@@ -362,8 +362,9 @@ int main(int argc, char** argv) {
       std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
       if (o.ground_truth)
         std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
-      std::printf("\nmodel %s (R_H = %.2f), %zu inliers\n", model_name(o.selection.model), o.selection.homography_ratio,
-                  o.inliers);
+      std::printf("\nmodel %s (parallax off the plane: z = %.1f, H when <= %.1f), %zu inliers\n",
+                  model_name(o.selection.model), o.selection.parallax_significance,
+                  affine_orb::ModelSelectionOptions{}.parallax_significance, o.inliers);
       if (plan.one_shot) {
         std::printf(
             "time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
@@ -378,8 +379,8 @@ int main(int argc, char** argv) {
       if (o.rectified_from == "chosen homography") {
         std::printf("image 2 rectified into image 1's frame: %s\n", rectified.c_str());
       } else if (!o.rectified_from.empty()) {
-        std::printf("image 2 rectified with the estimated homography although F was chosen (R_H = %.2f <= %.2f): %s\n",
-                    o.selection.homography_ratio, affine_orb::ModelSelectionOptions{}.homography_ratio_threshold,
+        std::printf("image 2 rectified with the estimated homography although F was chosen (z = %.1f > %.1f): %s\n",
+                    o.selection.parallax_significance, affine_orb::ModelSelectionOptions{}.parallax_significance,
                     rectified.c_str());
       }
     }

@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
-"""The Python version of affine_orb_match: Affine-ORB features of two images, Hamming matches,
+"""The Python version of affine_orb_match: two images matched with views on demand
+(affine_orb.match_images: plain keypoints first, affine views only while the pair is not verified),
 homography or fundamental matrix, correct matches against a ground-truth homography.
 
     PYTHONPATH=<build>/python /usr/bin/python3 examples/python/match.py [IMG1 IMG2 [H1TO2]]
-        [--features N] [--max-tilt T] [--threads K] [--out matches.png] [--rectified rectified.png]
+        [--features N] [--max-tilt T] [--threads K] [--all-stages] [--out matches.png]
+        [--rectified rectified.png]
 
 Without images it uses Debian opencv-doc's graf1.png, graf3.png and H1to3p.xml. Matching uses
 the strongest corners (spreading="strongest"), ratio 0.8, as the C++ example does."""
@@ -34,9 +36,12 @@ def read_homography(path):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("images", nargs="*", help="IMG1 IMG2 [H1TO2]")
-    parser.add_argument("--features", type=int, default=1000, help="keypoints from each image (the views add as many)")
-    parser.add_argument("--max-tilt", type=float, default=2.0 * 2 ** 0.5, help="largest simulated tilt, 1 = plain")
+    parser.add_argument("--features", type=int, default=2000,
+                        help="keypoints from each image itself; the stages of views add 0.25 and 0.5 x as many")
+    parser.add_argument("--max-tilt", type=float, default=2.0 * 2 ** 0.5,
+                        help="largest simulated tilt, 1 = plain; the stages stop there")
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--all-stages", action="store_true", help="run every stage instead of stopping when verified")
     parser.add_argument("--out", default="matches.png")
     parser.add_argument("--rectified", default="rectified.png")
     args = parser.parse_args()
@@ -49,13 +54,14 @@ def main():
         if image is None:
             raise SystemExit("match.py: cannot read %s" % path)
 
-    extractor = affine_orb.Extractor(features=args.features, max_tilt=args.max_tilt, threads=args.threads,
-                                     spreading="strongest")
+    stages = [(tilt, share) for tilt, share in ((2.0, 0.25), (2.0 * 2 ** 0.5, 0.5)) if tilt <= args.max_tilt * 1.001]
     start = time.perf_counter()
-    (k1, d1), (k2, d2) = (extractor.detect_and_compute(image) for image in images)
-    ms = (time.perf_counter() - start) * 500.0
-    matches = affine_orb.match(d1, d2, ratio=0.8)
-    print("keypoints %d / %d, %.1f ms per image, %d matches" % (len(k1), len(k2), ms, len(matches)))
+    r = affine_orb.match_images(images[0], images[1], features=args.features, max_tilt=max(args.max_tilt, 1.0),
+                                stages=stages, all_stages=args.all_stages, threads=args.threads)
+    ms = (time.perf_counter() - start) * 1000.0
+    k1, k2, matches = r["keypoints1"], r["keypoints2"], r["matches"]
+    print("%s at stage %d of %d, keypoints %d / %d, %d matches, %.1f ms in all" %
+          ("verified" if r["verified"] else "not verified", r["stage"], len(stages), len(k1), len(k2), len(matches), ms))
     if len(paths) == 3:
         h = read_homography(paths[2])
         p1 = np.array([k1[m.queryIdx].pt for m in matches], dtype=np.float64).reshape(-1, 1, 2)
@@ -63,17 +69,14 @@ def main():
         mapped = cv2.perspectiveTransform(p1, h).reshape(-1, 2)
         correct = int(np.count_nonzero(np.linalg.norm(mapped - p2, axis=1) < 3.0))
         print("correct (< 3 px from the ground truth): %d of %d" % (correct, len(matches)))
-    if len(matches) >= 8:
-        result = affine_orb.select_model(np.array([k1[m.queryIdx].pt for m in matches]),
-                                         np.array([k2[m.trainIdx].pt for m in matches]))
-        print("model %s (R_H = %.2f)" % (result["model"], result["homography_ratio"]))
-        if result["homography"] is not None:
-            # The second image brought into the first one's frame: x1 ~ H^-1 x2.
-            rectified = cv2.warpPerspective(images[1], np.linalg.inv(result["homography"]),
-                                            (images[0].shape[1], images[0].shape[0]))
-            cv2.imwrite(args.rectified, rectified)
-            print("rectified: %s (from the estimated homography%s)" %
-                  (args.rectified, "" if result["model"] == "homography" else ", although F was chosen"))
+    print("model %s, %d inliers" % (r["model"], int(np.count_nonzero(r["inliers"]))))
+    if r["homography"] is not None:
+        # The second image brought into the first one's frame: x1 ~ H^-1 x2.
+        rectified = cv2.warpPerspective(images[1], np.linalg.inv(r["homography"]),
+                                        (images[0].shape[1], images[0].shape[0]))
+        cv2.imwrite(args.rectified, rectified)
+        print("rectified: %s (from the estimated homography%s)" %
+              (args.rectified, "" if r["model"] == "homography" else ", although F was chosen"))
     drawn = cv2.drawMatches(images[0], k1, images[1], k2, matches, None,
                             flags=cv2.DrawMatchesFlags_NOT_DRAW_SINGLE_POINTS)
     cv2.imwrite(args.out, drawn)

@@ -31,12 +31,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <stdexcept>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -49,6 +49,7 @@
 #include "affine_orb/affine_matching.hpp"
 #include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
+#include "viewpoint_pairs.hpp"
 
 namespace {
 
@@ -126,47 +127,12 @@ affine_orb::Features<Bits> as_features(const Extracted& e) {
   return f;
 }
 
-/// Float descriptors matched by the rules of affine_orb::match_features with its default
-/// AffineMatchOptions, on L2 distances: ratio 0.8 against the nearest train descriptor farther
-/// than 4 px from the best one's keypoint (none among the k nearest: accepted), then duplicate
-/// correspondences (both points within 2 px) removed, the smaller distance kept.
-std::vector<affine_orb::Match> match_float(const Extracted& a, const Extracted& b) {
-  const affine_orb::AffineMatchOptions rules;
-  const int k = std::min(32, b.descriptors.rows);
-  std::vector<std::vector<cv::DMatch>> knn;
-  cv::BFMatcher(cv::NORM_L2).knnMatch(a.descriptors, b.descriptors, knn, k);
-  std::vector<affine_orb::Match> matches;
-  for (const auto& neighbours : knn) {
-    if (neighbours.empty()) continue;
-    const cv::DMatch& best = neighbours.front();
-    const cv::Point2f at = b.keypoints[static_cast<std::size_t>(best.trainIdx)].pt;
-    bool accepted = true;
-    for (std::size_t j = 1; j < neighbours.size(); ++j) {
-      const cv::Point2f other = b.keypoints[static_cast<std::size_t>(neighbours[j].trainIdx)].pt;
-      if (std::hypot(other.x - at.x, other.y - at.y) <= rules.ratio_exclusion_radius) continue;
-      accepted = best.distance < rules.matcher.ratio * neighbours[j].distance;
-      break;
-    }
-    // Distances scaled to integers for affine_orb::Match; only their order matters below.
-    if (accepted)
-      matches.push_back({best.queryIdx, best.trainIdx, static_cast<int>(std::lround(best.distance * 1000.0f))});
-  }
-  std::vector<cv::Point2f> p1, p2;
-  for (const auto& kp : a.keypoints) p1.push_back(kp.pt);
-  for (const auto& kp : b.keypoints) p2.push_back(kp.pt);
-  return affine_orb::remove_duplicate_matches(matches, p1, p2, rules.duplicate_radius);
-}
-
 std::vector<affine_orb::Match> match(const Extracted& a, const Extracted& b) {
   if (a.keypoints.empty() || b.keypoints.empty()) return {};
-  if (a.descriptors.type() == CV_32F) return match_float(a, b);
+  if (a.descriptors.type() == CV_32F)
+    return affine_orb::bench::match_float(a.keypoints, a.descriptors, b.keypoints, b.descriptors);
   if (a.descriptors.cols == 32) return affine_orb::match_features(as_features<256>(a), as_features<256>(b));
   return affine_orb::match_features(as_features<512>(a), as_features<512>(b));
-}
-
-cv::Point2d map(const cv::Matx33d& h, cv::Point2f p) {
-  const cv::Vec3d q = h * cv::Vec3d(p.x, p.y, 1.0);
-  return {q[0] / q[2], q[1] / q[2]};
 }
 
 Row evaluate(const Extracted& a, const Extracted& b, const cv::Matx33d& h, cv::Size size2) {
@@ -182,7 +148,7 @@ Row evaluate(const Extracted& a, const Extracted& b, const cv::Matx33d& h, cv::S
   for (std::size_t k = 0; k < matches.size(); ++k) {
     const cv::Point2f x1 = a.keypoints[static_cast<std::size_t>(matches[k].query)].pt;
     const cv::Point2f x2 = b.keypoints[static_cast<std::size_t>(matches[k].train)].pt;
-    const cv::Point2d y = map(h, x1);
+    const cv::Point2d y = affine_orb::bench::map_point(h, x1);
     correct[k] = std::hypot(y.x - x2.x, y.y - x2.y) < 3.0;
     if (correct[k]) cells.insert({static_cast<int>(std::floor(x1.x / 2)), static_cast<int>(std::floor(x1.y / 2))});
     p1.push_back(x1);
@@ -217,7 +183,7 @@ Row evaluate(const Extracted& a, const Extracted& b, const cv::Matx33d& h, cv::S
   // Repeatability over image-1 keypoints whose mapping falls inside image 2.
   std::size_t common = 0, repeated = 0;
   for (const auto& k1 : a.keypoints) {
-    const cv::Point2d y = map(h, k1.pt);
+    const cv::Point2d y = affine_orb::bench::map_point(h, k1.pt);
     if (y.x < 0 || y.y < 0 || y.x > size2.width - 1 || y.y > size2.height - 1) continue;
     ++common;
     for (const auto& k2 : b.keypoints) {
@@ -229,21 +195,6 @@ Row evaluate(const Extracted& a, const Extracted& b, const cv::Matx33d& h, cv::S
   }
   row.repeatability = common ? static_cast<double>(repeated) / static_cast<double>(common) : 0.0;
   return row;
-}
-
-cv::Matx33d read_oxford_homography(const std::string& path) {
-  std::ifstream in(path);
-  cv::Matx33d h;
-  for (int i = 0; i < 9; ++i) {
-    if (!(in >> h.val[i])) throw std::runtime_error("cannot read homography " + path);
-  }
-  return h;
-}
-
-cv::Mat read_gray(const std::string& path) {
-  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) throw std::runtime_error("cannot read image " + path);
-  return image;
 }
 
 void plot(const std::vector<Row>& rows, const std::vector<Method>& methods, const std::string& path) {
@@ -445,36 +396,13 @@ int main(int argc, char** argv) {
            asift_only.find("," + sequence + ",") != std::string::npos;
   };
 
-  struct Pair {
-    std::string sequence;
-    int image;
-    std::string path1, path2;
-    cv::Matx33d h;
-  };
-  std::vector<Pair> pairs;
-  const std::string oxford = affine_orb::bench::data_dir() + "/oxford/";
-  for (const std::string sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
-    if (!only.empty() && only.find("," + sequence + ",") == std::string::npos) continue;
-    for (int n = 2; n <= 6; ++n) {
-      pairs.push_back({sequence, n, oxford + sequence + "/img1.png",
-                       oxford + sequence + "/img" + std::to_string(n) + ".png",
-                       read_oxford_homography(oxford + sequence + "/H1to" + std::to_string(n) + "p")});
-    }
-  }
-  if (only.empty() || only.find(",opencv-doc,") != std::string::npos) {
-    const std::string doc = affine_orb::bench::opencv_samples_dir();
-    cv::Mat h;
-    cv::FileStorage fs(doc + "/H1to3p.xml", cv::FileStorage::READ);
-    if (fs.isOpened()) fs.getFirstTopLevelNode() >> h;
-    if (h.empty()) throw std::runtime_error("cannot read " + doc + "/H1to3p.xml");
-    pairs.push_back({"opencv-doc graf", 3, doc + "/graf1.png", doc + "/graf3.png", cv::Matx33d(h)});
-  }
+  const std::vector<affine_orb::bench::ViewpointPair> pairs = affine_orb::bench::viewpoint_pairs(only);
 
   std::vector<Row> rows;
   std::map<std::string, Extracted> first;  // image-1 features per (path, method)
-  for (const Pair& pair : pairs) {
-    const cv::Mat a = read_gray(pair.path1);
-    const cv::Mat b = read_gray(pair.path2);
+  for (const affine_orb::bench::ViewpointPair& pair : pairs) {
+    const cv::Mat a = affine_orb::bench::read_gray(pair.path1);
+    const cv::Mat b = affine_orb::bench::read_gray(pair.path2);
     for (const Method& method : methods) {
       if (!runs_on(method, pair.sequence)) continue;
       const std::string key = pair.path1 + "|" + method.name;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -65,6 +66,14 @@ cv::Matx33d turned_camera(double degrees, cv::Size size) {
   return k * r * k.inv();
 }
 
+/// Options that run every stage, with `features` image keypoints.
+affine_orb::TwoViewOptions every_stage(int features) {
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = features;
+  options.all_stages = true;
+  return options;
+}
+
 }  // namespace
 
 TEST_CASE("an easy pair is verified by plain keypoints and stops at stage 0") {
@@ -104,9 +113,7 @@ TEST_CASE("a wide-baseline pair escalates to the views and is solved there") {
 TEST_CASE("stage k's keypoints and descriptors are a superset of stage k-1's") {
   const cv::Mat image1 = affine_orb::test::oxford_image("boat", 1);
   const cv::Mat image2 = affine_orb::test::oxford_image("boat", 3);
-  affine_orb::TwoViewOptions options;
-  options.extractor.features = 600;
-  options.all_stages = true;
+  const affine_orb::TwoViewOptions options = every_stage(600);
   affine_orb::TwoViewOptions shorter = options;
   shorter.stages.pop_back();
   const auto full = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image2);
@@ -170,10 +177,7 @@ TEST_CASE("the escalation stops only on enough inliers making up enough of the m
 TEST_CASE("two-view matching honours masks and refuses bad input") {
   const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
   const cv::Mat image2 = affine_orb::test::oxford_image("graf", 2);
-  affine_orb::TwoViewOptions options;
-  options.extractor.features = 500;
-  options.all_stages = true;
-  affine_orb::TwoViewMatcher<affine_orb::Rbrief> matcher(options);
+  affine_orb::TwoViewMatcher<affine_orb::Rbrief> matcher(every_stage(500));
   cv::Mat mask1(image1.size(), CV_8UC1, cv::Scalar(255));
   mask1.colRange(0, image1.cols / 2).setTo(0);
   const auto r = matcher.match(image1, image2, mask1);
@@ -190,26 +194,26 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
   CHECK_FALSE(none.verified);
   CHECK(none.matches.empty());
 
-  affine_orb::TwoViewOptions bad;
-  bad.stages = {{2.0, 0.5}, {2.0, 0.5}};  // not increasing
-  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
-  bad = {};
-  bad.stages = {{4.0, 0.5}};  // beyond extractor.views.max_tilt (2√2)
-  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
-  bad = {};
-  bad.stages = {{1.0, 0.5}};
-  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
-  bad = {};
-  bad.stages.front().view_features = -1.0;
-  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
-  bad = {};
-  bad.min_inliers = 7;
-  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
-  bad = {};
-  bad.min_inlier_ratio = 1.5;
-  CHECK_THROWS_AS(bad.check(), std::invalid_argument);
-  bad = {};
-  bad.extractor.view_budget = affine_orb::ViewBudget::kAreaSplit;
-  CHECK_THROWS_AS(affine_orb::TwoViewMatcher<affine_orb::Rbrief>{bad}, std::invalid_argument);
+  const std::vector<std::function<void(affine_orb::TwoViewOptions&)>> invalid = {
+      [](auto& o) {
+        o.stages = {{2.0, 0.5}, {2.0, 0.5}};
+      },  // not increasing
+      [](auto& o) {
+        o.stages = {{4.0, 0.5}};
+      },  // beyond extractor.views.max_tilt (2√2)
+      [](auto& o) {
+        o.stages = {{1.0, 0.5}};
+      },  // not above 1
+      [](auto& o) { o.stages.front().view_features = -1.0; },
+      [](auto& o) { o.min_inliers = 7; },
+      [](auto& o) { o.min_inlier_ratio = 1.5; },
+      [](auto& o) { o.extractor.view_budget = affine_orb::ViewBudget::kAreaSplit; },
+  };
+  for (const auto& change : invalid) {
+    affine_orb::TwoViewOptions bad;
+    change(bad);
+    CHECK_THROWS_AS(bad.check(), std::invalid_argument);
+    CHECK_THROWS_AS(affine_orb::TwoViewMatcher<affine_orb::Rbrief>{bad}, std::invalid_argument);
+  }
   CHECK_NOTHROW(affine_orb::TwoViewOptions{}.check());
 }

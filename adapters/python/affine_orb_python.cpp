@@ -363,28 +363,15 @@ PYBIND11_MODULE(affine_orb, m) {
           r = octaves1 ? affine_orb::select_model(p1, p2, *octaves1, *octaves2, options)
                        : affine_orb::select_model(p1, p2, options);
         }
-        auto matrix = [](const Eigen::Matrix3d& e) {
-          py::array_t<double> out({3, 3});
-          for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) out.mutable_at(i, j) = e(i, j);
-          return out;
-        };
-        auto flags = [](const std::vector<std::uint8_t>& v) {
-          py::array_t<bool> out(static_cast<py::ssize_t>(v.size()));
-          for (std::size_t i = 0; i < v.size(); ++i) out.mutable_at(static_cast<py::ssize_t>(i)) = v[i] != 0;
-          return out;
-        };
         py::dict out;
         out["success"] = r.success;
-        out["model"] = r.model == affine_orb::GeometricModel::kHomography    ? "homography"
-                       : r.model == affine_orb::GeometricModel::kFundamental ? "fundamental"
-                                                                             : "none";
+        out["model"] = model_name(r.model);
         out["homography_ratio"] = r.homography_ratio;
         out["parallax_significance"] = r.parallax_significance;
-        out["homography"] = r.homography_found ? py::object(matrix(r.homography)) : py::none();
-        out["fundamental"] = r.fundamental_found ? py::object(matrix(r.fundamental)) : py::none();
-        out["homography_inliers"] = flags(r.homography_inliers);
-        out["fundamental_inliers"] = flags(r.fundamental_inliers);
+        out["homography"] = r.homography_found ? py::object(matrix_array(r.homography)) : py::none();
+        out["fundamental"] = r.fundamental_found ? py::object(matrix_array(r.fundamental)) : py::none();
+        out["homography_inliers"] = flag_array(r.homography_inliers);
+        out["fundamental_inliers"] = flag_array(r.fundamental_inliers);
         return out;
       },
       py::arg("points1"), py::arg("points2"), py::arg("sigma") = affine_orb::ModelSelectionOptions{}.sigma,

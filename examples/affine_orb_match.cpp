@@ -21,6 +21,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -141,6 +142,19 @@ affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
   return options;
 }
 
+/// The matched positions, original pixels: image 1's and image 2's point of each match.
+template <int Bits>
+std::pair<std::vector<cv::Point2f>, std::vector<cv::Point2f>> matched_points(
+    const affine_orb::Features<Bits>& f1, const affine_orb::Features<Bits>& f2,
+    const std::vector<affine_orb::Match>& matches) {
+  std::pair<std::vector<cv::Point2f>, std::vector<cv::Point2f>> points;
+  for (const auto& m : matches) {
+    points.first.push_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt);
+    points.second.push_back(f2.keypoints[static_cast<std::size_t>(m.train)].pt);
+  }
+  return points;
+}
+
 template <class Descriptor>
 Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, const cv::Matx33d* truth,
             const std::string& out, const std::string& rectified, const std::string& save_matches) {
@@ -163,11 +177,7 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
     start = std::chrono::steady_clock::now();
     matches = affine_orb::match_features(f1, f2);
     o.ms_match = ms_since(start);
-    std::vector<cv::Point2f> p1, p2;
-    for (const auto& m : matches) {
-      p1.push_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt);
-      p2.push_back(f2.keypoints[static_cast<std::size_t>(m.train)].pt);
-    }
+    const auto [p1, p2] = matched_points(f1, f2, matches);
     start = std::chrono::steady_clock::now();
     if (p1.size() >= 8) o.selection = affine_orb::select_model(p1, p2);
     o.ms_model = ms_since(start);
@@ -197,11 +207,7 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
   o.keypoints1 = f1.size();
   o.keypoints2 = f2.size();
   o.matches = matches.size();
-  std::vector<cv::Point2f> p1, p2;
-  for (const auto& m : matches) {
-    p1.push_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt);
-    p2.push_back(f2.keypoints[static_cast<std::size_t>(m.train)].pt);
-  }
+  const auto [p1, p2] = matched_points(f1, f2, matches);
   const std::vector<std::uint8_t>& inlier_mask = o.selection.model == affine_orb::GeometricModel::kFundamental
                                                      ? o.selection.fundamental_inliers
                                                      : o.selection.homography_inliers;

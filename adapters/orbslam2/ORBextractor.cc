@@ -19,8 +19,8 @@ affine_orb::adapters::DefaultOptionsStore& defaults() {
   return store;
 }
 
-affine_orb::adapters::ViewSwitch& view_switch() {
-  static affine_orb::adapters::ViewSwitch flag;
+affine_orb::adapters::RecoverySwitch& recovery_switch() {
+  static affine_orb::adapters::RecoverySwitch flag;
   return flag;
 }
 
@@ -41,7 +41,7 @@ ORBextractor::~ORBextractor() { delete impl_; }
 
 void ORBextractor::operator()(cv::InputArray image, cv::InputArray mask, std::vector<cv::KeyPoint>& keypoints,
                               cv::OutputArray descriptors) {
-  std::optional<affine_orb::adapters::AdapterFrame> frame = impl_->run(image.getMat(), mask.getMat(), view_switch().get());
+  std::optional<affine_orb::adapters::AdapterFrame> frame = impl_->run(image.getMat(), mask.getMat(), recovery_switch().get());
   if (!frame) return;
   keypoints = std::move(frame->keypoints);
   affine_orb::adapters::write_descriptors(frame->descriptors, descriptors);
@@ -57,8 +57,8 @@ std::vector<float> ORBextractor::GetInverseScaleSigmaSquares() const { return im
 
 void ORBextractor::SetAffineOptions(const AffineOrbAdapterOptions& options) { defaults().set(options); }
 AffineOrbAdapterOptions ORBextractor::GetAffineOptions() { return defaults().get(); }
-void ORBextractor::SetViewsActive(bool active) { view_switch().set(active); }
-bool ORBextractor::ViewsActive() { return view_switch().get(); }
+void ORBextractor::SetRecovering(bool recovering) { recovery_switch().set(recovering); }
+bool ORBextractor::Recovering() { return recovery_switch().get(); }
 AffineOrbAdapterOptions ORBextractor::AffineOptions() const { return impl_->affine_options(); }
 
 }  // namespace ORB_SLAM2

@@ -67,17 +67,18 @@ class ORBextractor {
   static void SetAffineOptions(const AffineOrbAdapterOptions& options);
   /// The defaults SetAffineOptions() last set (the compiled-in AffineOrbAdapterOptions{} before).
   static AffineOrbAdapterOptions GetAffineOptions();
-  /// Process-wide switch for the affine views, read at every call of operator(): while false,
-  /// extractors whose options enable the views extract the image only, with exactly the output of
-  /// views off; true (the default) restores them. Extractors with the views off ignore it, so
-  /// calling it changes nothing for the default options. For a fork that wants the views only
-  /// while tracking is not OK (lost, or not yet initialised), one line at the top of
+  /// Process-wide recovery switch, read at every call of operator(): while true, extractors
+  /// extract with their options' `recovery` fields (by default twice nfeatures from the image)
+  /// instead of nfeatures, max_tilt and view_features; false (the default) restores those.
+  /// Extractors whose recovery fields plan the same extraction ignore it. A fork that wants the
+  /// recovery mode while tracking is lost adds one line at the top of
   /// Tracking::GrabImageMonocular, GrabImageRGBD and GrabImageStereo:
-  ///   ORBextractor::SetViewsActive(mState != OK);
-  /// Thread-safe (an atomic flag).
-  static void SetViewsActive(bool active);
-  /// The state SetViewsActive() last set (true before any call).
-  static bool ViewsActive();
+  ///   ORBextractor::SetRecovering(mState == LOST);
+  /// (the state the previous frame left; monocular initialisation, which uses its own extractor
+  /// while not initialised, is not affected). Thread-safe (an atomic flag).
+  static void SetRecovering(bool recovering);
+  /// The state SetRecovering() last set (false before any call).
+  static bool Recovering();
   /// The options this extractor uses (defaults with the environment applied at construction).
   AffineOrbAdapterOptions AffineOptions() const;
 

@@ -18,8 +18,8 @@ affine_orb::adapters::DefaultOptionsStore& defaults() {
   return store;
 }
 
-affine_orb::adapters::ViewSwitch& view_switch() {
-  static affine_orb::adapters::ViewSwitch flag;
+affine_orb::adapters::RecoverySwitch& recovery_switch() {
+  static affine_orb::adapters::RecoverySwitch flag;
   return flag;
 }
 
@@ -43,7 +43,7 @@ int ORBextractor::operator()(cv::InputArray image, cv::InputArray mask, std::vec
   const cv::Mat im = image.getMat();
   if (im.empty()) return -1;
   affine_orb::adapters::check_lapping_area(vLappingArea, kWho);
-  affine_orb::adapters::AdapterFrame frame = impl_->run(im, mask.getMat(), view_switch().get()).value();  // not empty here
+  affine_orb::adapters::AdapterFrame frame = impl_->run(im, mask.getMat(), recovery_switch().get()).value();  // not empty here
   const int outside = affine_orb::adapters::split_lapping_area(frame, vLappingArea, kWho);
   keypoints = std::move(frame.keypoints);
   affine_orb::adapters::write_descriptors(frame.descriptors, descriptors);
@@ -60,8 +60,8 @@ std::vector<float> ORBextractor::GetInverseScaleSigmaSquares() const { return im
 
 void ORBextractor::SetAffineOptions(const AffineOrbAdapterOptions& options) { defaults().set(options); }
 AffineOrbAdapterOptions ORBextractor::GetAffineOptions() { return defaults().get(); }
-void ORBextractor::SetViewsActive(bool active) { view_switch().set(active); }
-bool ORBextractor::ViewsActive() { return view_switch().get(); }
+void ORBextractor::SetRecovering(bool recovering) { recovery_switch().set(recovering); }
+bool ORBextractor::Recovering() { return recovery_switch().get(); }
 AffineOrbAdapterOptions ORBextractor::AffineOptions() const { return impl_->affine_options(); }
 
 }  // namespace ORB_SLAM3

@@ -501,51 +501,89 @@ TEST_CASE_TEMPLATE_DEFINE("the pyramid of a frame stays valid after the next fra
   CHECK(cv::norm(extractor.mvImagePyramid[0], first, cv::NORM_INF) > 0.0);
 }
 
-TEST_CASE_TEMPLATE_DEFINE("SetViewsActive(false) gives views off exactly; true gives the views back", T,
-                          view_switch) {
+TEST_CASE_TEMPLATE_DEFINE("SetRecovering(true) extracts with the recovery options, false with the normal ones", T,
+                          recovery_switch) {
   using affine_orb::adapters::AdapterDescriptor;
   struct Restore {
-    ~Restore() { T::Extractor::SetViewsActive(true); }
+    ~Restore() { T::Extractor::SetRecovering(false); }
   } restore;
-  CHECK(T::Extractor::ViewsActive());
-  for (const AdapterDescriptor d : {AdapterDescriptor::kRbrief, AdapterDescriptor::kBrisk}) {
-    CAPTURE(static_cast<int>(d));
-    conformance::Output reference;
+  CHECK(!T::Extractor::Recovering());
+  constexpr int n = conformance::kFeatures;
+  constexpr double t = conformance::kViewsTilt;
+  // The subject: an adapter with `normal` fields and `recovery` fields. The references, built with
+  // the switch off: an adapter with the normal fields, and one constructed with `want_features`
+  // and `want_tilt`/`want_view_features` as its normal fields (the extraction the recovery fields
+  // ask for, written the other way).
+  struct Row {
+    const char* what;
+    AdapterDescriptor descriptor;
+    double max_tilt;
+    double recovery_image_features;
+    double recovery_max_tilt;
+    double recovery_view_features;
+    int want_features;
+    double want_tilt;
+    double want_view_features;
+  };
+  const Row rows[] = {
+      {"the same plan: ignored", AdapterDescriptor::kRbrief, 1.0, 1.0, 1.0, 1.0, n, 1.0, 1.0},
+      {"the same views: ignored", AdapterDescriptor::kRbrief, t, 1.0, t, 1.0, n, t, 1.0},
+      {"twice the image budget", AdapterDescriptor::kRbrief, 1.0, 2.0, 1.0, 1.0, 2 * n, 1.0, 1.0},
+      {"the views", AdapterDescriptor::kRbrief, 1.0, 1.0, t, 1.0, n, t, 1.0},
+      {"the views, BRISK", AdapterDescriptor::kBrisk, 1.0, 1.0, t, 1.0, n, t, 1.0},
+      {"both: twice the image budget and n from the views", AdapterDescriptor::kRbrief, 1.0, 2.0, t, 1.0, 2 * n, t,
+       0.5},
+      {"views normally, three times the image budget instead", AdapterDescriptor::kRbrief, t, 3.0, 1.0, 1.0, 3 * n,
+       1.0, 1.0},
+  };
+  const cv::Mat image = affine_orb::test::kitti_frame(10);
+  for (const Row& row : rows) {
+    const std::string what = row.what;
+    CAPTURE(what);
+    typename T::Options normal = conformance::views_options<T>(row.descriptor, row.max_tilt);
+    conformance::Output want_normal;
     {
-      conformance::DefaultsGuard<T> guard(conformance::views_options<T>(d, 1.0));
-      typename T::Extractor plain(conformance::kFeatures, conformance::kScale, conformance::kLevels,
-                                  conformance::kIniFast, conformance::kMinFast);
-      T::Extractor::SetViewsActive(false);  // ignored with the views off
-      reference = conformance::run<T>(plain, affine_orb::test::kitti_frame(10));
-      T::Extractor::SetViewsActive(true);
+      conformance::DefaultsGuard<T> guard(normal);
+      typename T::Extractor reference(n, conformance::kScale, conformance::kLevels, conformance::kIniFast,
+                                      conformance::kMinFast);
+      want_normal = conformance::run<T>(reference, image);
     }
-    conformance::DefaultsGuard<T> guard(conformance::views_options<T>(d, conformance::kViewsTilt));
-    typename T::Extractor extractor(conformance::kFeatures, conformance::kScale, conformance::kLevels,
-                                    conformance::kIniFast, conformance::kMinFast);
-    REQUIRE(reference.keypoints.size() == static_cast<std::size_t>(conformance::kFeatures));
-    // Views on, off, on again for the same frame: the switch is read at every call.
-    for (const bool active : {true, false, true}) {
-      CAPTURE(active);
-      T::Extractor::SetViewsActive(active);
-      CHECK(T::Extractor::ViewsActive() == active);
-      const conformance::Output out = conformance::run<T>(extractor, affine_orb::test::kitti_frame(10));
-      if (active) {
-        CHECK(out.keypoints.size() >= static_cast<std::size_t>(conformance::kFeatures * 14 / 10));
-        continue;
-      }
-      REQUIRE(out.keypoints.size() == reference.keypoints.size());
-      for (std::size_t i = 0; i < out.keypoints.size(); ++i) {
-        const cv::KeyPoint& a = out.keypoints[i];
-        const cv::KeyPoint& b = reference.keypoints[i];
-        CHECK((a.pt == b.pt && a.angle == b.angle && a.octave == b.octave && a.response == b.response &&
-               a.size == b.size));
-      }
-      CHECK(cv::norm(out.descriptors, reference.descriptors, cv::NORM_HAMMING) == 0.0);
-      REQUIRE(out.pyramid.size() == reference.pyramid.size());
+    conformance::Output want_recovering;
+    {
+      typename T::Options o = conformance::views_options<T>(row.descriptor, row.want_tilt);
+      o.view_features = row.want_view_features;
+      conformance::DefaultsGuard<T> guard(o);
+      typename T::Extractor reference(row.want_features, conformance::kScale, conformance::kLevels,
+                                      conformance::kIniFast, conformance::kMinFast);
+      want_recovering = conformance::run<T>(reference, image);
+    }
+    typename T::Options options = normal;
+    options.recovery.image_features = row.recovery_image_features;
+    options.recovery.max_tilt = row.recovery_max_tilt;
+    options.recovery.view_features = row.recovery_view_features;
+    conformance::DefaultsGuard<T> guard(options);
+    typename T::Extractor extractor(n, conformance::kScale, conformance::kLevels, conformance::kIniFast,
+                                    conformance::kMinFast);
+    // Normal, recovering, normal, recovering on the same frame: the switch is read at every call.
+    for (const bool recovering : {false, true, false, true}) {
+      CAPTURE(recovering);
+      T::Extractor::SetRecovering(recovering);
+      CHECK(T::Extractor::Recovering() == recovering);
+      const conformance::Output out = conformance::run<T>(extractor, image);
+      const conformance::Output& want = recovering ? want_recovering : want_normal;
+      conformance::check_same(out, want);
+      REQUIRE(out.pyramid.size() == want.pyramid.size());
       for (std::size_t l = 0; l < out.pyramid.size(); ++l) {
-        CHECK(cv::norm(out.pyramid[l], reference.pyramid[l], cv::NORM_INF) == 0.0);
+        CHECK(cv::norm(out.pyramid[l], want.pyramid[l], cv::NORM_INF) == 0.0);
       }
+      // The frame has the corners: each extraction returns about its budget (the views' share
+      // loses the keypoints whose stereo window would not fit).
+      const double budget = recovering ? row.want_features * (1.0 + (row.want_tilt > 1.0 ? row.want_view_features : 0.0))
+                                       : n * (row.max_tilt > 1.0 ? 2.0 : 1.0);
+      CHECK(static_cast<double>(out.keypoints.size()) >= 0.8 * budget);
+      CHECK(static_cast<double>(out.keypoints.size()) <= budget);
     }
+    T::Extractor::SetRecovering(false);
   }
 }
 
@@ -620,8 +658,14 @@ TEST_CASE_TEMPLATE_DEFINE("options: environment over the setter's defaults, read
       conformance::EnvGuard e3(affine_orb::adapters::kEnvDuplicates, "keep");
       conformance::EnvGuard e4(affine_orb::adapters::kEnvMergeRadius, "3.5");
       conformance::EnvGuard e5(affine_orb::adapters::kEnvViewFeatures, "0.5");
+      conformance::EnvGuard e6(affine_orb::adapters::kEnvRecoveryImageFeatures, "3");
+      conformance::EnvGuard e7(affine_orb::adapters::kEnvRecoveryMaxTilt, "2.01");
+      conformance::EnvGuard e8(affine_orb::adapters::kEnvRecoveryViewFeatures, "0.25");
       typename T::Extractor from_env(100, 1.2f, 8, 20, 7);
       const typename T::Options o = from_env.AffineOptions();
+      CHECK(o.recovery.image_features == 3.0);
+      CHECK(o.recovery.max_tilt == 2.01);
+      CHECK(o.recovery.view_features == 0.25);
       CHECK(o.max_tilt == 1.42);
       CHECK(o.descriptor == AdapterDescriptor::kBrisk);
       CHECK(o.duplicates == AdapterDuplicates::kKeepAll);
@@ -673,6 +717,25 @@ TEST_CASE_TEMPLATE_DEFINE("bad input is rejected with std::invalid_argument", T,
   bad = typename T::Options{};
   bad.threads = 0;
   CHECK_THROWS_AS(T::Extractor::SetAffineOptions(bad), std::invalid_argument);
+  for (const double image_features : {0.5, 17.0, std::nan("")}) {
+    bad = typename T::Options{};
+    bad.recovery.image_features = image_features;
+    CHECK_THROWS_AS(T::Extractor::SetAffineOptions(bad), std::invalid_argument);
+  }
+  bad = typename T::Options{};
+  bad.recovery.max_tilt = 0.9;
+  CHECK_THROWS_AS(T::Extractor::SetAffineOptions(bad), std::invalid_argument);
+  bad = typename T::Options{};
+  bad.recovery.view_features = -1.0;
+  CHECK_THROWS_AS(T::Extractor::SetAffineOptions(bad), std::invalid_argument);
+  {
+    // The recovery budget is bounded like nfeatures.
+    typename T::Options large;
+    large.recovery.image_features = 16.0;
+    conformance::DefaultsGuard<T> guard(large);
+    CHECK_NOTHROW(typename T::Extractor(62500, 1.2f, 8, 20, 7));
+    CHECK_THROWS_AS(typename T::Extractor(62501, 1.2f, 8, 20, 7), std::invalid_argument);
+  }
 
   // Environment values: each bad value names its variable.
   const std::vector<std::pair<const char*, const char*>> rows = {
@@ -684,6 +747,10 @@ TEST_CASE_TEMPLATE_DEFINE("bad input is rejected with std::invalid_argument", T,
       {affine_orb::adapters::kEnvDuplicates, "drop"},  {affine_orb::adapters::kEnvMergeRadius, "0"},
       {affine_orb::adapters::kEnvMergeRadius, "-1"},   {affine_orb::adapters::kEnvViewFeatures, "-0.5"},
       {affine_orb::adapters::kEnvViewFeatures, "x"},
+      {affine_orb::adapters::kEnvRecoveryImageFeatures, "0.5"},
+      {affine_orb::adapters::kEnvRecoveryImageFeatures, "two"},
+      {affine_orb::adapters::kEnvRecoveryMaxTilt, "17"},
+      {affine_orb::adapters::kEnvRecoveryViewFeatures, "-1"},
   };
   for (const auto& [name, value] : rows) {
     CAPTURE(name);

@@ -35,7 +35,7 @@ TEST_CASE_TEMPLATE_INVOKE(rbrief_definition, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(hamming, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(threads, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(pyramid_ownership, Orbslam2);
-TEST_CASE_TEMPLATE_INVOKE(view_switch, Orbslam2);
+TEST_CASE_TEMPLATE_INVOKE(recovery_switch, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(empty, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(initialisation, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam2);

@@ -36,7 +36,7 @@ TEST_CASE_TEMPLATE_INVOKE(rbrief_definition, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(hamming, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(threads, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(pyramid_ownership, Orbslam3);
-TEST_CASE_TEMPLATE_INVOKE(view_switch, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(recovery_switch, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(empty, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(initialisation, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam3);

@@ -146,6 +146,15 @@ inline AdapterOptions apply_environment(AdapterOptions base) {
   if (const char* v = std::getenv(kEnvViewFeatures)) {
     base.view_features = detail_env::parse_number(kEnvViewFeatures, v, 0.0, 16.0, false);
   }
+  if (const char* v = std::getenv(kEnvRecoveryImageFeatures)) {
+    base.recovery.image_features = detail_env::parse_number(kEnvRecoveryImageFeatures, v, 1.0, 16.0, false);
+  }
+  if (const char* v = std::getenv(kEnvRecoveryMaxTilt)) {
+    base.recovery.max_tilt = detail_env::parse_number(kEnvRecoveryMaxTilt, v, 1.0, 16.0, false);
+  }
+  if (const char* v = std::getenv(kEnvRecoveryViewFeatures)) {
+    base.recovery.view_features = detail_env::parse_number(kEnvRecoveryViewFeatures, v, 0.0, 16.0, false);
+  }
   base.check();
   return base;
 }
@@ -169,15 +178,16 @@ class DefaultOptionsStore {
   AdapterOptions options_;
 };
 
-/// The process-wide switch behind an adapter's static SetViewsActive()/ViewsActive(): an atomic
-/// flag, true by default, read by every extraction of extractors whose options enable the views.
-class ViewSwitch {
+/// The process-wide switch behind an adapter's static SetRecovering()/Recovering(): an atomic
+/// flag, false by default, read at every extraction; while it is true, extractors whose
+/// RecoveryOptions differ from their normal options extract with the recovery ones.
+class RecoverySwitch {
  public:
-  void set(bool active) { active_.store(active, std::memory_order_relaxed); }
-  bool get() const { return active_.load(std::memory_order_relaxed); }
+  void set(bool recovering) { recovering_.store(recovering, std::memory_order_relaxed); }
+  bool get() const { return recovering_.load(std::memory_order_relaxed); }
 
  private:
-  std::atomic<bool> active_{true};
+  std::atomic<bool> recovering_{false};
 };
 
 /// One frame's output in ORB-SLAM's layout.
@@ -187,16 +197,38 @@ struct AdapterFrame {
   std::vector<cv::Mat> pyramid;  ///< the original image at each level, owned (not shared)
 };
 
+/// What one of an adapter's extractors extracts: image keypoints, and the views' tilts and share.
+struct ExtractionPlan {
+  int image_features = 1000;   ///< keypoints from the image (ExtractorOptions::features)
+  double max_tilt = 1.0;       ///< largest tilt; 1 = no views
+  double view_features = 0.0;  ///< keypoints the views add, fraction of nfeatures (0 with no views)
+
+  bool operator==(const ExtractionPlan& o) const {
+    return image_features == o.image_features && max_tilt == o.max_tilt && view_features == o.view_features;
+  }
+  bool operator!=(const ExtractionPlan& o) const { return !(*this == o); }
+};
+
+/// The plan of `nfeatures` image keypoints and the given views; "no views" (max_tilt 1 or no view
+/// budget) is written one way, so that two plans that extract the same compare equal.
+inline ExtractionPlan make_plan(int image_features, double max_tilt, double view_features) {
+  const bool views = max_tilt > 1.0 && view_features > 0.0;
+  return {image_features, views ? max_tilt : 1.0, views ? view_features : 0.0};
+}
+
 /// ORB-SLAM's five extractor parameters plus the affine options, checked, and the extractors built
 /// from them. `who` names the adapter class in error messages.
 ///
-/// One affine_orb::Extractor with ViewBudget::kAdditive does the work: the image is extracted
-/// with ORB-SLAM2's budget (nfeatures keypoints, geometric over the levels), and those keypoints
-/// are the same with the views on or off, so ORB-SLAM's monocular initialisation, which matches
-/// octave-0 keypoints only, keeps all of its candidates. With the views on, the tilted views add
-/// about view_features · nfeatures keypoints where the image has none (AdapterDuplicates::kMerge:
-/// a view's candidate within merge_radius · s^l of a kept image keypoint or of a stronger view
-/// candidate of the same level l is dropped first), each with the octave nearest to its scale.
+/// An affine_orb::Extractor with ViewBudget::kAdditive does the work: the image is extracted with
+/// ORB-SLAM2's budget (nfeatures keypoints, geometric over the levels), and those keypoints are the
+/// same with the views on or off, so ORB-SLAM's monocular initialisation, which matches octave-0
+/// keypoints only, keeps all of its candidates. With the views on, the tilted views add about
+/// view_features · nfeatures keypoints where the image has none (AdapterDuplicates::kMerge: a view's
+/// candidate within merge_radius · s^l of a kept image keypoint or of a stronger view candidate of
+/// the same level l is dropped first), each with the octave nearest to its scale. When the
+/// recovery options plan another extraction, a second extractor serves the frames extracted while
+/// recovering (RecoverySwitch): its output is that of an adapter constructed with
+/// round(recovery.image_features · nfeatures) features and the recovery views.
 class AdapterCore {
  public:
   AdapterCore(const char* who, int nfeatures, float scale_factor, int nlevels, int ini_th_fast, int min_th_fast,
@@ -218,30 +250,38 @@ class AdapterCore {
     scales_ = make_scale_tables(scale_factor, nlevels);
 
     ExtractorOptions options;
-    options.features = nfeatures;
     options.pyramid.scale_factor = static_cast<double>(scale_factor);
     options.pyramid.levels = nlevels;
     options.detector.initial_threshold = ini_th_fast;
     options.detector.min_threshold = min_th_fast;
     options.detector.score = ScoreType::kFast;  // ORB-SLAM ranks by the FAST score
-    options.views.max_tilt = affine.view_features > 0.0 ? affine.max_tilt : 1.0;
     options.view_budget = ViewBudget::kAdditive;
-    options.view_features = affine.view_features;
     options.duplicates =
         affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;
     options.merge_radius = affine.merge_radius;
     options.threads = affine.threads;
-    // With the views on, a views-off twin serves the frames for which they are switched off
-    // (ViewSwitch): ViewBudget::kAdditive makes its output the image part of the views' output.
-    ExtractorOptions image_only = options;
-    image_only.views.max_tilt = 1.0;
-    const bool views = options.views.max_tilt > 1.0;
+    const ExtractionPlan normal = make_plan(nfeatures, affine.max_tilt, affine.view_features);
+    const double recovery_features = std::round(affine.recovery.image_features * nfeatures);
+    affine_orb::detail::require(recovery_features <= 1000000.0,
+                                w + ": recovery.image_features x nfeatures must be at most 1000000, got " +
+                                    detail_env::format(recovery_features));
+    const ExtractionPlan recovery = make_plan(static_cast<int>(recovery_features), affine.recovery.max_tilt,
+                                              affine.recovery.view_features);
+    const auto options_for = [&](const ExtractionPlan& plan) {
+      ExtractorOptions o = options;
+      o.features = plan.image_features;
+      o.views.max_tilt = plan.max_tilt;
+      // The extractor's view_features is a fraction of its own image budget.
+      o.view_features = plan.image_features == nfeatures ? plan.view_features
+                                                         : plan.view_features * nfeatures / plan.image_features;
+      return o;
+    };
     if (affine.descriptor == AdapterDescriptor::kRbrief) {
-      rbrief_.emplace(options);
-      if (views) rbrief_image_.emplace(image_only);
+      rbrief_.emplace(options_for(normal));
+      if (recovery != normal) rbrief_recovery_.emplace(options_for(recovery));
     } else {
-      brisk_.emplace(options);
-      if (views) brisk_image_.emplace(image_only);
+      brisk_.emplace(options_for(normal));
+      if (recovery != normal) brisk_recovery_.emplace(options_for(recovery));
     }
   }
 
@@ -252,15 +292,14 @@ class AdapterCore {
 
   /// Checks the image and mask: nullopt for an empty image (ORB-SLAM's "return, outputs untouched");
   /// std::invalid_argument for a type other than CV_8UC1 or a mask that is neither empty nor CV_8UC1
-  /// of the image size (non-zero = allowed, as affine_orb::Extractor::extract). With
-  /// `views_active` false the views are skipped: the output is then exactly that of the same
-  /// extractor with the views off.
-  std::optional<AdapterFrame> run(const cv::Mat& image, const cv::Mat& mask, bool views_active = true) {
+  /// of the image size (non-zero = allowed, as affine_orb::Extractor::extract). With `recovering`
+  /// the recovery options' extraction runs instead of the normal one (the same when they agree).
+  std::optional<AdapterFrame> run(const cv::Mat& image, const cv::Mat& mask, bool recovering = false) {
     if (image.empty()) return std::nullopt;
     affine_orb::detail::require_gray8(image, who_);
     affine_orb::detail::require_mask(mask, image.size(), who_);
-    if (rbrief_) return convert(views_active || !rbrief_image_ ? *rbrief_ : *rbrief_image_, image, mask);
-    return convert(views_active || !brisk_image_ ? *brisk_ : *brisk_image_, image, mask);
+    if (rbrief_) return convert(recovering && rbrief_recovery_ ? *rbrief_recovery_ : *rbrief_, image, mask);
+    return convert(recovering && brisk_recovery_ ? *brisk_recovery_ : *brisk_, image, mask);
   }
 
  private:
@@ -307,8 +346,8 @@ class AdapterCore {
   ScaleTables scales_;
   std::optional<Extractor<Rbrief>> rbrief_;
   std::optional<Extractor<Brisk>> brisk_;
-  std::optional<Extractor<Rbrief>> rbrief_image_;  ///< views off, only when rbrief_ has views
-  std::optional<Extractor<Brisk>> brisk_image_;    ///< views off, only when brisk_ has views
+  std::optional<Extractor<Rbrief>> rbrief_recovery_;  ///< only when the recovery plan differs
+  std::optional<Extractor<Brisk>> brisk_recovery_;    ///< only when the recovery plan differs
 };
 
 /// Writes descriptors to an ORB-SLAM output array: released when there is no keypoint (ORB-SLAM's

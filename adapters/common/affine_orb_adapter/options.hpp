@@ -17,6 +17,9 @@
 /// | `AFFINE_ORB_DUPLICATES`   | duplicates     | `merge` or `keep`                          |
 /// | `AFFINE_ORB_MERGE_RADIUS` | merge_radius   | number in (0, 64], pixels                  |
 /// | `AFFINE_ORB_VIEW_FEATURES`| view_features  | number in [0, 16], fraction of nfeatures   |
+/// | `AFFINE_ORB_RECOVERY_IMAGE_FEATURES` | recovery.image_features | number in [1, 16], multiple of nfeatures |
+/// | `AFFINE_ORB_RECOVERY_MAX_TILT`       | recovery.max_tilt       | number in [1, 16]; 1 = no views |
+/// | `AFFINE_ORB_RECOVERY_VIEW_FEATURES`  | recovery.view_features  | number in [0, 16], fraction of nfeatures |
 ///
 /// This header is included by the adapters' ORBextractor.h, which every ORB-SLAM file including
 /// Frame.h sees, and ORB-SLAM2/3 compile those as C++11: so it stays light (no extractor code) and
@@ -36,6 +39,9 @@ constexpr const char* kEnvThreads = "AFFINE_ORB_THREADS";
 constexpr const char* kEnvDuplicates = "AFFINE_ORB_DUPLICATES";
 constexpr const char* kEnvMergeRadius = "AFFINE_ORB_MERGE_RADIUS";
 constexpr const char* kEnvViewFeatures = "AFFINE_ORB_VIEW_FEATURES";
+constexpr const char* kEnvRecoveryImageFeatures = "AFFINE_ORB_RECOVERY_IMAGE_FEATURES";
+constexpr const char* kEnvRecoveryMaxTilt = "AFFINE_ORB_RECOVERY_MAX_TILT";
+constexpr const char* kEnvRecoveryViewFeatures = "AFFINE_ORB_RECOVERY_VIEW_FEATURES";
 
 /// Throws std::invalid_argument("affine_orb: " + what) unless `condition` holds (detail::require,
 /// which is C++17).
@@ -53,6 +59,33 @@ enum class AdapterDescriptor {
 enum class AdapterDuplicates {
   kMerge,    ///< One keypoint per corner and level, the strongest (SPEC §2: the SLAM default).
   kKeepAll,  ///< Every view's keypoint.
+};
+
+/// What an extractor extracts while the fork reports that tracking is lost (the adapters' static
+/// ORBextractor::SetRecovering(true), one line in the fork's Tracking, adapters/README.md "Recovery
+/// mode"): these fields replace nfeatures, max_tilt and view_features for those frames. Without
+/// that line, or with these fields equal to the normal ones, nothing changes.
+struct RecoveryOptions {
+  /// Keypoints from the image while recovering, as a multiple of ORB-SLAM's nfeatures (rounded to
+  /// the nearest integer). In [1, 16]. Default 2 (twice the normal budget): of the recovery modes
+  /// measured with the same number of keypoints, the one that relocalised best (adapters/README.md,
+  /// "Recovery mode", ../shared/slam/run.sh).
+  double image_features = 2.0;
+  /// Largest simulated tilt of the views while recovering (as AdapterOptions::max_tilt); 1 = no
+  /// views. In [1, 16].
+  double max_tilt = 1.0;
+  /// Keypoints the views add while recovering, as a fraction of nfeatures (as
+  /// AdapterOptions::view_features). In [0, 16].
+  double view_features = 1.0;
+
+  void check() const {
+    require_option(std::isfinite(image_features) && image_features >= 1.0 && image_features <= 16.0,
+                   "RecoveryOptions::image_features must be in [1, 16], got " + std::to_string(image_features));
+    require_option(std::isfinite(max_tilt) && max_tilt >= 1.0 && max_tilt <= 16.0,
+                   "RecoveryOptions::max_tilt must be in [1, 16], got " + std::to_string(max_tilt));
+    require_option(std::isfinite(view_features) && view_features >= 0.0 && view_features <= 16.0,
+                   "RecoveryOptions::view_features must be in [0, 16], got " + std::to_string(view_features));
+  }
 };
 
 /// Options of the drop-in extractors beyond ORB-SLAM's five constructor arguments.
@@ -77,8 +110,11 @@ struct AdapterOptions {
   /// The image's own keypoints never change, so that monocular initialisation keeps them. In
   /// [0, 16]; 1, as many from the views as from the image, is the library's default.
   double view_features = 1.0;
+  /// What the extractor extracts while tracking is lost (RecoveryOptions).
+  RecoveryOptions recovery;
 
   void check() const {
+    recovery.check();
     require_option(std::isfinite(max_tilt) && max_tilt >= 1.0 && max_tilt <= 16.0,
                    "AdapterOptions::max_tilt must be in [1, 16], got " + std::to_string(max_tilt));
     require_option(descriptor == AdapterDescriptor::kRbrief || descriptor == AdapterDescriptor::kBrisk,

@@ -9,7 +9,11 @@ What an install does to the fork (FORK below), and what --uninstall undoes byte 
   and replaced by adapters/<fork>/ORBextractor.{h,cc} of the affine_orb checkout;
 - FORK/CMakeLists.txt gets, just before the add_library() that compiles src/ORBextractor.cc, a block
   of lines between two marker comments: the checkout's include/ and adapters/common/ on the include
-  path, and src/ORBextractor.cc compiled as C++17.
+  path, and src/ORBextractor.cc compiled as C++17;
+- with --recovery, FORK/src/Tracking.cc gets one marked line at the top of each
+  Tracking::GrabImage{Stereo,RGBD,Monocular}: ORBextractor::SetRecovering(<tracking is lost>), so that
+  frames are extracted with the adapter's recovery options while tracking is lost (adapters/README.md,
+  "Recovery mode"). --no-recovery removes those lines; a plain install leaves them as they are.
 
 Why C++17 for that one file only, while ORB-SLAM sets -std=c++11 for everything: raising the whole
 fork changes how ORB-SLAM's own code compiles (GCC 12 in strict -std=c++17 rejects ORB-SLAM2's
@@ -44,15 +48,21 @@ SOURCE = "src/ORBextractor.cc"
 BEGIN_MARKER = "# >>> affine_orb adapter"
 END_MARKER = "# <<< affine_orb adapter"
 
+TRACKING = "src/Tracking.cc"
+RECOVERY_MARKER = "// affine_orb recovery mode (install.sh --recovery)"
+
+# "lost": the tracking states in which the previous frame left tracking lost (ORB-SLAM3 first
+# enters RECENTLY_LOST, where it still predicts the pose from IMU or the motion model, then LOST).
 FORKS = {
-    "orbslam2": {"name": "ORB-SLAM2", "namespace": "ORB_SLAM2"},
-    "orbslam3": {"name": "ORB-SLAM3", "namespace": "ORB_SLAM3"},
+    "orbslam2": {"name": "ORB-SLAM2", "namespace": "ORB_SLAM2", "lost": "mState == LOST"},
+    "orbslam3": {"name": "ORB-SLAM3", "namespace": "ORB_SLAM3", "lost": "mState == LOST || mState == RECENTLY_LOST"},
 }
 
 ADAPTER_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*["<]affine_orb_adapter/', re.MULTILINE)
 STOCK_IDENTIFIER = re.compile(rb"\bComputeKeyPointsOctTree\b")
 NAMESPACE = re.compile(rb"^[ \t]*namespace[ \t]+(ORB_SLAM[23])\b", re.MULTILINE)
 ADD_LIBRARY = re.compile(r"^\s*add_library\s*\(", re.IGNORECASE)
+GRAB_IMAGE = re.compile(r"^[^;/]*\bTracking::GrabImage(Stereo|RGBD|Monocular)\s*\(")
 
 
 class Refusal(Exception):
@@ -201,6 +211,71 @@ class CMakeLists:
         return [line + self.line_end for line in lines]
 
 
+class Tracking:
+    """The fork's src/Tracking.cc as lines, and the recovery lines this script manages in it."""
+
+    def __init__(self, tree, fork):
+        self.path = tree / TRACKING
+        self.fork = fork
+        self.original = self.path.read_bytes() if self.path.is_file() else None
+        text = (self.original or b"").decode("utf-8", "surrogateescape")
+        self.lines = text.split("\n")
+        self.line_end = "\r" if self.lines[0].endswith("\r") else ""
+
+    def check(self):
+        """Refuses fork lines the adapter no longer compiles with, or recovery lines added by hand."""
+        for i, line in enumerate(self.lines):
+            if "SetViewsActive" in line:
+                raise Refusal("%s, line %d, calls ORBextractor::SetViewsActive, which the adapter no longer has "
+                              "(the recovery mode replaces it): remove that line; --recovery adds the "
+                              "replacement" % (self.path, i + 1))
+            if "SetRecovering" in line and RECOVERY_MARKER not in line:
+                raise Refusal("%s, line %d, calls ORBextractor::SetRecovering outside the lines this script "
+                              "manages: remove it and run this again with --recovery" % (self.path, i + 1))
+
+    def marked(self):
+        return [i for i, line in enumerate(self.lines) if RECOVERY_MARKER in line]
+
+    def recovery_line(self):
+        return "    ORBextractor::SetRecovering(%s);  %s%s" % (FORKS[self.fork]["lost"], RECOVERY_MARKER, self.line_end)
+
+    def add_recovery(self):
+        """Puts the recovery line after the opening brace of each GrabImage function; returns how many
+        functions got it. Refuses a Tracking.cc without such a function."""
+        for i in reversed(self.marked()):
+            del self.lines[i]
+        openings = []
+        i = 0
+        while i < len(self.lines):
+            if GRAB_IMAGE.match(self.lines[i]):
+                j = next((k for k in range(i, len(self.lines)) if "{" in self.lines[k].split("//", 1)[0]), None)
+                if j is None:
+                    break
+                openings.append(j)
+                i = j
+            i += 1
+        if not openings:
+            raise Refusal("%s defines no Tracking::GrabImageStereo/RGBD/Monocular: add the line "
+                          "ORBextractor::SetRecovering(%s); at the top of your fork's image entry points "
+                          "by hand (adapters/README.md, \"Recovery mode\")" % (self.path, FORKS[self.fork]["lost"]))
+        for j in reversed(openings):
+            self.lines.insert(j + 1, self.recovery_line())
+        return len(openings)
+
+    def remove_recovery(self):
+        for i in reversed(self.marked()):
+            del self.lines[i]
+
+    def save_if_changed(self):
+        if self.original is None:
+            return False
+        data = "\n".join(self.lines).encode("utf-8", "surrogateescape")
+        if data == self.original:
+            return False
+        write_file(self.path, data)
+        return True
+
+
 def read_state(tree, fork):
     """Each replaced file: its relative path, its bytes and kind, and its backup's bytes (or None).
 
@@ -241,7 +316,8 @@ def report(tree, changes, done, nothing):
     print("%s: %s" % (tree, done if changes else nothing))
 
 
-def install(tree, fork, project):
+def install(tree, fork, project, recovery=None):
+    """recovery: True adds the recovery lines to src/Tracking.cc, False removes them, None leaves them."""
     check_fork(tree, fork)
     check_project(project, fork)
     cmake = CMakeLists(tree / "CMakeLists.txt")
@@ -249,6 +325,13 @@ def install(tree, fork, project):
     cmake.check_no_foreign_lines(block)
     anchor = cmake.library_line() if block is None else None
     state = read_state(tree, fork)
+    tracking = Tracking(tree, fork)
+    if recovery and tracking.original is None:
+        raise Refusal("%s has no %s for the recovery lines" % (tree, TRACKING))
+    tracking.check()
+    functions = tracking.add_recovery() if recovery else 0
+    if recovery is False:
+        tracking.remove_recovery()
 
     changes = []
     for entry in state:  # the fork's own files are saved before anything is replaced
@@ -269,6 +352,10 @@ def install(tree, fork, project):
         cmake.lines[block[0]:block[1] + 1] = lines
     if cmake.save_if_changed() and block is not None:
         changes.append("CMakeLists.txt: updated the affine_orb lines (AFFINE_ORB_DIR %s)" % project)
+    if tracking.save_if_changed():
+        changes.append("%s: %s" % (TRACKING, "ORBextractor::SetRecovering(%s) at the top of %d GrabImage "
+                                               "functions" % (FORKS[fork]["lost"], functions) if recovery
+                                   else "removed the recovery lines"))
 
     report(tree, changes,
            "installed affine_orb's adapter (affine_orb: %s); rebuild the fork, e.g. cd build && make; "
@@ -281,8 +368,12 @@ def uninstall(tree, fork):
     cmake = CMakeLists(tree / "CMakeLists.txt")
     block = cmake.block()
     state = read_state(tree, fork)
+    tracking = Tracking(tree, fork)
 
     changes = []
+    tracking.remove_recovery()
+    if tracking.save_if_changed():
+        changes.append("%s: removed the recovery lines" % TRACKING)
     if block is not None:
         del cmake.lines[block[0]:block[1] + 1]
         cmake.save_if_changed()
@@ -324,8 +415,15 @@ def main(argv):
                     % (name, name, fork, BACKUP_DIR, name),
         epilog="Then rebuild the fork as usual (its build/ re-runs CMake by itself).")
     parser.add_argument("fork_dir", metavar="FORK_DIR", type=Path, help="the %s checkout" % name)
-    parser.add_argument("--uninstall", action="store_true",
-                        help="restore the fork's own extractor files and remove the CMake lines")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--uninstall", action="store_true",
+                      help="restore the fork's own extractor files and remove the CMake lines (and the "
+                           "recovery lines)")
+    mode.add_argument("--recovery", action="store_true",
+                      help="also add ORBextractor::SetRecovering(%s); at the top of Tracking::GrabImageStereo, "
+                           "GrabImageRGBD and GrabImageMonocular in %s (marked, one line each): the adapter's "
+                           "recovery mode while tracking is lost" % (FORKS[fork]["lost"], TRACKING))
+    mode.add_argument("--no-recovery", action="store_true", help="remove those lines again")
     parser.add_argument("--affine-orb", metavar="DIR", type=Path, default=PROJECT,
                         help="the affine_orb checkout whose adapter files are copied and whose include/ and "
                              "adapters/common/ the fork compiles against (default: %(default)s, the "
@@ -336,7 +434,8 @@ def main(argv):
         if args.uninstall:
             uninstall(tree, fork)
         else:
-            install(tree, fork, args.affine_orb.resolve())
+            install(tree, fork, args.affine_orb.resolve(),
+                    recovery=True if args.recovery else (False if args.no_recovery else None))
     except Refusal as refusal:
         print("%s: error: %s" % (script_name(fork), refusal), file=sys.stderr)
         sys.exit(1)

@@ -1,6 +1,7 @@
 """Tests of adapters/orbslam2/install.sh and adapters/orbslam3/install.sh (common/install_adapter.py) on
 stand-in trees with the layout of each fork: install, reinstall, refresh, uninstall byte for byte,
-the refusals, and the installed CMake lines compiling the adapter as C++17 in a C++11 project.
+the refusals, the recovery lines in Tracking.cc, and the installed CMake lines compiling the adapter as
+C++17 in a C++11 project (and the recovery lines against the adapter's header).
 
 The stand-in files are written here: each holds only the identifiers the installer looks at (the
 namespace in include/System.h, include/Atlas.h for ORB-SLAM3, ComputeKeyPointsOctTree in the fork's
@@ -44,6 +45,7 @@ set(CMAKE_LIBRARY_OUTPUT_DIRECTORY ${{PROJECT_SOURCE_DIR}}/lib)
 
 add_library(${{PROJECT_NAME}} SHARED
 src/System.cc
+src/Tracking.cc
 src/ORBextractor.cc
 src/Frame.cc{headers}
 )
@@ -119,6 +121,38 @@ int Frame::Levels() const {{ return mpORBextractorLeft->GetLevels(); }}
 }}
 """
 
+# The three image entry points with ORB-SLAM's layout (signature line, brace on the next line; ORB-SLAM3
+# returns Sophus::SE3f and takes a file name), and the state names the recovery line reads.
+TRACKING_SOURCE = """\
+#include "ORBextractor.h"
+namespace {namespace} {{
+class Tracking {{
+ public:
+  enum eTrackingState {{ NOT_INITIALIZED = 1, OK = 2, RECENTLY_LOST = 3, LOST = 4 }};
+  int GrabImageStereo(int left, int right, const double& timestamp);
+  int GrabImageRGBD(int rgb, int depth, const double& timestamp);
+  int GrabImageMonocular(int image, const double& timestamp);
+  eTrackingState mState = NOT_INITIALIZED;
+}};
+
+int Tracking::GrabImageStereo(int left, int right, const double &timestamp)
+{{
+    return left + right + static_cast<int>(timestamp);
+}}
+
+int Tracking::GrabImageRGBD(int rgb, int depth,
+                            const double &timestamp) {{
+    return rgb + depth + static_cast<int>(timestamp);
+}}
+
+int Tracking::GrabImageMonocular(int image, const double &timestamp)
+{{
+    // a comment with a brace {{
+    return image + static_cast<int>(timestamp);
+}}
+}}
+"""
+
 
 def write(path, text, newline="\n"):
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -137,6 +171,7 @@ def make_standin(root, fork, newline="\n"):
     write(root / "include/Frame.h", FRAME_HEADER.format(namespace=namespace))
     write(root / "src/Frame.cc", FRAME_SOURCE.format(namespace=namespace))
     write(root / "src/System.cc", '#include "System.h"\nint main() { return 0; }\n')
+    write(root / "src/Tracking.cc", TRACKING_SOURCE.format(namespace=namespace), newline)
     write(root / "include/ORBextractor.h", STOCK_HEADER.format(namespace=namespace))
     write(root / "src/ORBextractor.cc", STOCK_SOURCE.format(namespace=namespace))
     (root / "src/ORBextractor.cc").chmod(0o755)  # a mode the round trip must keep
@@ -222,6 +257,62 @@ class InstallTest:
         self.assert_succeeds("--uninstall", self.tree, says="not installed; nothing changed")
         self.assertEqual(snapshot(self.tree), original)
 
+    def recovery_lines(self):
+        lines = (self.tree / "src/Tracking.cc").read_text().split("\n")
+        return [(i, line) for i, line in enumerate(lines) if "SetRecovering" in line]
+
+    def test_recovery_lines(self):
+        original = snapshot(self.tree)
+        lost = "mState == LOST" if self.fork == "orbslam2" else "mState == LOST || mState == RECENTLY_LOST"
+        self.assert_succeeds("--recovery", self.tree,
+                             says="ORBextractor::SetRecovering(%s) at the top of 3 GrabImage functions" % lost)
+        lines = (self.tree / "src/Tracking.cc").read_text().split("\n")
+        found = self.recovery_lines()
+        self.assertEqual(len(found), 3)
+        for i, line in found:
+            # the first statement of a GrabImage function: the line before opens its body
+            self.assertTrue(lines[i - 1].rstrip().endswith("{"), lines[i - 1])
+            self.assertIn("GrabImage", lines[i - 1] if "Tracking::" in lines[i - 1] else lines[i - 2])
+            self.assertEqual(line.split("//")[0].strip(), "ORBextractor::SetRecovering(%s);" % lost)
+        without = [line for i, line in enumerate(lines) if i not in {j for j, _ in found}]
+        self.assertEqual("\n".join(without).encode(), original["src/Tracking.cc"][0])
+
+        # Again with --recovery, or a plain refresh: nothing changes; --no-recovery removes the lines.
+        installed, times = snapshot(self.tree), mtimes(self.tree)
+        self.assert_succeeds("--recovery", self.tree, says="already installed and up to date")
+        self.assert_succeeds(self.tree, says="already installed and up to date")
+        self.assertEqual(snapshot(self.tree), installed)
+        self.assertEqual(mtimes(self.tree), times)
+        self.assert_succeeds("--no-recovery", self.tree, says="src/Tracking.cc: removed the recovery lines")
+        self.assertEqual(self.recovery_lines(), [])
+        self.assertEqual((self.tree / "src/Tracking.cc").read_bytes(), original["src/Tracking.cc"][0])
+
+        # Uninstalling removes them with the rest: the fork is back byte for byte.
+        self.assert_succeeds("--recovery", self.tree, says="installed")
+        self.assert_succeeds("--uninstall", self.tree, says="src/Tracking.cc: removed the recovery lines")
+        self.assertEqual(snapshot(self.tree), original)
+
+    def test_recovery_refusals(self):
+        tracking = self.tree / "src/Tracking.cc"
+        text = tracking.read_text()
+        # the 0.1.0 fork line, which the adapter no longer compiles with
+        tracking.write_text(text.replace("{\n    return left", "{\n    ORBextractor::SetViewsActive(mState != OK);\n"
+                                         "    return left", 1))
+        self.assert_refused(self.tree, "calls ORBextractor::SetViewsActive, which the adapter no longer has")
+        self.assert_refused(self.tree, "calls ORBextractor::SetViewsActive", "--recovery")
+        # a recovery line written by hand
+        tracking.write_text(text.replace("{\n    return left", "{\n    ORBextractor::SetRecovering(true);\n"
+                                         "    return left", 1))
+        self.assert_refused(self.tree, "calls ORBextractor::SetRecovering outside the lines this script manages",
+                            "--recovery")
+        # no entry point to put the line in
+        tracking.write_text("// no GrabImage here\n")
+        self.assert_refused(self.tree, "defines no Tracking::GrabImageStereo/RGBD/Monocular", "--recovery")
+        tracking.unlink()
+        self.assert_refused(self.tree, "has no src/Tracking.cc for the recovery lines", "--recovery")
+        result = self.run_script("--recovery", "--uninstall", self.tree)
+        self.assertEqual(result.returncode, 2, result.stdout + result.stderr)
+
     def test_crlf_cmakelists_round_trip(self):
         shutil.rmtree(str(self.tree))
         make_standin(self.tree, self.fork, newline="\r\n")
@@ -229,6 +320,10 @@ class InstallTest:
         self.assert_succeeds(self.tree, says="installed")
         text = (self.tree / "CMakeLists.txt").read_bytes()
         self.assertIn(b"# <<< affine_orb adapter\r\nadd_library(", text)
+        self.assertNotIn(b"\n", text.replace(b"\r\n", b""))
+        self.assert_succeeds("--recovery", self.tree, says="installed")
+        text = (self.tree / "src/Tracking.cc").read_bytes()
+        self.assertEqual(text.count(b"(install.sh --recovery)\r\n"), 3)
         self.assertNotIn(b"\n", text.replace(b"\r\n", b""))
         self.assert_succeeds("--uninstall", self.tree, says="uninstalled")
         self.assertEqual(snapshot(self.tree), original)
@@ -322,7 +417,7 @@ class InstallTest:
     @unittest.skipUnless(os.environ.get("AFFINE_ORB_CMAKE") and os.environ.get("AFFINE_ORB_CXX"),
                          "AFFINE_ORB_CMAKE and AFFINE_ORB_CXX name no CMake and compiler")
     def test_installed_fork_compiles_the_adapter_as_cxx17(self):
-        self.assert_succeeds(self.tree, says="installed")
+        self.assert_succeeds("--recovery", self.tree, says="installed")
         build = self.work / "build"
         configure = [os.environ["AFFINE_ORB_CMAKE"], "-S", str(self.tree), "-B", str(build),
                      "-DCMAKE_CXX_COMPILER=" + os.environ["AFFINE_ORB_CXX"], "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"]
@@ -333,7 +428,8 @@ class InstallTest:
         self.assertEqual(result.returncode, 0, result.stdout)
         commands = {Path(entry["file"]).name: entry
                     for entry in json.loads((build / "compile_commands.json").read_text())}
-        for name, standard in (("ORBextractor.cc", "-std=c++17"), ("Frame.cc", "-std=c++11")):
+        for name, standard in (("ORBextractor.cc", "-std=c++17"), ("Frame.cc", "-std=c++11"),
+                               ("Tracking.cc", "-std=c++11")):
             entry = commands[name]
             arguments = entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
             self.assertEqual([argument for argument in arguments if argument.startswith("-std=")][-1], standard,

@@ -2,6 +2,7 @@
 // rotation/scale invariance on real photos with ground-truth homographies (SPEC §7: correct < 3 px).
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -90,6 +91,44 @@ TEST_CASE("the mask is honoured and the budget is still met inside it") {
   CHECK(outside == 0);
   // An all-zero mask allows nothing.
   CHECK(extract<affine_orb::Rbrief>(image, 800, cv::Mat(image.size(), CV_8UC1, cv::Scalar(0))).empty());
+}
+
+TEST_CASE("the image's keypoints are spread over where candidates exist, not crowded at the border") {
+  // A texture with corners everywhere: candidates are uniform over the part of each level the
+  // descriptor's support allows (18 level pixels from the edges for rBRIEF). Spreading over that
+  // part keeps the keypoint density along the edges that of the interior; spreading over the whole
+  // image leaves the quadtree's edge cells mostly empty, and each still keeps one keypoint from its
+  // thin strip of candidates (2x the interior density and more next to the border).
+  cv::Mat noise(480, 640, CV_8UC1);
+  cv::RNG rng(7);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(noise, noise, cv::Size(5, 5), 1.2);
+  affine_orb::ExtractorOptions options;
+  options.views.max_tilt = 1.0;
+  options.features = 1000;
+  affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
+  const auto features = extractor.extract(noise);
+  REQUIRE(features.size() == 1000);
+  const double border = 18.0;  // rBRIEF's support at level 0
+  const double strip = 16.0;   // the band along the edges where the edge cells' keypoints land
+  int in_strip = 0;
+  int inside = 0;
+  for (const cv::KeyPoint& kp : features.keypoints) {
+    if (kp.octave != 0) continue;
+    const double x = kp.pt.x;
+    const double y = kp.pt.y;
+    const double d = std::min({x, y, 639.0 - x, 479.0 - y});
+    CHECK(d >= border - 0.5);
+    (d < border + strip ? in_strip : inside)++;
+  }
+  const double strip_area = 640.0 * 480.0 - (640.0 - 2 * (border + strip)) * (480.0 - 2 * (border + strip)) -
+                            (640.0 * 480.0 - (640.0 - 2 * border) * (480.0 - 2 * border));
+  const double inside_area = (640.0 - 2 * (border + strip)) * (480.0 - 2 * (border + strip));
+  const double ratio = (in_strip / strip_area) / (inside / inside_area);
+  CAPTURE(in_strip);
+  CAPTURE(inside);
+  CHECK(ratio < 1.3);
+  CHECK(ratio > 0.7);
 }
 
 TEST_CASE("a non-continuous ROI gives the same features as its copy") {

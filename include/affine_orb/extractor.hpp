@@ -496,7 +496,6 @@ class Extractor {
   /// direct(v), else its shortlist), entered in the repeat grids for the views after it.
   void choose(int v, cv::Size size, ThreadWork& work) {
     const int levels = options_.pyramid.levels;
-    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));
     if (direct(v)) {
       available_.clear();
       for (const LevelCandidates& c : work.levels) available_.push_back(static_cast<int>(c.responses.size()));
@@ -508,6 +507,7 @@ class Extractor {
       const int target = direct(v) ? budgets_.take(g)
                                    : detail::shortlist_size(static_cast<int>(c.responses.size()), budgets_.group(g),
                                                             options_.shortlist);
+      const cv::Rect2f region = spread_region(v, l, size);
       spread(c.original_points, c.responses, region, target, work.spread);
       c.chosen = work.spread.kept;
       if (merging()) enter_repeat_references(c, l, direct(v) ? target : budgets_.group(g), region, work.spread);
@@ -573,12 +573,12 @@ class Extractor {
       available_.push_back(static_cast<int>(level_of(g / levels, g % levels).keypoints.size()));
     }
     budgets_.allocate(first * levels, last * levels, available_);
-    const cv::Rect2f region(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));
     for_each(last - first, [&](int i, int w) {
       ThreadWork& work = thread_work_[static_cast<std::size_t>(w)];
       for (int l = 0; l < levels; ++l) {
         LevelWork& level = level_of(i + first, l);
-        spread(level.original_points, level.responses, region, budgets_.take((i + first) * levels + l), work.spread);
+        spread(level.original_points, level.responses, spread_region(i + first, l, size),
+               budgets_.take((i + first) * levels + l), work.spread);
         level.kept = work.spread.kept;
       }
     });
@@ -629,6 +629,28 @@ class Extractor {
   /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
   /// only view), rather than a shortlist chosen from once every view is done.
   bool direct(int v) const { return v == 0 && (additive() || view_work_.size() == 1); }
+
+  /// The box, in original pixels, that the spreading of view v, level l divides: for the image (an
+  /// identity view), the pixels of the level that can hold a candidate (the valid rectangle, at
+  /// support_border() level pixels from the level's edges, from pixel edge to pixel edge), as
+  /// ORB-SLAM2's octree divides the FAST region of the level; for a tilted view, whose valid region
+  /// is not a rectangle in the original image, the whole image. Dividing the whole image for every
+  /// level left the cells along its edges mostly empty (the support border grows to 18·s^l original
+  /// pixels), so each of those cells still kept one keypoint from a thin strip of candidates: more
+  /// keypoints within 30 px of the border, where they rarely match in the next frame.
+  cv::Rect2f spread_region(int v, int l, cv::Size size) const {
+    const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+    const cv::Rect2f image(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));
+    if (!view.view.is_identity()) return image;
+    const cv::Rect valid = view.levels[static_cast<std::size_t>(l)].valid.bounds();
+    if (valid.empty()) return image;
+    const cv::Size level_size = pyramid_level_size(size, options_.pyramid, l);
+    // Pixel edges x − 0.5 and x + 0.5 of the first and last valid pixels, in original pixels.
+    const cv::Point2f tl = Pyramid::to_level0(cv::Point2f(valid.x - 0.5f, valid.y - 0.5f), size, level_size);
+    const cv::Point2f br = Pyramid::to_level0(
+        cv::Point2f(valid.x + valid.width - 0.5f, valid.y + valid.height - 0.5f), size, level_size);
+    return cv::Rect2f(tl, br);
+  }
 
   /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
   int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }

@@ -68,7 +68,7 @@ class ORBextractor {
   /// The defaults SetAffineOptions() last set (the compiled-in AffineOrbAdapterOptions{} before).
   static AffineOrbAdapterOptions GetAffineOptions();
   /// Process-wide recovery switch, read at every call of operator(): while true, extractors
-  /// extract with their options' `recovery` fields (by default twice nfeatures from the image)
+  /// extract with their options' `recovery` fields (by default three times nfeatures from the image)
   /// instead of nfeatures, max_tilt and view_features; false (the default) restores those.
   /// Extractors whose recovery fields plan the same extraction ignore it. A fork that wants the
   /// recovery mode while tracking is lost adds one line at the top of

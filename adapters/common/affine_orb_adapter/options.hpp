@@ -67,10 +67,12 @@ enum class AdapterDuplicates {
 /// that line, or with these fields equal to the normal ones, nothing changes.
 struct RecoveryOptions {
   /// Keypoints from the image while recovering, as a multiple of ORB-SLAM's nfeatures (rounded to
-  /// the nearest integer). In [1, 16]. Default 2 (twice the normal budget): of the recovery modes
-  /// measured with the same number of keypoints, the one that relocalised best (adapters/README.md,
-  /// "Recovery mode", ../shared/slam/run.sh).
-  double image_features = 2.0;
+  /// the nearest integer). In [1, 16]. Default 3: of the recovery modes measured inside ORB-SLAM2
+  /// (2x and 3x plain, the views, 2x plain plus the views), the one that relocalised steeper than
+  /// views off by more than the run-to-run range on both development seeds, at 1.07–1.15x its mean
+  /// tracking time; 2000 + 1000 from the views, the same total, was better on one seed and worse
+  /// on the other at 1.4–1.6x (adapters/README.md, "Recovery mode"; ../shared/slam/run.sh).
+  double image_features = 3.0;
   /// Largest simulated tilt of the views while recovering (as AdapterOptions::max_tilt); 1 = no
   /// views. In [1, 16].
   double max_tilt = 1.0;

@@ -1,0 +1,191 @@
+#!/usr/bin/python3
+"""slam_tables.py -- the ORB-SLAM tables of adapters/README.md, from runs made with
+../shared/slam/run.sh (rendered sequences) and bench/slam/kitti_runs.sh (KITTI 00).
+
+  slam_tables.py relocalisation RUNS SEQS CONF...   revisit_sweep* sequences, RGB-D
+  slam_tables.py monocular RUNS_CSV CONF...          mono rows of ../shared/slam/analyze.py's runs.csv
+  slam_tables.py rgbd RUNS_CSV CONF...               RGB-D rows of the same
+  slam_tables.py kitti RUNS GROUNDTRUTH CONF...      KITTI 00 monocular runs
+
+Every cell is the median (min–max) over a configuration's runs. Needs ../shared/slam/ate.py (found
+beside this project, or through SLAM_HARNESS) and numpy; use /usr/bin/python3 on Debian.
+
+relocalisation: per run, the first frame after the cut (part "B" of the sequence's obliquity.txt)
+  whose pose, after an SE(3) alignment of the part-A poses to the ground truth, lies within
+  kCorrectM of it; its axis obliquity (degrees from the wall's normal: steeper = the relocaliser
+  coped with a larger viewpoint change), the frames with a pose, the correct part-B poses, and the
+  median and mean tracking times the example prints (ms).
+monocular: per sequence, the runs whose keyframe map is correct (Sim(3) ATE <= kCorrectMapM over at
+  least kCoverage of the frames), then ATE and coverage of all runs.
+rgbd: per sequence, frames with a pose, ATE (SE(3), every pose), median and mean tracking time, and
+  the median of the mean tracking time against the first configuration's.
+kitti: the runs whose map starts (>= 3 keyframes), when the first keyframe was taken (s from the
+  first frame), keyframes, Sim(3) ATE of the keyframes (m), mean tracking time (ms).
+"""
+import csv
+import glob
+import os
+import re
+import statistics
+import sys
+
+import numpy as np
+
+HARNESS = os.environ.get("SLAM_HARNESS",
+                         os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "shared", "slam"))
+sys.path.insert(0, HARNESS)
+import ate  # noqa: E402  (../shared/slam/ate.py)
+
+kCorrectM = 0.10      # a relocalised pose counts when within 10 cm of the ground truth
+kCorrectMapM = 0.10   # a monocular map counts as correct with Sim(3) ATE <= 10 cm ...
+kCoverage = 0.50      # ... over at least half of the sequence's frames
+
+
+def cell(values, fmt="%.1f"):
+    values = [v for v in values if v is not None]
+    if not values:
+        return "–"
+    return (fmt + " (" + fmt + "–" + fmt + ")") % (statistics.median(values), min(values), max(values))
+
+
+def tracking_times(log):
+    """(median, mean) tracking time in ms that rgbd_tum/mono_tum/mono_kitti print, or None."""
+    med = re.findall(r"median tracking time: ([0-9.e+-]+)", log)
+    mean = re.findall(r"mean tracking time: ([0-9.e+-]+)", log)
+    return (float(med[-1]) * 1e3 if med else None, float(mean[-1]) * 1e3 if mean else None)
+
+
+def read_log(directory):
+    for name in ("log.txt", "out.log"):
+        path = os.path.join(directory, name)
+        if os.path.exists(path):
+            return open(path, errors="replace").read()
+    return ""
+
+
+def relocalisation(runs, seqs, confs):
+    print("| sequence | configuration | relocalised | obliquity at the first pose after the cut, ° | frames with a pose "
+          "| correct poses after the cut | tracking ms, median | tracking ms, mean |")
+    print("|---|---|---|---|---|---|---|---|")
+    for seq in sorted(os.listdir(seqs)):
+        side = os.path.join(seqs, seq, "obliquity.txt")
+        if not seq.startswith("revisit_sweep") or not os.path.exists(side):
+            continue
+        rows = [l.split() for l in open(side) if l.strip() and not l.startswith("#")]
+        stamps = np.array([float(r[1]) for r in rows])
+        part = [r[2] for r in rows]
+        obliquity = [float(r[4]) for r in rows]
+        t_gt, p_gt = ate.read_tum(os.path.join(seqs, seq, "groundtruth.txt"))
+        for conf in confs:
+            results = []
+            for d in sorted(glob.glob(os.path.join(runs, conf, seq, "rgbd_*"))):
+                trajectory = os.path.join(d, "CameraTrajectory.txt")
+                median_ms, mean_ms = tracking_times(read_log(d))
+                if not os.path.exists(trajectory):
+                    results.append((None, 0, 0, median_ms, mean_ms))
+                    continue
+                t_e, p_e = ate.read_tum(trajectory)
+                ie, ig = ate.associate(t_e, t_gt)
+                frame = [int(np.argmin(np.abs(stamps - t_e[i]))) for i in ie]
+                in_a = [k for k, f in enumerate(frame) if part[f] == "A"]
+                if len(in_a) < 3:
+                    results.append((None, len(t_e), 0, median_ms, mean_ms))
+                    continue
+                s, R, t = ate.umeyama(p_e[ie[in_a], :3], p_gt[ig[in_a], :3])
+                first, correct = None, 0
+                for k, f in enumerate(frame):
+                    if part[f] != "B":
+                        continue
+                    error = np.linalg.norm(s * R @ p_e[ie[k], :3] + t - p_gt[ig[k], :3])
+                    if error < kCorrectM:
+                        correct += 1
+                        if first is None:
+                            first = obliquity[f]
+                results.append((first, len(t_e), correct, median_ms, mean_ms))
+            if not results:
+                continue
+            print("| %s | %s | %d/%d | %s | %s | %s | %s | %s |" % (
+                seq, conf, sum(r[0] is not None for r in results), len(results), cell([r[0] for r in results]),
+                cell([r[1] for r in results], "%.0f"), cell([r[2] for r in results], "%.0f"),
+                cell([r[3] for r in results]), cell([r[4] for r in results])))
+
+
+def monocular(runs_csv, confs):
+    rows = [r for r in csv.DictReader(open(runs_csv)) if r["mode"] == "mono"]
+    number = lambda v: float(v) if v not in ("", "None", None) else None
+    print("| sequence | configuration | correct maps (ATE <= %.2f m over >= %d %% of the frames) | map created at frame "
+          "| coverage %% | ATE m | tracking ms, median | tracking ms, mean |" % (kCorrectMapM, kCoverage * 100))
+    print("|---|---|---|---|---|---|---|---|")
+    for seq in sorted({r["seq"] for r in rows}):
+        for conf in confs:
+            rs = [r for r in rows if r["seq"] == seq and r["conf"] == conf]
+            if not rs:
+                continue
+            ates = [number(r["ate_rmse"]) for r in rs]  # mono: the keyframes, Sim(3)
+            spans = [number(r["kf_span_frac"]) for r in rs]
+            correct = sum(1 for a, s in zip(ates, spans) if a is not None and s is not None and a <= kCorrectMapM
+                          and s >= kCoverage)
+            print("| %s | %s | %d/%d | %s | %s | %s | %s | %s |" % (
+                seq, conf, correct, len(rs), cell([number(r["kf_first_idx"]) for r in rs], "%.0f"),
+                cell([s * 100 if s is not None else None for s in spans], "%.0f"), cell(ates, "%.3f"),
+                cell([number(r["median_track_s"]) * 1e3 if number(r["median_track_s"]) else None for r in rs]),
+                cell([number(r["mean_track_s"]) * 1e3 if number(r["mean_track_s"]) else None for r in rs])))
+
+
+def rgbd(runs_csv, confs):
+    rows = [r for r in csv.DictReader(open(runs_csv)) if r["mode"] == "rgbd"]
+    number = lambda v: float(v) if v not in ("", "None", None) else None
+    print("| sequence | configuration | frames with a pose | ATE m | tracking ms, median | tracking ms, mean "
+          "| mean tracking time / %s's |" % confs[0])
+    print("|---|---|---|---|---|---|---|")
+    for seq in sorted({r["seq"] for r in rows}):
+        base = [number(r["mean_track_s"]) for r in rows if r["seq"] == seq and r["conf"] == confs[0]]
+        base = statistics.median([b for b in base if b]) if any(base) else None
+        for conf in confs:
+            rs = [r for r in rows if r["seq"] == seq and r["conf"] == conf]
+            if not rs:
+                continue
+            means = [number(r["mean_track_s"]) for r in rs]
+            ratio = "%.2f" % (statistics.median([m for m in means if m]) / base) if base and any(means) else "–"
+            print("| %s | %s | %s | %s | %s | %s | %s |" % (
+                seq, conf, cell([number(r["poses"]) for r in rs], "%.0f"), cell([number(r["ate_rmse"]) for r in rs], "%.3f"),
+                cell([number(r["median_track_s"]) * 1e3 if number(r["median_track_s"]) else None for r in rs]),
+                cell([m * 1e3 if m else None for m in means]), ratio))
+
+
+def kitti(runs, groundtruth, confs):
+    t_gt, p_gt = ate.read_tum(groundtruth)
+    print("| configuration | maps | first keyframe at s | keyframes | Sim(3) ATE m | tracking ms, mean |")
+    print("|---|---|---|---|---|---|")
+    for conf in confs:
+        results = []
+        for d in sorted(glob.glob(os.path.join(runs, conf, "kitti00", "mono_*"))):
+            _, mean_ms = tracking_times(read_log(d))
+            path = os.path.join(d, "KeyFrameTrajectory.txt")
+            t, p = ate.read_tum(path) if os.path.exists(path) else (np.zeros(0), None)
+            if len(t) < 3:
+                results.append((None, None, None, mean_ms))
+                continue
+            res, _ = ate.evaluate(t_gt, p_gt, t, p, sim3=True)
+            results.append((t[0] - t_gt[0], len(t), res["ate"]["rmse"] if "ate" in res else None, mean_ms))
+        maps = [r for r in results if r[0] is not None]
+        print("| %s | %d/%d | %s | %s | %s | %s |" % (
+            conf, len(maps), len(results), cell([r[0] for r in maps]), cell([r[1] for r in maps], "%.0f"),
+            cell([r[2] for r in maps], "%.3f"), cell([r[3] for r in results])))
+
+
+def main(argv):
+    if len(argv) >= 4 and argv[0] == "relocalisation":
+        relocalisation(argv[1], argv[2], argv[3:])
+    elif len(argv) >= 3 and argv[0] == "monocular":
+        monocular(argv[1], argv[2:])
+    elif len(argv) >= 3 and argv[0] == "rgbd":
+        rgbd(argv[1], argv[2:])
+    elif len(argv) >= 4 and argv[0] == "kitti":
+        kitti(argv[1], argv[2], argv[3:])
+    else:
+        sys.exit(__doc__)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

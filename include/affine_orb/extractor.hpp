@@ -634,10 +634,11 @@ class Extractor {
   /// identity view), the pixels of the level that can hold a candidate (the valid rectangle, at
   /// support_border() level pixels from the level's edges, from pixel edge to pixel edge), as
   /// ORB-SLAM2's octree divides the FAST region of the level; for a tilted view, whose valid region
-  /// is not a rectangle in the original image, the whole image. Dividing the whole image for every
-  /// level left the cells along its edges mostly empty (the support border grows to 18·s^l original
-  /// pixels), so each of those cells still kept one keypoint from a thin strip of candidates: more
-  /// keypoints within 30 px of the border, where they rarely match in the next frame.
+  /// is not a rectangle in the original image, the whole image. The image's levels divide their
+  /// candidate rectangle because the support border grows to 18·s^l original pixels: quadtree cells
+  /// over the whole image would lie mostly outside it along the edges, and each would still keep one
+  /// keypoint from a thin strip of candidates, crowding the border, where keypoints rarely match in
+  /// the next frame (test_extractor checks the density along the edges).
   cv::Rect2f spread_region(int v, int l, cv::Size size) const {
     const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
     const cv::Rect2f image(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));

@@ -139,13 +139,14 @@ def write_file(path, data, mode_from=None):
     os.replace(str(temporary), str(path))
 
 
-class CMakeLists:
-    """The fork's CMakeLists.txt as lines, the newline style and any bytes kept as they are."""
+class LinesFile:
+    """A fork's text file as lines, the newline style and any bytes kept as they are. `original` is
+    None for a file that does not exist; nothing is written to it then."""
 
     def __init__(self, path):
         self.path = path
-        self.original = path.read_bytes()
-        text = self.original.decode("utf-8", "surrogateescape")
+        self.original = path.read_bytes() if path.is_file() else None
+        text = (self.original or b"").decode("utf-8", "surrogateescape")
         self.lines = text.split("\n")  # the last element is what follows the final line break
         self.line_end = "\r" if self.lines[0].endswith("\r") else ""
 
@@ -154,10 +155,14 @@ class CMakeLists:
 
     def save_if_changed(self):
         data = self.text()
-        if data == self.original:
+        if self.original is None or data == self.original:
             return False
         write_file(self.path, data)
         return True
+
+
+class CMakeLists(LinesFile):
+    """The fork's CMakeLists.txt and the marked block this script manages in it."""
 
     def block(self):
         """(first, last) line index of the marked block, or None; refuses a damaged or repeated one."""
@@ -211,16 +216,12 @@ class CMakeLists:
         return [line + self.line_end for line in lines]
 
 
-class Tracking:
-    """The fork's src/Tracking.cc as lines, and the recovery lines this script manages in it."""
+class Tracking(LinesFile):
+    """The fork's src/Tracking.cc and the recovery lines this script manages in it."""
 
     def __init__(self, tree, fork):
-        self.path = tree / TRACKING
+        super().__init__(tree / TRACKING)
         self.fork = fork
-        self.original = self.path.read_bytes() if self.path.is_file() else None
-        text = (self.original or b"").decode("utf-8", "surrogateescape")
-        self.lines = text.split("\n")
-        self.line_end = "\r" if self.lines[0].endswith("\r") else ""
 
     def check(self):
         """Refuses fork lines the adapter no longer compiles with, or recovery lines added by hand."""
@@ -265,15 +266,6 @@ class Tracking:
     def remove_recovery(self):
         for i in reversed(self.marked()):
             del self.lines[i]
-
-    def save_if_changed(self):
-        if self.original is None:
-            return False
-        data = "\n".join(self.lines).encode("utf-8", "surrogateescape")
-        if data == self.original:
-            return False
-        write_file(self.path, data)
-        return True
 
 
 def read_state(tree, fork):

@@ -14,12 +14,12 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/affine_matching.hpp"
-#include "affine_orb/affine_views.hpp"
-#include "affine_orb/brisk.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/fast.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/views/affine_views.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/detection/fast.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "test_data.hpp"
 
 namespace {

@@ -13,15 +13,15 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/affine_views.hpp"
-#include "affine_orb/detail/gaussian_q8.hpp"
-#include "affine_orb/detail/resize.hpp"
-#include "affine_orb/detail/view_regions.hpp"
-#include "affine_orb/detector.hpp"
-#include "affine_orb/distribution.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/orientation.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/views/affine_views.hpp"
+#include "affine_orb/descriptors/detail/gaussian_q8.hpp"
+#include "affine_orb/detection/detail/resize.hpp"
+#include "affine_orb/extraction/detail/view_regions.hpp"
+#include "affine_orb/detection/detector.hpp"
+#include "affine_orb/detection/distribution.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/detection/orientation.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "test_data.hpp"
 
 namespace {

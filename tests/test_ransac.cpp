@@ -20,10 +20,10 @@
 #include <Eigen/SVD>
 #include <opencv2/core.hpp>
 
-#include "affine_orb/detail/ransac_sampler.hpp"
-#include "affine_orb/fundamental.hpp"
-#include "affine_orb/homography.hpp"
-#include "affine_orb/ransac.hpp"
+#include "affine_orb/geometry/detail/ransac_sampler.hpp"
+#include "affine_orb/geometry/fundamental.hpp"
+#include "affine_orb/geometry/homography.hpp"
+#include "affine_orb/geometry/ransac.hpp"
 
 namespace {
 

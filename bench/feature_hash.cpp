@@ -128,12 +128,12 @@ void hash_stages(const std::vector<Image>& images) {
   Extractor<Rbrief> extractor(two_view.extractor);
   for (const Image& image : images) {
     Hash hash;
-    auto all = extractor.extract_image(image.pixels);
+    auto [all, cursor] = extractor.extract_image(image.pixels);
     add_features(hash, all);
     std::size_t count = all.size();
     for (const affine_orb::ViewStage& stage : two_view.stages) {
-      const auto more = extractor.extend(stage.max_tilt,
-                                         static_cast<int>(std::lround(stage.view_features * two_view.extractor.features)));
+      const auto more = extractor.extend(
+          cursor, stage.max_tilt, static_cast<int>(std::lround(stage.view_features * two_view.extractor.features)));
       add_features(hash, more);
       count += more.size();
     }

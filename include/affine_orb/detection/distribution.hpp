@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/detection/detail/distribution.hpp"
 
 namespace affine_orb {
 
@@ -98,18 +99,6 @@ inline std::vector<int> select_strongest(const std::vector<float>& responses, in
   select_strongest(responses, target, kept);
   return kept;
 }
-
-namespace detail {
-
-/// A quadtree cell: its box and the range [begin, end) of its members in QuadtreeWorkspace::index.
-struct QuadCell {
-  cv::Rect2f box;
-  int begin;
-  int end;
-  int size() const { return end - begin; }
-};
-
-}  // namespace detail
 
 /// Buffers of distribute_quadtree(), reused across calls so that the extractor does not allocate
 /// once they have grown to the largest level seen.

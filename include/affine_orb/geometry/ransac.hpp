@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/geometry/detail/ransac.hpp"
 #include "affine_orb/geometry/detail/ransac_sampler.hpp"
 
 namespace affine_orb {
@@ -74,19 +75,18 @@ struct RansacOptions {
   /// max_iterations, 0 < confidence < 1, 0 <= termination_inlier_ratio <= 1 and
   /// refinement_passes >= 0.
   void check() const {
-    detail::require(max_iterations >= 1, "RansacOptions: max_iterations must be >= 1, got " +
-                                             std::to_string(max_iterations));
-    detail::require(min_iterations >= 0 && min_iterations <= max_iterations,
-                    "RansacOptions: min_iterations must be in [0, max_iterations], got " +
-                        std::to_string(min_iterations));
+    detail::require(max_iterations >= 1,
+                    "RansacOptions: max_iterations must be >= 1, got " + std::to_string(max_iterations));
+    detail::require(
+        min_iterations >= 0 && min_iterations <= max_iterations,
+        "RansacOptions: min_iterations must be in [0, max_iterations], got " + std::to_string(min_iterations));
     detail::require(std::isfinite(confidence) && confidence > 0.0 && confidence < 1.0,
                     "RansacOptions: confidence must be in (0, 1), got " + std::to_string(confidence));
-    detail::require(std::isfinite(termination_inlier_ratio) && termination_inlier_ratio >= 0.0 &&
-                        termination_inlier_ratio <= 1.0,
-                    "RansacOptions: termination_inlier_ratio must be in [0, 1], got " +
-                        std::to_string(termination_inlier_ratio));
-    detail::require(refinement_passes >= 0, "RansacOptions: refinement_passes must be >= 0, got " +
-                                                std::to_string(refinement_passes));
+    detail::require(
+        std::isfinite(termination_inlier_ratio) && termination_inlier_ratio >= 0.0 && termination_inlier_ratio <= 1.0,
+        "RansacOptions: termination_inlier_ratio must be in [0, 1], got " + std::to_string(termination_inlier_ratio));
+    detail::require(refinement_passes >= 0,
+                    "RansacOptions: refinement_passes must be >= 0, got " + std::to_string(refinement_passes));
   }
 };
 
@@ -107,9 +107,9 @@ struct TruncatedChi2Score {
   void check() const {
     detail::require(detail::positive_finite(sigma),
                     "TruncatedChi2Score: sigma must be positive and finite, got " + std::to_string(sigma));
-    detail::require(detail::positive_finite(chi2_threshold),
-                    "TruncatedChi2Score: chi2_threshold must be positive and finite, got " +
-                        std::to_string(chi2_threshold));
+    detail::require(
+        detail::positive_finite(chi2_threshold),
+        "TruncatedChi2Score: chi2_threshold must be positive and finite, got " + std::to_string(chi2_threshold));
     detail::require(std::isfinite(score_constant) && score_constant >= chi2_threshold,
                     "TruncatedChi2Score: score_constant must be finite and >= chi2_threshold, got " +
                         std::to_string(score_constant));
@@ -146,8 +146,6 @@ struct PointScore {
   double value = 0.0;   ///< added to the model's score; larger is better
   bool inlier = false;  ///< whether the correspondence supports the model
 };
-
-namespace detail {
 
 /// A checked TruncatedChi2Score with 1/σ² computed once, as the estimators apply it to every
 /// squared residual of every model.
@@ -199,8 +197,6 @@ class InverseScaleSquares {
   std::vector<double> image1_, image2_;
 };
 
-}  // namespace detail
-
 /// Up to `Capacity` models from one minimal sample, stored inline (no allocation).
 template <class Model, int Capacity>
 struct ModelSet {
@@ -229,55 +225,6 @@ struct RansacResult {
   int iterations = 0;
 };
 
-namespace detail {
-
-template <class E, class = void>
-struct HasRefine : std::false_type {};
-template <class E>
-struct HasRefine<E, std::void_t<decltype(std::declval<const E&>().refine(
-                        std::declval<const typename E::Model&>(), std::declval<const std::vector<std::uint8_t>&>()))>>
-    : std::true_type {};
-
-/// Correspondences scored between two checks of the early exit in score_model(): short enough to
-/// stop soon after a model falls behind, long enough for the compiler to keep the scoring loop
-/// free of the check.
-inline constexpr std::size_t kScoreBlock = 32;
-
-/// Scores `model` on every correspondence into `mask`; stops (returning nullopt) as soon as the
-/// score cannot exceed `to_beat` any more. Returns {score, inlier count} otherwise.
-template <class Estimator>
-std::optional<std::pair<double, int>> score_model(const Estimator& estimator, const typename Estimator::Model& model,
-                                                  double to_beat, std::vector<std::uint8_t>& mask) {
-  const std::size_t n = estimator.size();
-  const double best_term = estimator.max_point_score();
-  double total = 0.0;
-  int count = 0;
-  for (std::size_t begin = 0; begin < n; begin += kScoreBlock) {
-    const std::size_t end = std::min(n, begin + kScoreBlock);
-    for (std::size_t i = begin; i < end; ++i) {
-      const PointScore s = estimator.score(model, i);
-      total += s.value;
-      mask[i] = s.inlier ? 1 : 0;
-      count += s.inlier ? 1 : 0;
-    }
-    if (total + best_term * static_cast<double>(n - end) <= to_beat) return std::nullopt;
-  }
-  return std::make_pair(total, count);
-}
-
-/// Samples needed so that one is outlier-free with probability `confidence`, for inlier ratio
-/// `inlier_ratio` and sample size `sample_size` (Hartley & Zisserman eq. 4.18), capped at `cap`.
-inline int adaptive_iterations(double inlier_ratio, int sample_size, double confidence, int cap) {
-  if (inlier_ratio >= 1.0) return 0;
-  const double all_inliers = std::pow(inlier_ratio, sample_size);
-  if (!(all_inliers > 0.0)) return cap;
-  const double needed = std::log1p(-confidence) / std::log1p(-all_inliers);
-  if (!(needed < static_cast<double>(cap))) return cap;
-  return static_cast<int>(std::ceil(needed));
-}
-
-}  // namespace detail
-
 /// RANSAC with the estimator's score (MSAC-style when the score is the truncated χ² one):
 /// draws `draw_size` distinct correspondence indices per iteration from a std::mt19937_64 seeded
 /// with options.seed, hands the first Estimator::kSampleSize of them to estimator.generate(),
@@ -299,14 +246,12 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
   static_assert(kSampleSize >= 1, "an estimator needs a positive sample size");
   options.check();
   detail::require(draw_size >= kSampleSize, "ransac: draw_size must be >= the estimator's sample size (" +
-                                                std::to_string(kSampleSize) + "), got " +
-                                                std::to_string(draw_size));
+                                                std::to_string(kSampleSize) + "), got " + std::to_string(draw_size));
 
   const std::size_t n = estimator.size();
   RansacResult<Model> result;
   result.inliers.assign(n, 0);
-  if (n < static_cast<std::size_t>(draw_size) ||
-      n > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+  if (n < static_cast<std::size_t>(draw_size) || n > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
     return result;
   }
 

@@ -37,6 +37,7 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/geometry/detail/relative_pose.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 
 namespace affine_orb {
@@ -237,46 +238,6 @@ inline std::vector<PoseHypothesis> homography_hypotheses(const Eigen::Matrix3d& 
   return out;
 }
 
-namespace detail {
-
-/// Linear (DLT) triangulation of the normalised rays y1, y2 with cameras [I | 0] and [R | t]
-/// (Hartley & Zisserman Sec. 12.2): the null vector of the 4x4 system x × (P X) = 0. nullopt for a
-/// point at infinity or a non-finite result.
-inline std::optional<Eigen::Vector3d> triangulate(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2,
-                                                  const Eigen::Matrix3d& r, const Eigen::Vector3d& t) {
-  Eigen::Matrix<double, 3, 4> p2;
-  p2 << r, t;
-  Eigen::Matrix4d a;
-  a.row(0) << -1.0, 0.0, y1.x(), 0.0;
-  a.row(1) << 0.0, -1.0, y1.y(), 0.0;
-  a.row(2) = y2.x() * p2.row(2) - p2.row(0);
-  a.row(3) = y2.y() * p2.row(2) - p2.row(1);
-  for (int i = 0; i < 4; ++i) a.row(i).normalize();
-  const Eigen::JacobiSVD<Eigen::Matrix4d> svd(a, Eigen::ComputeFullV);
-  const Eigen::Vector4d x = svd.matrixV().col(3);
-  if (!(std::abs(x(3)) > 1e-12 * x.head<3>().norm())) return std::nullopt;
-  const Eigen::Vector3d point = x.head<3>() / x(3);
-  if (!point.allFinite()) return std::nullopt;
-  return point;
-}
-
-/// Throws unless the inputs of a relative-pose function are consistent.
-inline void require_pose_inputs(const Eigen::Matrix3d& model, const PinholeCamera& camera,
-                                const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
-                                const std::vector<std::uint8_t>& inliers, const char* who) {
-  camera.check();
-  require(model.allFinite(), std::string(who) + ": the matrix has a non-finite entry");
-  require(points1.size() == points2.size(), std::string(who) + ": points1 has " + std::to_string(points1.size()) +
-                                                " points but points2 has " + std::to_string(points2.size()));
-  require(inliers.empty() || inliers.size() == points1.size(),
-          std::string(who) + ": the inlier mask must be empty or have one entry per correspondence");
-  for (std::size_t i = 0; i < points1.size(); ++i) {
-    require(std::isfinite(points1[i].x) && std::isfinite(points1[i].y) && std::isfinite(points2[i].x) &&
-                std::isfinite(points2[i].y),
-            std::string(who) + ": non-finite point coordinate");
-  }
-}
-
 /// Number of masked correspondences that `hypothesis` explains: triangulated in front of both
 /// cameras and reprojected within the bound in both images; for a hypothesis with zero translation
 /// (pure rotation), those whose transfer x2 ~ K R K⁻¹ x1 is within the bound.
@@ -300,7 +261,7 @@ inline int count_good_points(const PoseHypothesis& hypothesis, const PinholeCame
       if (x2.z() > 0.0 && error2(camera.project(x2), points2[i]) < bound) ++good;
       continue;
     }
-    const std::optional<Eigen::Vector3d> x1 = triangulate(y1, y2, r, t);
+    const std::optional<Eigen::Vector3d> x1 = detail::triangulate(y1, y2, r, t);
     if (!x1) continue;
     const Eigen::Vector3d x2 = r * *x1 + t;
     if (!(x1->z() > 0.0 && x2.z() > 0.0)) continue;
@@ -309,7 +270,8 @@ inline int count_good_points(const PoseHypothesis& hypothesis, const PinholeCame
   return good;
 }
 
-/// Chooses among `hypotheses` by count_good_points() (ties: the first), see RelativePose.
+/// The hypothesis among `hypotheses` that count_good_points() rates highest (ties: the first), with
+/// the ambiguity tests of RelativePoseOptions; see RelativePose.
 inline RelativePose choose_hypothesis(const std::vector<PoseHypothesis>& hypotheses, const PinholeCamera& camera,
                                       const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
                                       const std::vector<std::uint8_t>& inliers, const RelativePoseOptions& options) {
@@ -344,14 +306,12 @@ inline RelativePose choose_hypothesis(const std::vector<PoseHypothesis>& hypothe
   return pose;
 }
 
-}  // namespace detail
-
 /// Relative pose from a fundamental matrix (x2ᵀ F x1 = 0, pixels) of two views of `camera`.
 ///
 /// `points1[i]`, `points2[i]` (pixels) are correspondences; `inliers` is empty (use all) or one
 /// entry per correspondence, non-zero = use it (ModelSelectionResult::fundamental_inliers).
 /// E = Kᵀ F K gives four hypotheses (essential_hypotheses()); the one that explains the most
-/// correspondences wins (detail::count_good_points()). success = false when it explains fewer than
+/// correspondences wins (count_good_points()). success = false when it explains fewer than
 /// options.min_good_points, or when a competitor explaining at least options.ambiguity_ratio of its
 /// count has a rotation more than options.tolerance_degrees away; competitors with the same
 /// rotation and another translation direction clear RelativePose::translation_unique instead.
@@ -365,10 +325,11 @@ inline RelativePose relative_pose_from_fundamental(const Eigen::Matrix3d& fundam
                                                    const std::vector<std::uint8_t>& inliers = {},
                                                    const RelativePoseOptions& options = {}) {
   options.check();
-  detail::require_pose_inputs(fundamental, camera, points1, points2, inliers, "relative_pose_from_fundamental");
+  camera.check();
+  detail::require_pose_inputs(fundamental, points1, points2, inliers, "relative_pose_from_fundamental");
   const Eigen::Matrix3d k = camera.matrix();
-  return detail::choose_hypothesis(essential_hypotheses(k.transpose() * fundamental * k), camera, points1, points2,
-                                   inliers, options);
+  return choose_hypothesis(essential_hypotheses(k.transpose() * fundamental * k), camera, points1, points2, inliers,
+                           options);
 }
 
 /// Relative pose from a homography (x2 ~ H x1, pixels) of two views of `camera`: a plane seen
@@ -387,7 +348,8 @@ inline RelativePose relative_pose_from_homography(const Eigen::Matrix3d& homogra
                                                   const std::vector<std::uint8_t>& inliers = {},
                                                   const RelativePoseOptions& options = {}) {
   options.check();
-  detail::require_pose_inputs(homography, camera, points1, points2, inliers, "relative_pose_from_homography");
+  camera.check();
+  detail::require_pose_inputs(homography, points1, points2, inliers, "relative_pose_from_homography");
   Eigen::Matrix3d g = camera.inverse() * homography * camera.matrix();
   int votes = 0;
   for (std::size_t i = 0; i < points1.size(); ++i) {
@@ -396,7 +358,7 @@ inline RelativePose relative_pose_from_homography(const Eigen::Matrix3d& homogra
     votes += side > 0.0 ? 1 : (side < 0.0 ? -1 : 0);
   }
   if (votes < 0) g = -g;
-  return detail::choose_hypothesis(homography_hypotheses(g), camera, points1, points2, inliers, options);
+  return choose_hypothesis(homography_hypotheses(g), camera, points1, points2, inliers, options);
 }
 
 /// Relative pose from the model select_model() chose; success = false when it chose none.

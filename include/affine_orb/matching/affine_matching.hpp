@@ -13,6 +13,7 @@
 
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/features.hpp"
+#include "affine_orb/matching/detail/affine_matching.hpp"
 #include "affine_orb/matching/matcher.hpp"
 
 namespace affine_orb {
@@ -40,12 +41,13 @@ struct AffineMatchOptions {
 
   void check() const {
     matcher.check();
-    detail::require(std::isfinite(ratio_exclusion_radius) && ratio_exclusion_radius >= 0.0 &&
-                        ratio_exclusion_radius <= 1000.0,
-                    "AffineMatchOptions::ratio_exclusion_radius must be in [0, 1000], got " +
-                        std::to_string(ratio_exclusion_radius));
-    detail::require(std::isfinite(duplicate_radius) && duplicate_radius >= 0.0 && duplicate_radius <= 1000.0,
-                    "AffineMatchOptions::duplicate_radius must be in [0, 1000], got " + std::to_string(duplicate_radius));
+    detail::require(
+        std::isfinite(ratio_exclusion_radius) && ratio_exclusion_radius >= 0.0 && ratio_exclusion_radius <= 1000.0,
+        "AffineMatchOptions::ratio_exclusion_radius must be in [0, 1000], got " +
+            std::to_string(ratio_exclusion_radius));
+    detail::require(
+        std::isfinite(duplicate_radius) && duplicate_radius >= 0.0 && duplicate_radius <= 1000.0,
+        "AffineMatchOptions::duplicate_radius must be in [0, 1000], got " + std::to_string(duplicate_radius));
   }
 };
 
@@ -58,7 +60,8 @@ inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, c
                                                    const std::vector<cv::Point2f>& points2, double radius) {
   detail::require(std::isfinite(radius) && radius >= 0.0, "remove_duplicate_matches: radius must be finite and >= 0");
   std::sort(matches.begin(), matches.end(), [](const Match& a, const Match& b) {
-    return a.distance < b.distance || (a.distance == b.distance && (a.query < b.query || (a.query == b.query && a.train < b.train)));
+    return a.distance < b.distance ||
+           (a.distance == b.distance && (a.query < b.query || (a.query == b.query && a.train < b.train)));
   });
   std::vector<Match> kept;
   if (radius == 0.0) {
@@ -95,55 +98,11 @@ inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, c
       kept.push_back(m);
     }
   }
-  std::sort(kept.begin(), kept.end(),
-            [](const Match& a, const Match& b) { return a.query < b.query || (a.query == b.query && a.train < b.train); });
+  std::sort(kept.begin(), kept.end(), [](const Match& a, const Match& b) {
+    return a.query < b.query || (a.query == b.query && a.train < b.train);
+  });
   return kept;
 }
-
-namespace detail {
-
-/// Global matching with the location-aware ratio test of AffineMatchOptions::ratio_exclusion_radius.
-/// knn2() gives the best neighbour j1 and the runner-up; when the runner-up lies within the radius
-/// of j1 (a duplicate of the same point), the train set is scanned again for the nearest descriptor
-/// outside the radius.
-template <int Bits>
-std::vector<Match> match_excluding_duplicates(const Features<Bits>& a, const Features<Bits>& b,
-                                              const AffineMatchOptions& options) {
-  const MatcherOptions& m = options.matcher;
-  const std::vector<KnnMatch> forward = knn2(a.descriptors, b.descriptors);
-  std::vector<KnnMatch> backward;
-  if (m.cross_check) backward = knn2(b.descriptors, a.descriptors);
-  const double r2 = options.ratio_exclusion_radius * options.ratio_exclusion_radius;
-  auto near = [&](int j, int k) {
-    const cv::Point2f& p = b.keypoints[static_cast<std::size_t>(j)].pt;
-    const cv::Point2f& q = b.keypoints[static_cast<std::size_t>(k)].pt;
-    return (p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) <= r2;
-  };
-  std::vector<Match> matches;
-  for (const KnnMatch& k : forward) {
-    if (k.count == 0 || k.best.distance > m.max_distance) continue;
-    KnnMatch test = k;
-    if (k.count == 2 && near(k.best.train, k.second.train)) {
-      test.count = 1;
-      test.second = Neighbour{};
-      const auto& q = a.descriptors[static_cast<std::size_t>(k.query)];
-      for (std::size_t j = 0; j < b.size(); ++j) {
-        if (near(k.best.train, static_cast<int>(j))) continue;
-        const int d = hamming_distance(q, b.descriptors[j]);
-        if (d < test.second.distance) {
-          test.second = {static_cast<int>(j), d};
-          test.count = 2;
-        }
-      }
-    }
-    if (!passes_ratio_test(test, m.ratio)) continue;
-    if (m.cross_check && backward[static_cast<std::size_t>(k.best.train)].best.train != k.query) continue;
-    matches.push_back({k.query, k.best.train, k.best.distance});
-  }
-  return matches;
-}
-
-}  // namespace detail
 
 /// Matches two feature sets from Extractor::extract() (SPEC §4). Match::query indexes `a`,
 /// Match::train indexes `b`.
@@ -165,7 +124,7 @@ std::vector<Match> match_features(const Features<Bits>& a, const Features<Bits>&
 
   std::vector<Match> all;
   if (!options.per_view_pairs) {
-    all = detail::match_excluding_duplicates(a, b, options);
+    all = detail::match_excluding_duplicates(a, b, options.matcher, options.ratio_exclusion_radius);
   } else {
     // Indices of each view's keypoints.
     auto group = [](const Features<Bits>& f) {

@@ -15,12 +15,12 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/core/features.hpp"
-#include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/geometry/model_selection.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 
 namespace affine_orb {
 
@@ -176,18 +176,23 @@ class TwoViewMatcher {
   TwoViewResult<kBits> match(const cv::Mat& image1, const cv::Mat& image2, const cv::Mat& mask1 = cv::Mat(),
                              const cv::Mat& mask2 = cv::Mat()) {
     TwoViewResult<kBits> result;
+    ViewCursor cursor1, cursor2;
     const int n_stages = static_cast<int>(options_.stages.size());
     for (int k = 0; k <= n_stages; ++k) {
       TwoViewStageReport report;
       const Clock::time_point start = Clock::now();
       if (k == 0) {
-        result.features1 = extractor1_.extract_image(image1, mask1);
-        result.features2 = extractor2_.extract_image(image2, mask2);
+        StagedFeatures<kBits> staged1 = extractor1_.extract_image(image1, mask1);
+        StagedFeatures<kBits> staged2 = extractor2_.extract_image(image2, mask2);
+        result.features1 = std::move(staged1.features);
+        result.features2 = std::move(staged2.features);
+        cursor1 = std::move(staged1.cursor);
+        cursor2 = std::move(staged2.cursor);
       } else {
         const ViewStage& stage = options_.stages[static_cast<std::size_t>(k - 1)];
         const int budget = static_cast<int>(std::lround(stage.view_features * options_.extractor.features));
-        append(result.features1, extractor1_.extend(stage.max_tilt, budget));
-        append(result.features2, extractor2_.extend(stage.max_tilt, budget));
+        append(result.features1, extractor1_.extend(cursor1, stage.max_tilt, budget));
+        append(result.features2, extractor2_.extend(cursor2, stage.max_tilt, budget));
       }
       const Clock::time_point extracted = Clock::now();
       result.matches = match_features(result.features1, result.features2, options_.matching);
@@ -195,7 +200,7 @@ class TwoViewMatcher {
       verify(result);
       const Clock::time_point verified = Clock::now();
 
-      report.max_tilt = k == 0 ? 1.0 : extractor1_.extracted_tilt();
+      report.max_tilt = cursor1.extracted_tilt();
       report.keypoints1 = static_cast<int>(result.features1.size());
       report.keypoints2 = static_cast<int>(result.features2.size());
       report.matches = static_cast<int>(result.matches.size());

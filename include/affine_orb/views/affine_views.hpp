@@ -146,8 +146,6 @@ inline cv::Point2d apply_affine(const cv::Matx23d& m, cv::Point2d p) {
   return {m(0, 0) * p.x + m(0, 1) * p.y + m(0, 2), m(1, 0) * p.x + m(1, 1) * p.y + m(1, 2)};
 }
 
-namespace detail {
-
 /// The view pipeline written with OpenCV calls, step by step: cv::warpAffine into the canvas
 /// (bilinear, BORDER_REPLICATE; skipped for φ = 0), cv::GaussianBlur along x with σ =
 /// antialias·√(t² − 1) and radius max(1, ⌈3σ⌉) (BORDER_REPLICATE; none for σ = 0), cv::resize to
@@ -174,7 +172,7 @@ inline void render_view_reference(const cv::Mat& image, const AffineView& view, 
   cv::resize(*source, out, view.size, 0.0, 0.0, cv::INTER_LINEAR);
 }
 
-/// Renders one view of many images with render_view()'s arithmetic (detail/view_render.hpp), the
+/// Renders one view of many images with render_view()'s arithmetic (views/detail/view_render.hpp), the
 /// resampling weights computed once. Images wider or taller than the fixed-point ranges allow (W +
 /// H > 16000, a row step above 32767 bytes) or smaller than 2x2 go through render_view_reference().
 class ViewRenderer {
@@ -191,7 +189,7 @@ class ViewRenderer {
   /// columns of each row's run are computed (the whole row where the run is empty), and the other
   /// pixels of the row repeat the nearest computed one. `scratch` holds one canvas row (grown to the
   /// widest row it has held, so that views of several sizes share it without reallocating).
-  void render(const cv::Mat& image, const RowSpans* region, cv::Mat& scratch, cv::Mat& out) const {
+  void render(const cv::Mat& image, const detail::RowSpans* region, cv::Mat& scratch, cv::Mat& out) const {
     detail::require_gray8(image, "render_view");
     if (view_.is_identity()) {
       image.copyTo(out);
@@ -202,7 +200,7 @@ class ViewRenderer {
       return;
     }
     out.create(view_.size, CV_8UC1);
-    const CanvasSampler sampler(view_.to_original_canvas(), image.size());
+    const detail::CanvasSampler sampler(view_.to_original_canvas(), image.size());
     const int canvas_width = view_.canvas_size.width;
     const int width = view_.size.width;
     // The widest row: every view column computed (in `scratch`, grown to the widest row seen).
@@ -227,13 +225,13 @@ class ViewRenderer {
       if (view_.is_unrotated()) {
         std::memcpy(row + (c0 - first), image.ptr<std::uint8_t>(y) + c0, static_cast<std::size_t>(c1 - c0));
       } else {
-        sample_canvas_row(image, sampler, y, c0, c1, row + (c0 - first));
+        detail::sample_canvas_row(image, sampler, y, c0, c1, row + (c0 - first));
       }
       // Canvas columns outside the canvas repeat its edge (BORDER_REPLICATE of the blur).
       std::memset(row, row[c0 - first], static_cast<std::size_t>(c0 - first));
       std::memset(row + (c1 - first), row[c1 - 1 - first], static_cast<std::size_t>(last + 1 - c1));
       std::uint8_t* target = out.ptr<std::uint8_t>(y);
-      resample_row(resampler_, row, first, x0, x1, target);
+      detail::resample_row(resampler_, row, first, x0, x1, target);
       std::memset(target, target[x0], static_cast<std::size_t>(x0));
       std::memset(target + x1, target[x1 - 1], static_cast<std::size_t>(width - x1));
     }
@@ -242,10 +240,8 @@ class ViewRenderer {
  private:
   AffineView view_;
   double antialias_ = 0.0;
-  ViewResampler resampler_;
+  detail::ViewResampler resampler_;
 };
-
-}  // namespace detail
 
 /// Renders a view of a CV_8UC1 image into `out` (reusing its buffer): the image rotated into the
 /// canvas (bilinear, borders replicated so that no artificial edge appears; no resampling for φ =
@@ -257,7 +253,7 @@ class ViewRenderer {
 /// resize; warpAffine interpolates at 1/32 px).
 /// `canvas` is a caller-owned scratch buffer.
 inline void render_view(const cv::Mat& image, const AffineView& view, double antialias, cv::Mat& canvas, cv::Mat& out) {
-  detail::ViewRenderer(view, antialias).render(image, nullptr, canvas, out);
+  ViewRenderer(view, antialias).render(image, nullptr, canvas, out);
 }
 
 }  // namespace affine_orb

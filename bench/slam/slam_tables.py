@@ -21,7 +21,8 @@ monocular: per sequence, the runs whose keyframe map is correct (Sim(3) ATE <= k
 rgbd: per sequence, frames with a pose, ATE (SE(3), every pose), median and mean tracking time, and
   the median of the mean tracking time against the first configuration's.
 suite: one table per sequence type (SEQS/TYPE_sSEED, every seed pooled) and mode from RUNS/runs.csv
-  (../shared/slam/analyze.py): keyframes, runs with a reset, runs that relocalise and the obliquity
+  (../shared/slam/analyze.py): keyframes, the frame of the second keyframe (RGB-D ORB-SLAM2 takes
+  it only once fewer than 40 % of the first keyframe's points are tracked), runs with a reset, runs that relocalise and the obliquity
   there (revisit_sweep, RGB-D, as `relocalisation`), correct maps (monocular, as `monocular`), ATE,
   mean tracking time against stock's; RUNS/kitti as `kitti`; then every sequence and mode where a
   configuration is worse than stock beyond the run-to-run range: all of its runs worse than all of
@@ -185,6 +186,8 @@ def kitti(runs, groundtruth, confs):
                 continue
             res, _ = ate.evaluate(t_gt, p_gt, t, p, sim3=True)
             results.append((t[0] - t_gt[0], len(t), res["ate"]["rmse"] if "ate" in res else None, mean_ms))
+        if not results:
+            continue
         maps = [r for r in results if r[0] is not None]
         print("| %s | %d/%d | %s | %s | %s | %s |" % (
             conf, len(maps), len(results), cell([r[0] for r in maps]), cell([r[1] for r in maps], "%.0f"),
@@ -213,6 +216,7 @@ def suite_rows(runs, seqs):
         row = dict(r)
         row["type"] = sequence_type(r["seq"])
         row["keyframes"] = number(r["keyframes"])
+        row["second"] = number(r["kf_second_idx"])
         row["poses"] = number(r["poses"]) if r["mode"] == "rgbd" else None
         row["reset"] = 1.0 if (number(r["msg_reset"]) or 0) > 0 else 0.0
         row["ate"] = number(r["ate_rmse"])
@@ -249,9 +253,9 @@ def suite(runs, seqs, confs):
             seeds = sorted({r["seq"] for r in group})
             print("\n%s, %s: %d sequences (%s)\n" % (kind, "RGB-D" if mode == "rgbd" else "monocular", len(seeds),
                                                     " ".join(s.rpartition("_s")[2] for s in seeds)))
-            print("| configuration | runs | keyframes | runs with a reset | relocalised | obliquity there, ° "
-                  "| correct maps | ATE m | tracking ms, mean | / %s's |" % stock)
-            print("|---|---|---|---|---|---|---|---|---|---|")
+            print("| configuration | runs | keyframes | second keyframe at frame | runs with a reset | relocalised "
+                  "| obliquity there, ° | correct maps | ATE m | tracking ms, mean | / %s's |" % stock)
+            print("|---|---|---|---|---|---|---|---|---|---|---|")
             base = [r["track_ms"] for r in group if r["conf"] == stock and r["track_ms"]]
             for conf in confs:
                 rs = [r for r in group if r["conf"] == conf]
@@ -259,8 +263,9 @@ def suite(runs, seqs, confs):
                     continue
                 times = [r["track_ms"] for r in rs if r["track_ms"]]
                 ratio = "%.2f" % (statistics.median(times) / statistics.median(base)) if base and times else "–"
-                print("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s |" % (
-                    conf, len(rs), cell([r["keyframes"] for r in rs], "%.0f"), count(rs, "reset"),
+                print("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                    conf, len(rs), cell([r["keyframes"] for r in rs], "%.0f"), cell([r["second"] for r in rs], "%.0f"),
+                    count(rs, "reset"),
                     count(rs, "relocalised"), cell([r["obliquity"] for r in rs]), count(rs, "correct"),
                     cell([r["ate"] for r in rs], "%.3f"), cell(times), ratio))
     groundtruth = os.path.join(runs, "kitti", "groundtruth.txt")

@@ -25,7 +25,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/brisk.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
 
 namespace {
 

@@ -23,8 +23,8 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "affine_orb/features.hpp"
-#include "affine_orb/matcher.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/matching/matcher.hpp"
 
 namespace {
 

@@ -53,11 +53,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "../examples/sequence_io.hpp"
-#include "affine_orb/affine_matching.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/model_selection.hpp"
-#include "affine_orb/rbrief.hpp"
-#include "affine_orb/relative_pose.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/geometry/model_selection.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/geometry/relative_pose.hpp"
 
 namespace {
 

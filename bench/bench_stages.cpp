@@ -38,7 +38,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "affine_orb/affine_orb.hpp"
-#include "affine_orb/detail/gaussian_q8.hpp"
+#include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "bench_common.hpp"
 
 namespace {
@@ -263,7 +263,7 @@ affine_orb::AffineView bench_view(const cv::Mat& image) { return affine_orb::mak
 void view_render_ours(benchmark::State& state) {
   const cv::Mat& image = inputs().image;
   const affine_orb::AffineViewOptions options;
-  const affine_orb::detail::ViewRenderer renderer(bench_view(image), options.antialias);
+  const affine_orb::ViewRenderer renderer(bench_view(image), options.antialias);
   cv::Mat scratch, out;
   for (auto _ : state) {
     renderer.render(image, nullptr, scratch, out);
@@ -277,7 +277,7 @@ void view_render_cv(benchmark::State& state) {
   const affine_orb::AffineView view = bench_view(image);
   cv::Mat canvas, out;
   for (auto _ : state) {
-    affine_orb::detail::render_view_reference(image, view, options.antialias, canvas, out);
+    affine_orb::render_view_reference(image, view, options.antialias, canvas, out);
     benchmark::DoNotOptimize(out.data);
   }
   set_items(state, image.total());

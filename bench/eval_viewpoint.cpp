@@ -46,7 +46,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/affine_matching.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
 #include "viewpoint_pairs.hpp"

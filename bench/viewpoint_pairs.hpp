@@ -15,7 +15,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "affine_orb/affine_matching.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 #include "bench_common.hpp"
 
 namespace affine_orb::bench {

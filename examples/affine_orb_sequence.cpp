@@ -24,10 +24,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/keyframe_tracker.hpp"
-#include "affine_orb/rbrief.hpp"
-#include "affine_orb/relative_pose.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/slam/keyframe_tracker.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/geometry/relative_pose.hpp"
 #include "cli.hpp"
 #include "sequence_io.hpp"
 

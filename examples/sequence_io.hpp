@@ -23,7 +23,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "affine_orb/relative_pose.hpp"
+#include "affine_orb/geometry/relative_pose.hpp"
 
 namespace affine_orb::examples {
 

@@ -14,12 +14,12 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/affine_matching.hpp"
-#include "affine_orb/affine_views.hpp"
-#include "affine_orb/brisk.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/fast.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/detection/fast.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/views/affine_views.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -151,7 +151,7 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
 
   cv::Mat canvas;
   cv::Mat by_definition;
-  affine_orb::detail::render_view_reference(photo, view, options.views.antialias, canvas, by_definition);
+  affine_orb::render_view_reference(photo, view, options.views.antialias, canvas, by_definition);
   cv::Mat blurred;
   cv::GaussianBlur(photo, blurred, cv::Size(0, 0), 0.8, 0.8);
   cv::Mat by_warp;
@@ -721,11 +721,13 @@ TEST_CASE("views on demand: stage 0 is plain extraction, and the image plus one 
         const auto plain = affine_orb::Extractor<affine_orb::Rbrief>(off).extract(image);
         const auto one_shot = affine_orb::Extractor<affine_orb::Rbrief>(on).extract(image);
         affine_orb::Extractor<affine_orb::Rbrief> staged(on);
-        const auto image_only = staged.extract_image(image);
-        CHECK(staged.extracted_tilt() == 1.0);
+        auto [image_only, cursor] = staged.extract_image(image);
+        CHECK(cursor.extracted_tilt() == 1.0);
         CHECK(differing(image_only, plain) == 0);
-        const auto views = staged.extend(on.views.max_tilt, static_cast<int>(std::lround(on.view_features * on.features)));
-        CHECK(staged.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
+        const auto views =
+            staged.extend(cursor, on.views.max_tilt, static_cast<int>(std::lround(on.view_features * on.features)));
+        CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
+        CHECK(cursor.extracted_views() == static_cast<int>(staged.views().size()));
         CHECK(std::count(views.views.begin(), views.views.end(), 0) == 0);
         CHECK(differing(in_extract_order({image_only, views}), one_shot) == 0);
       }
@@ -738,10 +740,10 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
   affine_orb::ExtractorOptions options;
   options.features = 800;
   affine_orb::Extractor<affine_orb::Rbrief> staged(options);
-  const auto s0 = staged.extract_image(image);
-  const auto s1 = staged.extend(kSqrt2, 300);
-  const auto s2 = staged.extend(2.0, 400);
-  const auto s3 = staged.extend(2.0 * kSqrt2, 500);
+  auto [s0, cursor] = staged.extract_image(image);
+  const auto s1 = staged.extend(cursor, kSqrt2, 300);
+  const auto s2 = staged.extend(cursor, 2.0, 400);
+  const auto s3 = staged.extend(cursor, 2.0 * kSqrt2, 500);
   const std::vector<affine_orb::AffineView> views = staged.views();
   CHECK(s0.size() == 800);
   CHECK(s1.size() == 300);
@@ -751,8 +753,9 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
   for (int v : s1.views) CHECK(tilt_of(v) == doctest::Approx(kSqrt2));
   for (int v : s2.views) CHECK(tilt_of(v) == doctest::Approx(2.0));
   for (int v : s3.views) CHECK(tilt_of(v) == doctest::Approx(2.0 * kSqrt2));
-  CHECK(staged.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
-  CHECK(staged.extend(4.0, 100).empty());  // no view is left up to 4 (max_tilt 2√2)
+  CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
+  CHECK(staged.extend(cursor, 4.0, 100).empty());  // no view is left up to 4 (max_tilt 2√2)
+  CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
 
   SUBCASE("the first stage is the one-shot extraction of the same views") {
     affine_orb::ExtractorOptions first = options;
@@ -780,9 +783,10 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
   }
   SUBCASE("a new image starts again from stage 0") {
     const cv::Mat other = affine_orb::test::oxford_image("boat", 2);
-    staged.extract_image(other);
-    CHECK(staged.extracted_tilt() == 1.0);
-    const auto again = staged.extend(kSqrt2, 300);
+    auto other_stage = staged.extract_image(other);
+    CHECK(other_stage.cursor.extracted_tilt() == 1.0);
+    CHECK_THROWS_AS(staged.extend(cursor, 4.0, 100), std::invalid_argument);  // the first image's cursor
+    const auto again = staged.extend(other_stage.cursor, kSqrt2, 300);
     for (int v : again.views) CHECK(tilt_of(v) == doctest::Approx(kSqrt2));
   }
 }
@@ -790,13 +794,16 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
 TEST_CASE("views on demand: misuse is refused with std::invalid_argument") {
   const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
   affine_orb::Extractor<affine_orb::Rbrief> extractor;
-  CHECK_THROWS_AS(extractor.extend(2.0, 100), std::invalid_argument);  // before extract_image()
-  extractor.extract_image(image);
-  CHECK_THROWS_AS(extractor.extend(std::nan(""), 100), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extend(2.0, -1), std::invalid_argument);
-  extractor.extract(image);  // ends the staged image
-  CHECK(extractor.extracted_tilt() == 0.0);
-  CHECK_THROWS_AS(extractor.extend(2.0, 100), std::invalid_argument);
+  affine_orb::ViewCursor unused;
+  CHECK(unused.extracted_tilt() == 0.0);
+  CHECK_THROWS_AS(extractor.extend(unused, 2.0, 100), std::invalid_argument);  // not from extract_image()
+  auto stage = extractor.extract_image(image);
+  CHECK_THROWS_AS(extractor.extend(stage.cursor, std::nan(""), 100), std::invalid_argument);
+  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, -1), std::invalid_argument);
+  affine_orb::Extractor<affine_orb::Rbrief> other;
+  CHECK_THROWS_AS(other.extend(stage.cursor, 2.0, 100), std::invalid_argument);  // another Extractor's cursor
+  extractor.extract(image);                                                      // ends the staged image
+  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, 100), std::invalid_argument);
   affine_orb::ExtractorOptions split;
   split.view_budget = affine_orb::ViewBudget::kAreaSplit;
   affine_orb::Extractor<affine_orb::Rbrief> area(split);

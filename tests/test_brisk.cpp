@@ -18,7 +18,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/brisk.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
 #include "test_data.hpp"
 
 namespace {

@@ -13,15 +13,15 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/affine_views.hpp"
-#include "affine_orb/detail/gaussian_q8.hpp"
-#include "affine_orb/detail/resize.hpp"
-#include "affine_orb/detail/view_regions.hpp"
-#include "affine_orb/detector.hpp"
-#include "affine_orb/distribution.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/orientation.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/descriptors/detail/gaussian_q8.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/detection/detail/resize.hpp"
+#include "affine_orb/detection/detector.hpp"
+#include "affine_orb/detection/distribution.hpp"
+#include "affine_orb/detection/orientation.hpp"
+#include "affine_orb/extraction/detail/view_regions.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/views/affine_views.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -409,7 +409,7 @@ TEST_CASE("the view renderer is within a grey level of the exact definition and 
     CAPTURE(view.rotation_degrees);
     cv::Mat scratch, ours, reference;
     affine_orb::render_view(small, view, 0.8, scratch, ours);
-    affine_orb::detail::render_view_reference(small, view, 0.8, scratch, reference);
+    affine_orb::render_view_reference(small, view, 0.8, scratch, reference);
     REQUIRE(ours.size() == view.size);
     REQUIRE(reference.size() == view.size);
     cv::Mat difference;
@@ -431,7 +431,7 @@ TEST_CASE("the view renderer is within a grey level of the exact definition and 
     // Rendering a region computes its pixels exactly as the whole view; the rest of each row
     // repeats the row's nearest computed pixel.
     const affine_orb::RowSpans region = affine_orb::detail::render_region(view, small.size(), 4.0);
-    const affine_orb::detail::ViewRenderer renderer(view, 0.8);
+    const affine_orb::ViewRenderer renderer(view, 0.8);
     cv::Mat partial;
     renderer.render(small, &region, scratch, partial);
     int mismatches = 0;

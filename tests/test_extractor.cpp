@@ -9,10 +9,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/brisk.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/matcher.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/matching/matcher.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "test_data.hpp"
 
 namespace {

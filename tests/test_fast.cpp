@@ -6,7 +6,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/fast.hpp"
+#include "affine_orb/detection/fast.hpp"
 #include "test_data.hpp"
 
 namespace {

@@ -13,7 +13,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
-#include "affine_orb/opencv_feature2d.hpp"
+#include "affine_orb/extraction/opencv_feature2d.hpp"
 #include "test_data.hpp"
 
 namespace {

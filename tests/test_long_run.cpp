@@ -14,8 +14,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "test_data.hpp"
 
 namespace {

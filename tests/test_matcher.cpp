@@ -17,8 +17,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/features.hpp"
-#include "affine_orb/matcher.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/matching/matcher.hpp"
 
 namespace {
 

@@ -20,10 +20,10 @@
 #include <Eigen/SVD>
 #include <opencv2/core.hpp>
 
-#include "affine_orb/detail/ransac_sampler.hpp"
-#include "affine_orb/fundamental.hpp"
-#include "affine_orb/homography.hpp"
-#include "affine_orb/ransac.hpp"
+#include "affine_orb/geometry/detail/ransac_sampler.hpp"
+#include "affine_orb/geometry/fundamental.hpp"
+#include "affine_orb/geometry/homography.hpp"
+#include "affine_orb/geometry/ransac.hpp"
 
 namespace {
 
@@ -45,7 +45,7 @@ struct LineEstimator {
   static constexpr int kMaxModels = 2;
 
   std::vector<Eigen::Vector2d> points;
-  double threshold = 1.0;  // squared distance
+  double threshold = 1.0;   // squared distance
   bool degenerate = false;  // when true, generate() never yields a model
   bool twin = false;        // when true, generate() also yields a useless second model
 
@@ -469,7 +469,7 @@ TEST_CASE("geometric estimators: scores equal the naive eq. 20/21 definitions; d
   const double sigma = 1.3;
   const affine_orb::HomographyEstimator he(p1, p2, {sigma, 5.991, 5.991});
   const affine_orb::FundamentalEstimator fe(p1, p2, {sigma, 3.841, 5.991});
-  const affine_orb::HomographyModel hm = *affine_orb::detail::make_homography_model(v.homography());
+  const affine_orb::HomographyModel hm = *affine_orb::HomographyModel::from_pixels(v.homography());
   const Eigen::Matrix3d fm = v.fundamental();
   int h_inliers = 0, f_inliers = 0;
   for (std::size_t i = 0; i < x1.size(); ++i) {
@@ -570,10 +570,10 @@ TEST_CASE("geometric estimators inside ransac: plane with outliers (H) and 3-D s
   const auto hr = affine_orb::ransac(affine_orb::HomographyEstimator(to_cv(plane1), to_cv(plane2)));
   REQUIRE(hr.success);
   double corner_error = 0.0;
-  for (const Eigen::Vector2d& c : {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 0), Eigen::Vector2d(0, 479),
-                                   Eigen::Vector2d(639, 479)}) {
-    corner_error = std::max(corner_error, ((hr.model.h * c.homogeneous()).hnormalized() -
-                                           (h * c.homogeneous()).hnormalized()).norm());
+  for (const Eigen::Vector2d& c :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 0), Eigen::Vector2d(0, 479), Eigen::Vector2d(639, 479)}) {
+    corner_error = std::max(
+        corner_error, ((hr.model.h * c.homogeneous()).hnormalized() - (h * c.homogeneous()).hnormalized()).norm());
   }
   CHECK(corner_error < 1.0);
   int recovered = 0, total = 0;
@@ -603,7 +603,7 @@ TEST_CASE("geometric estimators inside ransac: plane with outliers (H) and 3-D s
 TEST_CASE("geometric estimators at their minimal sizes: 3, 4 and 5 correspondences for H, 7 and 8 for F") {
   const TwoViews v;
   const Eigen::Matrix3d h = v.homography();
-  std::vector<Eigen::Vector2d> x1 = {{40.0, 30.0},   {600.0, 50.0}, {620.0, 450.0}, {30.0, 420.0},
+  std::vector<Eigen::Vector2d> x1 = {{40.0, 30.0},   {600.0, 50.0},  {620.0, 450.0}, {30.0, 420.0},
                                      {320.0, 240.0}, {150.0, 300.0}, {480.0, 120.0}, {250.0, 60.0}};
   std::vector<Eigen::Vector2d> on_plane, in_depth;
   for (std::size_t i = 0; i < x1.size(); ++i) {

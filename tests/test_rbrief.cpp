@@ -9,9 +9,9 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/detail/orb_pattern.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/descriptors/detail/orb_pattern.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "test_data.hpp"
 
 namespace {

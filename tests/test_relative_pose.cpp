@@ -19,8 +19,8 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-#include "affine_orb/model_selection.hpp"
-#include "affine_orb/relative_pose.hpp"
+#include "affine_orb/geometry/model_selection.hpp"
+#include "affine_orb/geometry/relative_pose.hpp"
 
 namespace {
 

@@ -27,10 +27,10 @@
 
 #include "../examples/homography_io.hpp"
 #include "../examples/sequence_io.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/keyframe_tracker.hpp"
-#include "affine_orb/rbrief.hpp"
-#include "affine_orb/relative_pose.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/slam/keyframe_tracker.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/geometry/relative_pose.hpp"
 #include "test_data.hpp"
 
 namespace {

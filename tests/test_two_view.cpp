@@ -10,7 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/two_view.hpp"
+#include "affine_orb/two_view/two_view.hpp"
 #include "test_data.hpp"
 
 namespace {

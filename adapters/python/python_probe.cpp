@@ -17,10 +17,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "affine_orb/brisk.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/rbrief.hpp"
-#include "affine_orb/two_view.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/two_view/two_view.hpp"
 
 namespace {
 

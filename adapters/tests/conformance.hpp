@@ -29,9 +29,9 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/brisk.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb_adapter/options.hpp"
 #include "test_data.hpp"
 

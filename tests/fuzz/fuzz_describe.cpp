@@ -15,7 +15,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/opencv_feature2d.hpp"
+#include "affine_orb/extraction/opencv_feature2d.hpp"
 #include "fuzz_input.hpp"
 
 namespace {

@@ -14,10 +14,10 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/affine_matching.hpp"
-#include "affine_orb/brisk.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "fuzz_input.hpp"
 
 namespace {

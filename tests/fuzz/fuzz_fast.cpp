@@ -11,7 +11,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/fast.hpp"
+#include "affine_orb/detection/fast.hpp"
 #include "fuzz_input.hpp"
 
 namespace {

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "affine_orb/matcher.hpp"
+#include "affine_orb/matching/matcher.hpp"
 #include "fuzz_input.hpp"
 
 namespace {

@@ -18,7 +18,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/model_selection.hpp"
+#include "affine_orb/geometry/model_selection.hpp"
 #include "fuzz_input.hpp"
 
 namespace {

@@ -15,7 +15,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/two_view.hpp"
+#include "affine_orb/two_view/two_view.hpp"
 #include "fuzz_input.hpp"
 
 namespace {

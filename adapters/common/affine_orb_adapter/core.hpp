@@ -31,12 +31,12 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/affine_views.hpp"
-#include "affine_orb/brisk.hpp"
-#include "affine_orb/detail/check.hpp"
-#include "affine_orb/extractor.hpp"
-#include "affine_orb/features.hpp"
-#include "affine_orb/rbrief.hpp"
+#include "affine_orb/views/affine_views.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb_adapter/options.hpp"
 
 namespace affine_orb::adapters {

@@ -1,0 +1,347 @@
+#pragma once
+/// \file
+/// rBRIEF-256, ORB's steered BRIEF descriptor (Rublee et al., ICCV 2011, section 4.3), as a
+/// descriptor policy for Extractor<Rbrief> (see descriptor.hpp).
+///
+/// Definition, for a keypoint at level pixel p (rounded to the nearest integer pixel c) with
+/// orientation θ, on the level image smoothed by a 7x7 Gaussian of σ = 2 (border reflected, 101):
+/// test i of ORB's published pair table (detail/orb_pattern.hpp) rotates both points by θ,
+/// (x', y') = (round(x cos θ − y sin θ), round(x sin θ + y cos θ)), and bit i is 1 iff
+/// I_s(c + a'_i) < I_s(c + b'_i). Rounding is OpenCV's cvRound (round half to even), as in ORB.
+/// With the default options the bits are those of ORB for the same keypoint and angle, so DBoW2
+/// vocabularies trained on ORB (ORB-SLAM2's ORBvoc.txt) remain valid.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "affine_orb/descriptors/descriptor.hpp"
+#include "affine_orb/core/detail/buffer.hpp"
+#include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/descriptors/detail/gaussian_q8.hpp"
+#include "affine_orb/descriptors/detail/orb_pattern.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/detection/orientation.hpp"
+
+namespace affine_orb {
+
+/// rBRIEF parameters. Changing any of them breaks bit compatibility with ORB.
+struct RbriefOptions {
+  /// Radius in level pixels of the intensity-centroid disc, in [3, 64]; 15, half ORB's 31-pixel
+  /// patch, is ORB's.
+  int orientation_radius = 15;
+  /// Side of the Gaussian smoothing kernel in pixels, odd, in [1, 31]; 7 is ORB's and ORB-SLAM2's.
+  int blur_kernel = 7;
+  /// σ of the Gaussian smoothing in pixels, in (0, 16]; 2 is ORB's and ORB-SLAM2's. With these
+  /// three defaults the bits equal cv::ORB's (bench/bench_extract counts the equal rows).
+  double blur_sigma = 2.0;
+
+  void check() const {
+    detail::require(orientation_radius >= 3 && orientation_radius <= 64,
+                    "RbriefOptions::orientation_radius must be in [3, 64], got " + std::to_string(orientation_radius));
+    detail::require(blur_kernel >= 1 && blur_kernel <= 31 && blur_kernel % 2 == 1,
+                    "RbriefOptions::blur_kernel must be odd and in [1, 31], got " + std::to_string(blur_kernel));
+    detail::require(detail::positive_finite(blur_sigma) && blur_sigma <= 16.0,
+                    "RbriefOptions::blur_sigma must be in (0, 16], got " + std::to_string(blur_sigma));
+  }
+};
+
+/// The rBRIEF-256 descriptor policy.
+class Rbrief {
+ public:
+  static constexpr int kBits = 256;
+  /// Diameter in level pixels of ORB's patch; cv::KeyPoint::size is this times the keypoint scale.
+  static constexpr float kPatchSize = 31.0f;
+  using Options = RbriefOptions;
+
+  /// Per-level data: the level image (shallow) for the orientation and its smoothed copy for the
+  /// tests. One LevelData serves levels of any size in turn without reallocating once it has held
+  /// the largest.
+  struct LevelData {
+    cv::Mat image;
+    cv::Mat smoothed;                ///< the top-left part of `storage`
+    cv::Mat storage;                 ///< grown to the largest level seen, never shrunk
+    detail::GaussianQ8Work squares;  ///< scratch of the integer smoothing
+  };
+
+  explicit Rbrief(const Options& options = {})
+      : options_(options), disc_((options.check(), options.orientation_radius)) {
+    int extent = 0;
+    for (const auto& pair : detail::kOrbTestPairs) {
+      const double ra = std::hypot(pair.xa, pair.ya);
+      const double rb = std::hypot(pair.xb, pair.yb);
+      extent = std::max(extent, static_cast<int>(std::lround(std::max(ra, rb))));
+    }
+    // A rotated test point has |x'|, |y'| <= round(|(x, y)|), the rounded radius.
+    border_ = std::max(extent, options_.orientation_radius);
+    // The default smoothing's kernel is read and checked once per process (an immutable
+    // function-local static); other kernels at construction.
+    const RbriefOptions defaults;
+    kernel_q8_ = options_.blur_kernel == defaults.blur_kernel && options_.blur_sigma == defaults.blur_sigma
+                     ? default_kernel_q8()
+                     : detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
+#if defined(__SSE2__)
+    disc_chunks_ = disc_chunks(options_.orientation_radius);
+#endif
+  }
+
+  const Options& options() const { return options_; }
+
+  /// Minimal distance in level pixels between a keypoint and the level border (18 by default).
+  int border() const { return border_; }
+
+  /// Smooths the whole level. The border is reflected about the level's own edge even when the
+  /// level is a ROI of a larger image (BORDER_ISOLATED), as the definition says. Uses
+  /// cv::GaussianBlur's integer arithmetic (detail/gaussian_q8.hpp) when it was confirmed at
+  /// construction, cv::GaussianBlur itself otherwise: the same bytes.
+  void prepare(const cv::Mat& level, LevelData& data) const {
+    detail::require_gray8(level, "Rbrief::prepare");
+    data.image = level;
+    data.smoothed = detail::fit_buffer(data.storage, level.size(), CV_8UC1);
+    if (kernel_q8_.empty()) {
+      cv::GaussianBlur(level, data.smoothed, cv::Size(options_.blur_kernel, options_.blur_kernel), options_.blur_sigma,
+                       options_.blur_sigma, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+      return;
+    }
+    detail::smooth_square_q8(level, cv::Rect(0, 0, level.cols, level.rows), kernel_q8_, data.squares, data.smoothed);
+  }
+
+  /// Smooths only the union of the squares of side 2·border()+1 around `points` (level pixels,
+  /// rounded) when it covers less than half of the level, else the whole level. The union is
+  /// smoothed row run by row run, each pixel once, with cv::GaussianBlur's own integer arithmetic
+  /// (detail/gaussian_q8.hpp, reflecting about the level edges), so its pixels equal those of the
+  /// full smoothing; when that arithmetic could not be confirmed at construction, the whole level is
+  /// smoothed. Pixels outside the squares are left undefined.
+  void prepare(const cv::Mat& level, const std::vector<cv::Point2f>& points, LevelData& data) const {
+    detail::require_gray8(level, "Rbrief::prepare");
+    if (kernel_q8_.empty()) {
+      prepare(level, data);
+      return;
+    }
+    const int side = 2 * border_ + 1;
+    const cv::Rect bounds(0, 0, level.cols, level.rows);
+    data.squares.squares.clear();
+    for (const cv::Point2f& p : points) {
+      const cv::Rect square = cv::Rect(cvRound(p.x) - border_, cvRound(p.y) - border_, side, side) & bounds;
+      if (!square.empty()) data.squares.squares.push_back(square);
+    }
+    const std::int64_t area = detail::union_runs_q8(data.squares);
+    if (2 * area >= static_cast<std::int64_t>(level.total())) {
+      prepare(level, data);
+      return;
+    }
+    data.image = level;
+    data.smoothed = detail::fit_buffer(data.storage, level.size(), CV_8UC1);
+    detail::smooth_runs_q8(level, kernel_q8_, data.squares, data.smoothed);
+  }
+
+  /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it:
+  /// CentroidDisc::angle(), whose integer moments are summed 8 columns at a time where the target
+  /// has SSE2 (the same sums, so the same angle).
+  float orientation(const LevelData& data, cv::Point2f pt) const {
+#if defined(__SSE2__)
+    return centroid_angle_sse2(data.image, cvRound(pt.x), cvRound(pt.y));
+#else
+    return disc_.angle(data.image, cvRound(pt.x), cvRound(pt.y));
+#endif
+  }
+
+  /// The 256-bit descriptor of the keypoint at integer level position `pt` (border() <= x <
+  /// width − border(), likewise y) with the test pattern rotated by `angle` (radians, the frame of
+  /// orientation()). Throws std::invalid_argument for a non-finite angle (its rotated test points
+  /// would be undefined).
+  BinaryDescriptor<kBits> describe(const LevelData& data, cv::Point2f pt, float angle) const {
+    detail::require(std::isfinite(angle), "Rbrief::describe: the angle is not finite");
+    const float a = std::cos(angle);
+    const float b = std::sin(angle);
+    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(data.smoothed.step[0]);
+    const std::uint8_t* center = data.smoothed.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x);
+    // Byte offsets of the rotated test points: offset = round(x sin + y cos)·step + round(x cos − y sin).
+    alignas(16) std::array<std::int32_t, 2 * kBits> offset;
+    rotated_offsets(a, b, static_cast<std::int32_t>(step), offset.data());
+    BinaryDescriptor<kBits> descriptor{};
+#if defined(__SSE2__)
+    // The two samples of every test gathered into byte arrays, then compared 16 tests at a time:
+    // I_a < I_b iff the saturated difference I_b − I_a is non-zero.
+    alignas(16) std::array<std::uint8_t, kBits> first;
+    alignas(16) std::array<std::uint8_t, kBits> second;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(kBits); ++i) {
+      first[i] = center[offset[2 * i]];
+      second[i] = center[offset[2 * i + 1]];
+    }
+    const __m128i zero = _mm_setzero_si128();
+    for (int i = 0; i < kBits; i += 16) {
+      const __m128i va = _mm_load_si128(reinterpret_cast<const __m128i*>(first.data() + i));
+      const __m128i vb = _mm_load_si128(reinterpret_cast<const __m128i*>(second.data() + i));
+      const int not_less = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(vb, va), zero));
+      const std::uint64_t bits = static_cast<std::uint64_t>(~not_less & 0xFFFF);
+      descriptor[static_cast<std::size_t>(i / 64)] |= bits << (i % 64);
+    }
+#else
+    for (int i = 0; i < kBits; ++i) {
+      const int ia = center[offset[static_cast<std::size_t>(2 * i)]];
+      const int ib = center[offset[static_cast<std::size_t>(2 * i + 1)]];
+      descriptor[static_cast<std::size_t>(i / 64)] |= static_cast<std::uint64_t>(ia < ib) << (i % 64);
+    }
+#endif
+    return descriptor;
+  }
+
+ private:
+  // gaussian_kernel_q8() of the default blur_kernel and blur_sigma, computed at the first call.
+  static const std::vector<std::uint16_t>& default_kernel_q8() {
+    static const std::vector<std::uint16_t> kernel =
+        detail::gaussian_kernel_q8(RbriefOptions{}.blur_kernel, RbriefOptions{}.blur_sigma);
+    return kernel;
+  }
+
+  /// The test points of the pattern as floats, interleaved a_0, b_0, a_1, b_1, ... (x and y apart).
+  struct PatternPoints {
+    alignas(16) std::array<float, 2 * kBits> x{};
+    alignas(16) std::array<float, 2 * kBits> y{};
+  };
+
+  static const PatternPoints& pattern_points() {
+    static const PatternPoints points = [] {
+      PatternPoints p;
+      for (std::size_t i = 0; i < detail::kOrbTestPairs.size(); ++i) {
+        const auto& pair = detail::kOrbTestPairs[i];
+        p.x[2 * i] = pair.xa;
+        p.y[2 * i] = pair.ya;
+        p.x[2 * i + 1] = pair.xb;
+        p.y[2 * i + 1] = pair.yb;
+      }
+      return p;
+    }();
+    return points;
+  }
+
+  /// Rounded rotated positions of all 512 test points as byte offsets, rounding half to even
+  /// (cvRound's rule, which cvtps2dq applies under the default rounding mode).
+  static void rotated_offsets(float a, float b, std::int32_t step, std::int32_t* out) {
+    const PatternPoints& p = pattern_points();
+#if defined(__SSE2__)
+    const __m128 va = _mm_set1_ps(a);
+    const __m128 vb = _mm_set1_ps(b);
+    const __m128i vstep = _mm_set1_epi32(step);
+    for (std::size_t i = 0; i < 2 * kBits; i += 4) {
+      const __m128 x = _mm_load_ps(p.x.data() + i);
+      const __m128 y = _mm_load_ps(p.y.data() + i);
+      const __m128i rx = _mm_cvtps_epi32(_mm_sub_ps(_mm_mul_ps(x, va), _mm_mul_ps(y, vb)));
+      const __m128i ry = _mm_cvtps_epi32(_mm_add_ps(_mm_mul_ps(x, vb), _mm_mul_ps(y, va)));
+      // ry·step with SSE2 only: the low 32 bits of the unsigned 32x32 products are the signed
+      // products modulo 2^32, exact since |ry·step| < 2^31.
+      const __m128i lo = _mm_mul_epu32(ry, vstep);
+      const __m128i hi = _mm_mul_epu32(_mm_srli_si128(ry, 4), _mm_srli_si128(vstep, 4));
+      const __m128i product = _mm_unpacklo_epi32(_mm_shuffle_epi32(lo, _MM_SHUFFLE(0, 0, 2, 0)),
+                                                 _mm_shuffle_epi32(hi, _MM_SHUFFLE(0, 0, 2, 0)));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), _mm_add_epi32(product, rx));
+    }
+#else
+    for (std::size_t i = 0; i < 2 * kBits; ++i) {
+      out[i] = cvRound(p.x[i] * b + p.y[i] * a) * step + cvRound(p.x[i] * a - p.y[i] * b);
+    }
+#endif
+  }
+
+#if defined(__SSE2__)
+  /// The disc of CentroidDisc in 8-column chunks from column −r: for chunk j (columns
+  /// chunk_x[j] .. chunk_x[j] + 7, the last one ending at r and overlapping the one before) and row
+  /// v, the weight u of column u inside the disc and not in an earlier chunk (else 0), and the
+  /// weight v of the same columns.
+  struct DiscChunks {
+    std::vector<int> x;
+    std::vector<std::array<std::int16_t, 8>> u;  ///< [v·chunks + j]
+    std::vector<std::array<std::int16_t, 8>> v;  ///< [v·chunks + j]
+  };
+
+  static DiscChunks disc_chunks(int r) {
+    DiscChunks d;
+    for (int x = -r;; x = std::min(x + 8, r - 7)) {
+      d.x.push_back(x);
+      if (x + 8 > r) break;
+    }
+    const std::size_t chunks = d.x.size();
+    d.u.assign((static_cast<std::size_t>(r) + 1) * chunks, {});
+    d.v.assign(d.u.size(), {});
+    const std::vector<int> widths = orb_disc_half_widths(r);
+    for (int v = 0; v <= r; ++v) {
+      const int half = widths[static_cast<std::size_t>(v)];
+      for (std::size_t j = 0; j < chunks; ++j) {
+        for (int i = 0; i < 8; ++i) {
+          const int u = d.x[j] + i;
+          const bool earlier = j > 0 && u < d.x[j - 1] + 8;
+          if (std::abs(u) > half || earlier) continue;
+          d.u[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(u);
+          d.v[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(v);
+        }
+      }
+    }
+    return d;
+  }
+
+  /// CentroidDisc::angle() with the moments m10 = Σ u·I, m01 = Σ v·I summed by 16-bit multiply-adds:
+  /// per row pair ±v, u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|, |v| <= 64, sums below
+  /// 2^15 per lane product), exactly the integers of the scalar loop.
+  float centroid_angle_sse2(const cv::Mat& image, int cx, int cy) const {
+    const int r = options_.orientation_radius;
+    const std::size_t chunks = disc_chunks_.x.size();
+    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
+    const std::uint8_t* center = image.ptr<std::uint8_t>(cy) + cx;
+    const __m128i zero = _mm_setzero_si128();
+    __m128i m10 = zero;
+    __m128i m01 = zero;
+    auto load8 = [&](const std::uint8_t* p) {
+      return _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
+    };
+    for (std::size_t j = 0; j < chunks; ++j) {
+      m10 = _mm_add_epi32(m10,
+                          _mm_madd_epi16(load8(center + disc_chunks_.x[j]),
+                                         _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.u[j].data()))));
+    }
+    for (int v = 1; v <= r; ++v) {
+      const std::uint8_t* below = center + v * step;
+      const std::uint8_t* above = center - v * step;
+      for (std::size_t j = 0; j < chunks; ++j) {
+        const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
+        const __m128i b = load8(below + disc_chunks_.x[j]);
+        const __m128i a = load8(above + disc_chunks_.x[j]);
+        m10 = _mm_add_epi32(
+            m10, _mm_madd_epi16(_mm_add_epi16(a, b),
+                                _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.u[k].data()))));
+        m01 = _mm_add_epi32(
+            m01, _mm_madd_epi16(_mm_sub_epi16(b, a),
+                                _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.v[k].data()))));
+      }
+    }
+    alignas(16) std::int32_t x[4];
+    alignas(16) std::int32_t y[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(x), m10);
+    _mm_store_si128(reinterpret_cast<__m128i*>(y), m01);
+    const std::int64_t sx = static_cast<std::int64_t>(x[0]) + x[1] + x[2] + x[3];
+    const std::int64_t sy = static_cast<std::int64_t>(y[0]) + y[1] + y[2] + y[3];
+    return orb_angle(sy, sx);
+  }
+#endif
+
+  Options options_;
+  CentroidDisc disc_;
+#if defined(__SSE2__)
+  DiscChunks disc_chunks_;
+#endif
+  int border_ = 0;
+  /// cv::GaussianBlur's integer kernel for the options (empty: not reproduced, see prepare()).
+  std::vector<std::uint16_t> kernel_q8_;
+};
+
+}  // namespace affine_orb

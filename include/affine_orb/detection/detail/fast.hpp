@@ -1,0 +1,458 @@
+#pragma once
+/// \file
+/// Internals of affine_orb/detection/fast.hpp (namespace detail): not part of the API.
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
+#include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/core/detail/row_spans.hpp"
+
+namespace affine_orb {
+namespace detail {
+
+/// Radius of the FAST circle in pixels: a pixel closer than this to the image border has no score.
+inline constexpr int kFastRadius = 3;
+
+/// The 16 circle offsets (dx, dy), clockwise from the top, as in Rosten & Drummond (2006), fig. 1.
+inline constexpr std::array<std::array<int, 2>, 16> kFastCircle = {{{0, -3},
+                                                                    {1, -3},
+                                                                    {2, -2},
+                                                                    {3, -1},
+                                                                    {3, 0},
+                                                                    {3, 1},
+                                                                    {2, 2},
+                                                                    {1, 3},
+                                                                    {0, 3},
+                                                                    {-1, 3},
+                                                                    {-2, 2},
+                                                                    {-3, 1},
+                                                                    {-3, 0},
+                                                                    {-3, -1},
+                                                                    {-2, -2},
+                                                                    {-1, -3}}};
+
+/// A detected corner: integer pixel position in the image it was detected in, and its FAST score.
+struct Corner {
+  int x = 0;
+  int y = 0;
+  int score = 0;
+};
+
+/// Arc strength of a pixel from its 16 circle differences d_k >= 0 (saturated at 0): the largest
+/// value v such that some 9 contiguous d_k are all >= v. For d_k = max(I_k − I_p, 0) (bright) or
+/// max(I_p − I_k, 0) (dark), the pixel is a corner at threshold t >= 1 iff the larger of its two
+/// arc strengths S exceeds t, and its FAST score is max(S − 1, 0).
+inline int arc_strength(const std::array<int, 16>& d) {
+  std::array<int, 16> m2{};
+  std::array<int, 16> m4{};
+  int best = 0;
+  for (int k = 0; k < 16; ++k) m2[k] = std::min(d[k], d[(k + 1) & 15]);
+  for (int k = 0; k < 16; ++k) m4[k] = std::min(m2[k], m2[(k + 2) & 15]);
+  for (int k = 0; k < 16; ++k) {
+    const int m8 = std::min(m4[k], m4[(k + 4) & 15]);
+    best = std::max(best, std::min(m8, d[(k + 8) & 15]));
+  }
+  return best;
+}
+
+/// max(bright, dark) arc strength of the pixel at p; see arc_strength().
+inline int pixel_strength(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset) {
+  const int center = p[0];
+  std::array<int, 16> bright{};
+  std::array<int, 16> dark{};
+  for (int k = 0; k < 16; ++k) {
+    const int v = p[offset[k]];
+    bright[k] = std::max(v - center, 0);
+    dark[k] = std::max(center - v, 0);
+  }
+  return std::max(arc_strength(bright), arc_strength(dark));
+}
+
+/// Scalar scoring of pixels [x0, x1) of one row (see fast_score_map()); the portable path and the
+/// reference the SIMD path is tested against.
+inline void score_row_scalar(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                             int threshold, std::uint8_t* out) {
+  for (int x = x0; x < x1; ++x) {
+    const std::uint8_t* p = row + x;
+    const int center = p[0];
+    const int hi = center + threshold;
+    const int lo = center - threshold;
+    // Any arc of 9 contains one of the pixels 0/8 and one of 4/12: reject early.
+    const int p0 = p[offset[0]], p4 = p[offset[4]], p8 = p[offset[8]], p12 = p[offset[12]];
+    const bool bright_possible = (p0 > hi || p8 > hi) && (p4 > hi || p12 > hi);
+    const bool dark_possible = (p0 < lo || p8 < lo) && (p4 < lo || p12 < lo);
+    if (!bright_possible && !dark_possible) {
+      out[x] = 0;
+      continue;
+    }
+    const int strength = pixel_strength(p, offset);
+    out[x] = static_cast<std::uint8_t>(strength > threshold ? strength - 1 : 0);
+  }
+}
+
+#if defined(__SSE2__)
+#if defined(__GNUC__) || defined(__clang__)
+#define AFFINE_ORB_UNROLL _Pragma("GCC unroll 16")
+#else
+#define AFFINE_ORB_UNROLL
+#endif
+
+/// 8-bit lane operations of SSE2 (16 lanes), for the FAST code written once for every width.
+struct Lanes128 {
+  using V = __m128i;
+  static constexpr int kLanes = 16;
+  static V load(const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); }
+  static void store(std::uint8_t* p, V v) { _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v); }
+  static V set1(int v) { return _mm_set1_epi8(static_cast<char>(v)); }
+  static V zero() { return _mm_setzero_si128(); }
+  static V adds(V a, V b) { return _mm_adds_epu8(a, b); }
+  static V subs(V a, V b) { return _mm_subs_epu8(a, b); }
+  static V min(V a, V b) { return _mm_min_epu8(a, b); }
+  static V max(V a, V b) { return _mm_max_epu8(a, b); }
+  static V eq(V a, V b) { return _mm_cmpeq_epi8(a, b); }
+  static V or_(V a, V b) { return _mm_or_si128(a, b); }
+  static V andnot(V a, V b) { return _mm_andnot_si128(a, b); }
+  static bool none(V v) { return _mm_movemask_epi8(v) == 0; }
+  /// Bit i set where lane i has its top bit set.
+  static unsigned mask(V v) { return static_cast<unsigned>(_mm_movemask_epi8(v)); }
+};
+
+#if defined(__AVX2__)
+/// 8-bit lane operations of AVX2 (32 lanes).
+struct Lanes256 {
+  using V = __m256i;
+  static constexpr int kLanes = 32;
+  static V load(const std::uint8_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p)); }
+  static void store(std::uint8_t* p, V v) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v); }
+  static V set1(int v) { return _mm256_set1_epi8(static_cast<char>(v)); }
+  static V zero() { return _mm256_setzero_si256(); }
+  static V adds(V a, V b) { return _mm256_adds_epu8(a, b); }
+  static V subs(V a, V b) { return _mm256_subs_epu8(a, b); }
+  static V min(V a, V b) { return _mm256_min_epu8(a, b); }
+  static V max(V a, V b) { return _mm256_max_epu8(a, b); }
+  static V eq(V a, V b) { return _mm256_cmpeq_epi8(a, b); }
+  static V or_(V a, V b) { return _mm256_or_si256(a, b); }
+  static V andnot(V a, V b) { return _mm256_andnot_si256(a, b); }
+  static bool none(V v) { return _mm256_movemask_epi8(v) == 0; }
+  /// Bit i set where lane i has its top bit set.
+  static unsigned mask(V v) { return static_cast<unsigned>(_mm256_movemask_epi8(v)); }
+};
+#endif
+
+/// arc_strength() of the L pixels at p[0, L) at once (L = S::kLanes), for the bright (c − v) or
+/// dark (v − c) polarity, in saturated 8-bit arithmetic. The 16 windows of 9 contiguous
+/// differences are split at the window length (van Herk / Gil-Werman): with e_i = d_(i mod 16),
+/// the window starting at k <= 8 is min(suffix of e_0..e_8 from k, prefix of e_9..e_17 up to
+/// k + 8), and the one starting at 9 <= k <= 15 is min(suffix of e_9..e_17 from k, prefix of
+/// e_18..e_23 up to k + 8). At most 12 vectors are live, so nothing spills on 16 registers.
+template <class S, bool kBright>
+inline typename S::V arc_strength_simd(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset,
+                                       typename S::V v) {
+  using V = typename S::V;
+  auto e = [&](int i) {
+    const V c = S::load(p + offset[static_cast<std::size_t>(i & 15)]);
+    return kBright ? S::subs(c, v) : S::subs(v, c);
+  };
+  V suffix[9];
+  // Windows 0..8: suffixes of block e_0..e_8, running prefix of block e_9..e_17.
+  suffix[8] = e(8);
+  AFFINE_ORB_UNROLL
+  for (int k = 7; k >= 0; --k) suffix[k] = S::min(e(k), suffix[k + 1]);
+  V strength = suffix[0];
+  V prefix = e(9);
+  strength = S::max(strength, S::min(suffix[1], prefix));
+  AFFINE_ORB_UNROLL
+  for (int k = 2; k <= 8; ++k) {
+    prefix = S::min(prefix, e(k + 8));
+    strength = S::max(strength, S::min(suffix[k], prefix));
+  }
+  // Windows 9..15: suffixes of block e_9..e_17 (suffix[j] holds e_(9+j)..e_17), prefix of e_18...
+  suffix[8] = e(17);
+  AFFINE_ORB_UNROLL
+  for (int j = 7; j >= 0; --j) suffix[j] = S::min(e(9 + j), suffix[j + 1]);
+  strength = S::max(strength, suffix[0]);
+  prefix = e(18);
+  strength = S::max(strength, S::min(suffix[1], prefix));
+  AFFINE_ORB_UNROLL
+  for (int j = 2; j <= 6; ++j) {
+    prefix = S::min(prefix, e(j + 17));
+    strength = S::max(strength, S::min(suffix[j], prefix));
+  }
+  return strength;
+}
+
+/// The FAST scores of the L pixels at p[0, L) (see score_row_scalar()), all 0 when none passes the
+/// test of pixels 0, 4, 8 and 12.
+template <class S>
+inline typename S::V score_chunk_simd(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset,
+                                      typename S::V t) {
+  using V = typename S::V;
+  const V zero = S::zero();
+  const V v = S::load(p);
+  const V hi = S::adds(v, t);
+  const V lo = S::subs(v, t);
+  auto brighter = [&](V a) { return S::subs(a, hi); };  // non-zero where a > hi
+  auto darker = [&](V a) { return S::subs(lo, a); };    // non-zero where a < lo
+  const V c0 = S::load(p + offset[0]), c4 = S::load(p + offset[4]), c8 = S::load(p + offset[8]),
+          c12 = S::load(p + offset[12]);
+  auto both = [&](V a, V b) {  // non-zero lanes: a and b both non-zero
+    return S::andnot(S::or_(S::eq(a, zero), S::eq(b, zero)), S::set1(-1));
+  };
+  const V bright = both(S::or_(brighter(c0), brighter(c8)), S::or_(brighter(c4), brighter(c12)));
+  const V dark = both(S::or_(darker(c0), darker(c8)), S::or_(darker(c4), darker(c12)));
+  // A polarity that fails the test in every lane has strength <= t there, which the result
+  // discards (a lane's other polarity decides, or the lane is 0): its arcs are not computed.
+  const bool any_bright = !S::none(bright);
+  const bool any_dark = !S::none(dark);
+  if (!any_bright && !any_dark) return zero;
+  V strength = zero;
+  if (any_bright) strength = arc_strength_simd<S, true>(p, offset, v);
+  if (any_dark) strength = S::max(strength, arc_strength_simd<S, false>(p, offset, v));
+  const V not_corner = S::eq(S::subs(strength, t), zero);  // strength <= t
+  return S::andnot(not_corner, S::subs(strength, S::set1(1)));
+}
+
+/// score_chunk_simd() on 16 lanes.
+inline __m128i score_chunk_sse2(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset, __m128i t) {
+  return score_chunk_simd<Lanes128>(p, offset, t);
+}
+
+/// SSE2 scoring of pixels [x0, x1) of one row, 16 at a time, equal to score_row_scalar() bit for
+/// bit. [lo, hi) ⊇ [x0, x1) are the columns whose circle lies inside the image: a run shorter
+/// than 16 is scored as the 16 pixels from clamp(x0, lo, hi − 16) and only its own lanes are
+/// stored (the scalar path remains for rows narrower than 16 such columns).
+inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                           int lo, int hi, int threshold, std::uint8_t* out) {
+  const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
+  if (x1 <= x0) return;
+  if (x1 - x0 < 16) {
+    if (hi - lo < 16) {
+      score_row_scalar(row, offset, x0, x1, threshold, out);
+      return;
+    }
+    const int c = std::clamp(x0, lo, hi - 16);
+    const __m128i lane = _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    // Lanes i with x0 − c <= i < x1 − c (signed compares of small values).
+    const __m128i keep = _mm_andnot_si128(_mm_cmpgt_epi8(_mm_set1_epi8(static_cast<char>(x0 - c)), lane),
+                                          _mm_cmpgt_epi8(_mm_set1_epi8(static_cast<char>(x1 - c)), lane));
+    const __m128i scores = score_chunk_sse2(row + c, offset, t);
+    const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(out + c));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c),
+                     _mm_or_si128(_mm_and_si128(keep, scores), _mm_andnot_si128(keep, old)));
+    return;
+  }
+  // The last chunk overlaps the previous one so that it ends exactly at x1: scoring a pixel twice
+  // writes the same value, and nothing outside [x0, x1) is touched.
+  for (int x = x0;; x = std::min(x + 16, x1 - 16)) {
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), score_chunk_sse2(row + x, offset, t));
+    if (x + 16 >= x1) break;
+  }
+}
+
+#if defined(__AVX2__)
+/// score_row_sse2() 32 pixels at a time where the run is that long (the last 32 overlapping the
+/// previous ones), identical bytes; shorter runs go to score_row_sse2().
+inline void score_row_avx2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                           int lo, int hi, int threshold, std::uint8_t* out) {
+  if (x1 - x0 < 32) {
+    score_row_sse2(row, offset, x0, x1, lo, hi, threshold, out);
+    return;
+  }
+  const __m256i t = _mm256_set1_epi8(static_cast<char>(threshold));
+  for (int x = x0;; x = std::min(x + 32, x1 - 32)) {
+    Lanes256::store(out + x, score_chunk_simd<Lanes256>(row + x, offset, t));
+    if (x + 32 >= x1) break;
+  }
+}
+#endif
+
+/// score_row_avx2() where the target has AVX2, score_row_sse2() where it has SSE2.
+inline void score_row_simd(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
+                           int lo, int hi, int threshold, std::uint8_t* out) {
+#if defined(__AVX2__)
+  score_row_avx2(row, offset, x0, x1, lo, hi, threshold, out);
+#else
+  score_row_sse2(row, offset, x0, x1, lo, hi, threshold, out);
+#endif
+}
+#endif
+
+/// The 16 circle offsets in bytes for a row step of `step` bytes.
+inline std::array<std::ptrdiff_t, 16> circle_offsets(std::ptrdiff_t step) {
+  std::array<std::ptrdiff_t, 16> offset{};
+  for (int i = 0; i < 16; ++i) offset[i] = kFastCircle[i][1] * step + kFastCircle[i][0];
+  return offset;
+}
+
+/// fast_score_spans() without the argument checks, for callers that made them once.
+inline void score_spans(const cv::Mat& image, const RowSpans& region, int threshold, cv::Mat& scores) {
+  const std::array<std::ptrdiff_t, 16> offset = circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
+  const int top = std::max(region.y0, 0);
+  const int bottom = std::min(region.y0 + region.rows(), image.rows);
+  for (int y = top; y < bottom; ++y) {
+    const auto [b, e] = region.run(y);
+    const int x0 = std::max(b, 0);
+    const int x1 = std::min(e, image.cols);
+    if (x0 >= x1) continue;
+    std::uint8_t* out = scores.ptr<std::uint8_t>(y);
+    if (y < kFastRadius || y >= image.rows - kFastRadius) {
+      std::memset(out + x0, 0, static_cast<std::size_t>(x1 - x0));
+      continue;
+    }
+    const int s0 = std::max(x0, kFastRadius);
+    const int s1 = std::min(x1, image.cols - kFastRadius);
+    if (s0 >= s1) {
+      std::memset(out + x0, 0, static_cast<std::size_t>(x1 - x0));
+      continue;
+    }
+    std::memset(out + x0, 0, static_cast<std::size_t>(s0 - x0));
+    std::memset(out + s1, 0, static_cast<std::size_t>(x1 - s1));
+#if defined(__SSE2__)
+    score_row_simd(image.ptr<std::uint8_t>(y), offset, s0, s1, kFastRadius, image.cols - kFastRadius, threshold, out);
+#else
+    score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
+#endif
+  }
+}
+
+/// The local maxima of row y, columns [x0, x1), of a score map, appended to `corners`; see
+/// non_max_suppression(). The caller keeps the columns and rows one pixel inside the map. The
+/// scalar reference.
+inline void non_max_row_scalar(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                               std::vector<Corner>& corners) {
+  const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
+  const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
+  const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
+  for (int x = x0; x < x1; ++x) {
+    // Score maps are mostly zero: skip 8 empty pixels at a time.
+    if (x + 8 <= x1) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, row + x, sizeof(word));
+      if (word == 0) {
+        x += 7;
+        continue;
+      }
+    }
+    const int s = row[x];
+    if (s < threshold) continue;
+    if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s >= row[x + 1] &&
+        s >= below[x - 1] && s >= below[x] && s >= below[x + 1]) {
+      corners.push_back({x, y, s});
+    }
+  }
+}
+
+#if defined(__SSE2__)
+/// Bit i of the result is set when pixel row[i] (i < S::kLanes) is a local maximum at `t` per
+/// non_max_row_scalar(), `above` and `below` pointing at the same columns of the rows around: in
+/// saturated arithmetic a > b iff (a − b) != 0 and a >= b iff (b − a) == 0, so a pixel is a
+/// maximum iff the minimum of its four strict differences is non-zero and the maximum of its four
+/// others (and of threshold − s) is zero.
+template <class S>
+inline unsigned non_max_chunk(const std::uint8_t* above, const std::uint8_t* row, const std::uint8_t* below,
+                              typename S::V t) {
+  using V = typename S::V;
+  const V zero = S::zero();
+  const V s = S::load(row);
+  V strict = S::min(S::subs(s, S::load(above - 1)), S::subs(s, S::load(above)));
+  strict = S::min(strict, S::subs(s, S::load(above + 1)));
+  strict = S::min(strict, S::subs(s, S::load(row - 1)));
+  V loose = S::max(S::subs(S::load(row + 1), s), S::subs(S::load(below - 1), s));
+  loose = S::max(loose, S::subs(S::load(below), s));
+  loose = S::max(loose, S::subs(S::load(below + 1), s));
+  loose = S::max(loose, S::subs(t, s));
+  return S::mask(S::andnot(S::eq(strict, zero), S::eq(loose, zero)));
+}
+
+/// Appends the corners of the set bits of `mask` (bit i: column x + i of row y).
+inline void append_corners(unsigned mask, int x, int y, const std::uint8_t* row, std::vector<Corner>& corners) {
+  while (mask != 0) {
+    const int i = __builtin_ctz(mask);
+    corners.push_back({x + i, y, row[x + i]});
+    mask &= mask - 1;
+  }
+}
+
+/// non_max_row_scalar() S::kLanes pixels at a time, the same corners in the same order, for runs
+/// of at least S::kLanes pixels. Every chunk is tested without a branch on its content (skipping
+/// empty chunks mispredicted too often on score maps at low thresholds); the last chunk overlaps
+/// the previous one, its already visited lanes masked off.
+template <class S>
+inline void non_max_run_simd(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                             std::vector<Corner>& corners) {
+  const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
+  const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
+  const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
+  const typename S::V t = S::set1(threshold);
+  constexpr int kLanes = S::kLanes;
+  for (int x = x0, done = x0;; done = x + kLanes, x = std::min(x + kLanes, x1 - kLanes)) {
+    // Lanes below `done` were visited by the previous chunk.
+    const unsigned fresh = ~0u << (done - x);
+    append_corners(non_max_chunk<S>(above + x, row + x, below + x, t) & fresh, x, y, row, corners);
+    if (x + kLanes >= x1) break;
+  }
+}
+
+/// non_max_row_scalar() 16 pixels at a time (runs shorter than 16: the scalar reference).
+inline void non_max_row_sse2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                             std::vector<Corner>& corners) {
+  if (x1 - x0 < Lanes128::kLanes) {
+    non_max_row_scalar(scores, y, x0, x1, threshold, corners);
+  } else {
+    non_max_run_simd<Lanes128>(scores, y, x0, x1, threshold, corners);
+  }
+}
+
+#if defined(__AVX2__)
+/// non_max_row_scalar() 32 pixels at a time (runs shorter than 32: non_max_row_sse2()).
+inline void non_max_row_avx2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                             std::vector<Corner>& corners) {
+  if (x1 - x0 < Lanes256::kLanes) {
+    non_max_row_sse2(scores, y, x0, x1, threshold, corners);
+  } else {
+    non_max_run_simd<Lanes256>(scores, y, x0, x1, threshold, corners);
+  }
+}
+#endif
+#endif
+
+/// non_max_row_avx2() where the target has AVX2, non_max_row_sse2() where it has SSE2, else the
+/// scalar reference.
+inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
+#if defined(__AVX2__)
+  non_max_row_avx2(scores, y, x0, x1, threshold, corners);
+#elif defined(__SSE2__)
+  non_max_row_sse2(scores, y, x0, x1, threshold, corners);
+#else
+  non_max_row_scalar(scores, y, x0, x1, threshold, corners);
+#endif
+}
+
+/// non_max_suppression() on row spans without the argument check.
+inline void non_max_spans(const cv::Mat& scores, const RowSpans& region, int threshold, std::vector<Corner>& corners) {
+  threshold = std::max(threshold, 1);
+  const int top = std::max(region.y0, 1);
+  const int bottom = std::min(region.y0 + region.rows(), scores.rows - 1);
+  for (int y = top; y < bottom; ++y) {
+    const auto [b, e] = region.run(y);
+    const int x0 = std::max(b, 1);
+    const int x1 = std::min(e, scores.cols - 1);
+    if (x0 < x1) non_max_row(scores, y, x0, x1, threshold, corners);
+  }
+}
+
+}  // namespace detail
+}  // namespace affine_orb

@@ -1,0 +1,328 @@
+#pragma once
+/// \file
+/// Internals of affine_orb/extraction/extractor.hpp (namespace detail): the buffers an Extractor
+/// processes views in and the steps of its walk that need no Extractor state.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/descriptors/descriptor.hpp"
+#include "affine_orb/detection/detector.hpp"
+#include "affine_orb/detection/distribution.hpp"
+#include "affine_orb/detection/fast.hpp"
+#include "affine_orb/detection/pyramid.hpp"
+#include "affine_orb/extraction/detail/view_regions.hpp"
+#include "affine_orb/extraction/detail/view_schedule.hpp"
+#include "affine_orb/extraction/extractor_options.hpp"
+#include "affine_orb/views/affine_views.hpp"
+
+namespace affine_orb {
+namespace detail {
+
+/// Buffers of the budget step of one thread, reused across frames.
+struct SpreadWork {
+  std::vector<cv::Point2f> points;
+  std::vector<float> responses;
+  std::vector<int> kept;
+  QuadtreeWorkspace quadtree;
+};
+
+/// The candidates of one level of the view a thread is processing.
+struct LevelCandidates {
+  Candidates detected;
+  std::vector<cv::Point2f> level_points;     ///< level pixels of the view
+  std::vector<cv::Point2f> original_points;  ///< the same, original pixels
+  std::vector<float> responses;
+  std::vector<int> chosen;  ///< the candidates to describe, ascending
+};
+
+/// The buffers one thread of an Extractor processes views with, reused view after view and frame after frame:
+/// everything that scales with a view's area.
+template <class Descriptor>
+struct ThreadWork {
+  explicit ThreadWork(const PyramidOptions& options) : pyramid(options) {}
+  cv::Mat scratch;  ///< one canvas row of the renderer
+  Pyramid pyramid;  ///< a tilted view's levels (the image's are the Extractor's own)
+  DetectorWorkspace detector;
+  std::vector<LevelCandidates> levels;
+  typename Descriptor::LevelData descriptor_data;  ///< one level at a time
+  std::vector<cv::Point2f> describe_points;
+  SpreadWork spread;
+};
+
+/// What a (view, level) keeps of its view once the view's pixels are gone: its described
+/// keypoints (the final ones for the image with kAdditive, a shortlist otherwise), in raster
+/// order of the view, and the selection among them.
+template <int Bits>
+struct LevelWork {
+  RowSpans valid;  ///< level pixels whose support maps inside the original image (image-size dependent)
+  std::vector<cv::Point2f> original_points;  ///< unrefined positions, original pixels
+  std::vector<float> responses;
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<BinaryDescriptor<Bits>> descriptors;
+  std::vector<int> kept;  ///< the output: indices into the described keypoints, ascending
+
+  void clear() {
+    original_points.clear();
+    responses.clear();
+    keypoints.clear();
+    descriptors.clear();
+    kept.clear();
+  }
+};
+
+/// A view and its per-level records (fixed for an image size, prepare_views()).
+template <int Bits>
+struct ViewWork {
+  AffineView view;
+  ViewRenderer renderer;
+  /// Per level, the pixels computed (the rest repeats the row's edge pixels): level 0 is
+  /// rendered, the others resized, within kRenderMargin level pixels of the image.
+  std::vector<RowSpans> regions;
+  std::vector<LevelWork<Bits>> levels;
+};
+
+/// Sets up the record of `view` of an image of `size`: its renderer and, per level, the valid pixels
+/// (support border `border` level pixels, detail::support_region()) and the pixels computed
+/// (within `margin` level pixels of the image, detail::region_near_image()).
+template <int Bits>
+void prepare_view(const AffineView& view, cv::Size size, double antialias, const PyramidOptions& pyramid, int border,
+                  double margin, ViewWork<Bits>& work) {
+  work.view = view;
+  work.renderer = ViewRenderer(view, antialias);
+  work.levels.resize(static_cast<std::size_t>(pyramid.levels));
+  work.regions.resize(static_cast<std::size_t>(pyramid.levels));
+  for (int l = 0; l < pyramid.levels; ++l) {
+    const cv::Size level_size = pyramid_level_size(view.size, pyramid, l);
+    work.levels[static_cast<std::size_t>(l)].valid = support_region(view, size, level_size, border);
+    work.regions[static_cast<std::size_t>(l)] =
+        region_near_image(level_to_original(view, level_size), level_size, size, margin);
+  }
+}
+
+/// Step 2 of an Extractor for one view: the FAST candidates of every level of its `pyramid` among the
+/// level's valid pixels (support border `border` level pixels), kept where their original position
+/// lies in the image and the mask allows, into `levels` (one entry per level).
+template <int Bits>
+void detect_view(const ViewWork<Bits>& view, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid,
+                 int border, const DetectorOptions& detector, DetectorWorkspace& workspace,
+                 std::vector<LevelCandidates>& levels) {
+  const cv::Matx23d& back = view.view.to_original;
+  for (std::size_t l = 0; l < view.levels.size(); ++l) {
+    LevelCandidates& c = levels[l];
+    c.level_points.clear();
+    c.original_points.clear();
+    c.responses.clear();
+    const RowSpans& valid = view.levels[l].valid;
+    if (valid.rows() == 0) continue;
+    detect_candidates(pyramid.level(static_cast<int>(l)), valid, cv::Point(border, border), detector, workspace,
+                      c.detected);
+    for (std::size_t i = 0; i < c.detected.corners.size(); ++i) {
+      const Corner& corner = c.detected.corners[i];
+      const cv::Point2f p(static_cast<float>(corner.x), static_cast<float>(corner.y));
+      const cv::Point2d q = apply_affine(back, pyramid.to_level0(p, static_cast<int>(l)));
+      const int mx = cvRound(q.x);
+      const int my = cvRound(q.y);
+      if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) continue;
+      if (!mask.empty() && mask.at<std::uint8_t>(my, mx) == 0) continue;
+      c.level_points.push_back(p);
+      c.original_points.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+      c.responses.push_back(c.detected.responses[i]);
+    }
+  }
+}
+
+/// Step 3 of an Extractor, in a tilted view's turn, with DuplicatePolicy::kMerge: drops the
+/// candidates of every level that repeat a keypoint chosen by an earlier view (`repeats`).
+inline void drop_repeats(const RepeatGrids& repeats, std::vector<LevelCandidates>& levels) {
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    LevelCandidates& c = levels[l];
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < c.responses.size(); ++i) {
+      if (repeats.repeats(c.original_points[i], static_cast<int>(l))) continue;
+      c.level_points[n] = c.level_points[i];
+      c.original_points[n] = c.original_points[i];
+      c.responses[n] = c.responses[i];
+      ++n;
+    }
+    c.level_points.resize(n);
+    c.original_points.resize(n);
+    c.responses.resize(n);
+  }
+}
+
+/// The box, in original pixels, that the spreading of a view's level l divides (Extractor's step
+/// 5), given the level's valid pixels: for the image (an identity view), the pixels of the level
+/// that can hold a candidate (the valid rectangle, at the support border from the level's edges,
+/// from pixel edge to pixel edge), as ORB-SLAM2's octree divides the FAST region of the level; for
+/// a tilted view, whose valid region is not a rectangle in the original image, the whole image. The
+/// image's levels divide their candidate rectangle because the support border grows to 18·s^l
+/// original pixels: quadtree cells over the whole image would lie mostly outside it along the
+/// edges, and each would still keep one keypoint from a thin strip of candidates, crowding the
+/// border, where keypoints rarely match in the next frame (test_extractor checks the density along
+/// the edges).
+inline cv::Rect2f spread_region(const AffineView& view, const RowSpans& valid_pixels, cv::Size size,
+                                const PyramidOptions& pyramid, int l) {
+  const cv::Rect2f image(0.0f, 0.0f, static_cast<float>(size.width), static_cast<float>(size.height));
+  if (!view.is_identity()) return image;
+  const cv::Rect valid = valid_pixels.bounds();
+  if (valid.empty()) return image;
+  const cv::Size level_size = pyramid_level_size(size, pyramid, l);
+  // Pixel edges x − 0.5 and x + 0.5 of the first and last valid pixels, in original pixels.
+  const cv::Point2f tl = Pyramid::to_level0(cv::Point2f(valid.x - 0.5f, valid.y - 0.5f), size, level_size);
+  const cv::Point2f br =
+      Pyramid::to_level0(cv::Point2f(valid.x + valid.width - 0.5f, valid.y + valid.height - 0.5f), size, level_size);
+  return cv::Rect2f(tl, br);
+}
+
+/// RefineOptions: the strongest FAST corner of level o of the original image's pyramid within
+/// `radius` level-o pixels of `point` (original pixels), as a level-0 point, if one scores at
+/// least `min_threshold` and lies where the mask allows (ties: the nearer pixel, then raster
+/// order).
+inline std::optional<cv::Point2f> refine_to_corner(const Pyramid& original, cv::Point2f point, int o, int radius,
+                                                   int min_threshold, const cv::Mat& mask) {
+  const cv::Mat& level = original.level(o);
+  const cv::Size base = original.level(0).size();
+  const double rx = static_cast<double>(base.width) / level.cols;
+  const double ry = static_cast<double>(base.height) / level.rows;
+  const double x = (point.x + 0.5) / rx - 0.5;
+  const double y = (point.y + 0.5) / ry - 0.5;
+  const int cx = static_cast<int>(std::lround(x));
+  const int cy = static_cast<int>(std::lround(y));
+  int best_score = -1;
+  double best_distance = 0.0;
+  cv::Point best;
+  for (int py = std::max(cy - radius, kFastRadius); py <= std::min(cy + radius, level.rows - 1 - kFastRadius); ++py) {
+    for (int px = std::max(cx - radius, kFastRadius); px <= std::min(cx + radius, level.cols - 1 - kFastRadius); ++px) {
+      const int score = fast_score(level.ptr<std::uint8_t>(py) + px, static_cast<std::ptrdiff_t>(level.step[0]));
+      if (score < min_threshold) continue;
+      const double distance = (px - x) * (px - x) + (py - y) * (py - y);
+      if (score > best_score || (score == best_score && distance < best_distance)) {
+        best_score = score;
+        best_distance = distance;
+        best = {px, py};
+      }
+    }
+  }
+  if (best_score < 0) return std::nullopt;
+  const cv::Point2f refined =
+      Pyramid::to_level0(cv::Point2f(static_cast<float>(best.x), static_cast<float>(best.y)), base, level.size());
+  if (!mask.empty() && mask.at<std::uint8_t>(cvRound(refined.y), cvRound(refined.x)) == 0) return std::nullopt;
+  return refined;
+}
+
+/// Step 4 of an Extractor for the chosen candidates of level l of `view` (in work.levels[l]):
+/// orientation and descriptor in the view, keypoints mapped back with octave `octave` (and, for a
+/// tilted view, refined on the original image's pyramid `original`: RefineOptions), appended to
+/// the level's record `level`.
+template <class Descriptor, int Bits>
+void describe_level(const Descriptor& descriptor, const AffineView& view, const Pyramid& pyramid, int l, int octave,
+                    const ExtractorOptions& options, const Pyramid& original, const cv::Mat& mask,
+                    ThreadWork<Descriptor>& work, LevelWork<Bits>& level) {
+  const LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+  const std::vector<int>& chosen = c.chosen;
+  if (chosen.empty()) return;
+  const cv::Matx23d& back = view.to_original;
+  const bool identity = view.is_identity();
+  work.describe_points.clear();
+  for (int i : chosen) work.describe_points.push_back(c.level_points[static_cast<std::size_t>(i)]);
+  descriptor.prepare(pyramid.level(l), work.describe_points, work.descriptor_data);
+  const float scale = static_cast<float>(options.pyramid.scale(l) * std::sqrt(view.tilt));
+  for (int i : chosen) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const cv::Point2f p = c.level_points[k];
+    const float angle = descriptor.orientation(work.descriptor_data, p);
+    level.descriptors.push_back(descriptor.describe(work.descriptor_data, p, angle));
+    // The direction (cos θ, sin θ) in the view, mapped to the original image.
+    const double dx = back(0, 0) * std::cos(angle) + back(0, 1) * std::sin(angle);
+    const double dy = back(1, 0) * std::cos(angle) + back(1, 1) * std::sin(angle);
+    const float original_angle = identity ? angle : static_cast<float>(std::atan2(dy, dx));
+    cv::Point2f position = c.original_points[k];
+    if (!identity && options.refine.enabled) {
+      if (const std::optional<cv::Point2f> refined = refine_to_corner(original, position, octave, options.refine.radius,
+                                                                      options.detector.min_threshold, mask)) {
+        position = *refined;
+      }
+    }
+    level.keypoints.emplace_back(position, Descriptor::kPatchSize * scale, radians_to_degrees_0_360(original_angle),
+                                 c.responses[k], octave);
+    level.original_points.push_back(c.original_points[k]);
+    level.responses.push_back(c.responses[k]);
+  }
+}
+/// Keeps `target` of `points` by quadtree spreading over `region` or by strength (`spreading`),
+/// into work.kept (ascending indices).
+inline void spread(Spreading spreading, const std::vector<cv::Point2f>& points, const std::vector<float>& responses,
+                   const cv::Rect2f& region, int target, SpreadWork& work) {
+  if (spreading == Spreading::kQuadtree) {
+    distribute_quadtree(points, responses, region, target, work.quadtree, work.kept);
+  } else {
+    select_strongest(responses, target, work.kept);
+  }
+}
+
+/// Enters in `repeats` (level l) what later views must not repeat of the chosen
+/// candidates of `c`: those a selection of `take` among them keeps (all of them when they are
+/// the final keypoints; for a shortlist, its nominal budget: the final selection when no
+/// shortfall is carried, so that the rest of the shortlist suppresses nothing).
+inline void enter_repeat_references(Spreading spreading, const LevelCandidates& c, int l, int take,
+                                    const cv::Rect2f& region, SpreadWork& work, RepeatGrids& repeats) {
+  // Both selections keep exactly min(take, n) of n: with take >= n, every chosen candidate.
+  if (take >= static_cast<int>(c.chosen.size())) {
+    for (int i : c.chosen) repeats.enter(c.original_points[static_cast<std::size_t>(i)], l);
+    return;
+  }
+  work.points.clear();
+  work.responses.clear();
+  for (int i : c.chosen) {
+    work.points.push_back(c.original_points[static_cast<std::size_t>(i)]);
+    work.responses.push_back(c.responses[static_cast<std::size_t>(i)]);
+  }
+  spread(spreading, work.points, work.responses, region, take, work);
+  for (int k : work.kept) repeats.enter(work.points[static_cast<std::size_t>(k)], l);
+}
+
+/// The output of views [first, last) of an Extractor: keypoints grouped by octave (0 first), then by
+/// view, then level, then raster order in the view. `octave_start` is a buffer reused across calls.
+template <int Bits>
+Features<Bits> assemble(const std::vector<ViewWork<Bits>>& view_work, int first, int last, int levels,
+                        std::vector<int>& octave_start) {
+  octave_start.assign(static_cast<std::size_t>(levels) + 1, 0);
+  for (int v = first; v < last; ++v) {
+    for (const LevelWork<Bits>& level : view_work[static_cast<std::size_t>(v)].levels) {
+      for (int i : level.kept) {
+        ++octave_start[static_cast<std::size_t>(level.keypoints[static_cast<std::size_t>(i)].octave) + 1];
+      }
+    }
+  }
+  for (int o = 0; o < levels; ++o)
+    octave_start[static_cast<std::size_t>(o) + 1] += octave_start[static_cast<std::size_t>(o)];
+  const std::size_t total = static_cast<std::size_t>(octave_start.back());
+  Features<Bits> features;
+  features.keypoints.resize(total);
+  features.descriptors.resize(total);
+  features.views.resize(total);
+  for (int v = first; v < last; ++v) {
+    for (const LevelWork<Bits>& level : view_work[static_cast<std::size_t>(v)].levels) {
+      for (int i : level.kept) {
+        const cv::KeyPoint& kp = level.keypoints[static_cast<std::size_t>(i)];
+        const std::size_t slot = static_cast<std::size_t>(octave_start[static_cast<std::size_t>(kp.octave)]++);
+        features.keypoints[slot] = kp;
+        features.descriptors[slot] = level.descriptors[static_cast<std::size_t>(i)];
+        features.views[slot] = v;
+      }
+    }
+  }
+  return features;
+}
+
+}  // namespace detail
+}  // namespace affine_orb

@@ -1,0 +1,442 @@
+#pragma once
+/// \file
+/// Extractor<Descriptor>: Affine-ORB feature extraction (paper section 3, SPEC §1–§3). Oriented FAST
+/// keypoints are detected on a scale pyramid of every simulated affine view, spread over the image
+/// under an exact feature budget, described in their view by a descriptor policy (Rbrief, Brisk),
+/// and mapped back to the original image.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/core/detail/buffer.hpp"
+#include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/detail/worker_pool.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/descriptors/descriptor.hpp"
+#include "affine_orb/detection/detector.hpp"
+#include "affine_orb/detection/distribution.hpp"
+#include "affine_orb/detection/fast.hpp"
+#include "affine_orb/detection/pyramid.hpp"
+#include "affine_orb/extraction/detail/extractor.hpp"
+#include "affine_orb/extraction/detail/view_regions.hpp"
+#include "affine_orb/extraction/detail/view_schedule.hpp"
+#include "affine_orb/extraction/extractor_options.hpp"
+#include "affine_orb/extraction/view_cursor.hpp"
+#include "affine_orb/views/affine_views.hpp"
+
+namespace affine_orb {
+
+/// Extracts keypoints and descriptors from grey images.
+///
+/// For an image of size W x H and every view v of ExtractorOptions::views (affine_views.hpp), one
+/// view at a time on each thread (its pixels live in that thread's buffers only while it is
+/// processed; the image's pyramid is kept until the next call, see pyramid()):
+/// 1. the view is rendered (render_view()) and a pyramid of PyramidOptions::levels levels is built
+///    on it; for a tilted view, level pixels farther than 8 level pixels from the original image
+///    repeat the nearest computed pixel of their row (only descriptor reads beyond the image, which
+///    are extrapolation anyway, can see them);
+/// 2. on each level, FAST candidates are detected (detect_candidates(), grid cells anchored at the
+///    support border) among the level's valid pixels only: those whose support (a disc of
+///    max(Descriptor::border(), DetectorOptions::support_radius()) level pixels) maps inside the
+///    original image (detail::support_region()); a cell falls back to the minimum threshold when
+///    its valid pixels hold no corner at the initial one. A candidate is kept if the mask pixel
+///    nearest to its original position is non-zero;
+/// 3. in view order (detail::ViewTurns), with DuplicatePolicy::kMerge, a tilted view drops its
+///    candidates that repeat a keypoint chosen by an earlier view (detail::RepeatGrids,
+///    ExtractorOptions::repeat_levels); then each level chooses what it describes: the image with
+///    ViewBudget::kAdditive its final keypoints, exactly as with max_tilt = 1 (`features` of them,
+///    levels geometric, shortfalls carried); every other view a shortlist
+///    (ExtractorOptions::shortlist);
+/// 4. the chosen keypoints are oriented and described in their view, then mapped back: position
+///    through the inverse view map, orientation by mapping the direction vector, scale s^l·√t
+///    (SPEC §1); a tilted view's keypoint is then snapped to a corner of the original image
+///    (RefineOptions);
+/// 5. once every view is done, a budget is split over the shortlisted views (kAdditive:
+///    view_features · features over the tilted views, in proportion to t^view_weight_exponent;
+///    kAreaSplit: `features` over all views, in proportion to their area 1/t) and, within a view,
+///    over levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry(),
+///    detail::ViewBudgets); each (view, level) keeps its share of its shortlist by quadtree
+///    spreading (distribute_quadtree()) in original coordinates, or its strongest keypoints
+///    (select_strongest()), per ExtractorOptions::spreading.
+///
+/// Output order: by octave (0 first), then by view, then by level, then raster order in the view.
+/// The output does not depend on ExtractorOptions::threads.
+///
+/// Views on demand: extract_image() is stage 0 (the image alone, exactly extract() with
+/// max_tilt = 1) and returns a ViewCursor; each extend() with it adds the views of further tilts,
+/// so that a caller pays for views only when it needs them (TwoViewMatcher escalates this way).
+/// The stages {extract_image(), extend(cursor, views.max_tilt, round(view_features · features))}
+/// give exactly extract()'s keypoints.
+///
+/// An Extractor holds a workspace reused across calls (and, with ExtractorOptions::threads > 1, its
+/// worker threads): it can be moved, not copied. Its size is the image's pyramid plus, per thread,
+/// the buffers of the largest view; once they have held the largest view of an image size, a call
+/// allocates only the three vectors it returns. One instance must not be used by two threads at
+/// once; separate instances share nothing.
+template <class Descriptor>
+class Extractor {
+ public:
+  static constexpr int kBits = Descriptor::kBits;
+  using DescriptorOptions = typename Descriptor::Options;
+
+  explicit Extractor(ExtractorOptions options = {}, DescriptorOptions descriptor_options = {})
+      : options_((options.check(), options)),
+        descriptor_(descriptor_options),
+        image_pyramid_(options_.pyramid),
+        thread_work_(static_cast<std::size_t>(options_.threads), ThreadWork(options_.pyramid)),
+        turns_(std::make_unique<detail::ViewTurns>()) {}
+
+  const ExtractorOptions& options() const { return options_; }
+  const Descriptor& descriptor() const { return descriptor_; }
+
+  /// The views of ExtractorOptions::views for the last image passed to extract() or
+  /// extract_image() (empty before the first call), in view index order (Features::views).
+  std::vector<AffineView> views() const {
+    std::vector<AffineView> out;
+    for (const ViewWork& w : view_work_) out.push_back(w.view);
+    return out;
+  }
+
+  /// The pyramid of the original (untilted) image of the last extract() or extract_image() call.
+  const Pyramid& pyramid() const {
+    detail::require(!view_work_.empty() && !image_pyramid_.empty(), "Extractor::pyramid: extract() was not called yet");
+    return image_pyramid_;
+  }
+
+  /// Keypoints (original pixel coordinates) and descriptors of a CV_8UC1 image (a ROI of a larger
+  /// matrix is fine), every view at once; see Features for the keypoint fields.
+  ///
+  /// `mask`: empty (everything allowed) or CV_8UC1 of the image size; a keypoint is kept only where
+  /// the mask pixel nearest to its original position is non-zero.
+  ///
+  /// Throws std::invalid_argument for an empty image, a type other than CV_8UC1, or a mask of the
+  /// wrong size or type. A valid image with no corners (flat, or smaller than the descriptor
+  /// support on every level) gives an empty result.
+  Features<kBits> extract(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
+    begin(image, mask);
+    const int n_views = static_cast<int>(view_work_.size());
+    if (additive()) {
+      budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
+      budgets_.share(tilts_, 1, n_views, static_cast<int>(std::lround(options_.view_features * options_.features)),
+                     options_.view_weight_exponent, options_.pyramid.scale_factor);
+    } else {
+      budgets_.share(tilts_, 0, n_views, options_.features, -1.0, options_.pyramid.scale_factor);
+    }
+    run_views(image, mask, 0, n_views);
+    return assemble(0, n_views);
+  }
+
+  /// Views on demand, stage 0: the keypoints of the image alone, exactly extract()'s with
+  /// views.max_tilt = 1 (the image's `features` keypoints), and the cursor for extend(), which
+  /// holds `image` and `mask` (headers, not copies). Same arguments, checks and exceptions as
+  /// extract(); also throws std::invalid_argument unless ExtractorOptions::view_budget is
+  /// ViewBudget::kAdditive.
+  StagedFeatures<kBits> extract_image(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
+    detail::require(additive(), "Extractor::extract_image: views on demand need ViewBudget::kAdditive");
+    begin(image, mask);
+    budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
+    run_views(image, mask, 0, 1);
+    StagedFeatures<kBits> out;
+    out.features = assemble(0, 1);
+    out.cursor.image_ = image;
+    out.cursor.mask_ = mask;
+    out.cursor.extracted_views_ = 1;
+    out.cursor.extracted_tilt_ = 1.0;
+    out.cursor.image_serial_ = image_serial_;
+    return out;
+  }
+
+  /// Views on demand, next stage: the keypoints that the tilted views of ExtractorOptions::views
+  /// with tilt in (cursor.extracted_tilt(), up_to_tilt] add to the cursor's image, `features` of
+  /// them in all when there are enough corners (shared over the stage's views in proportion to
+  /// t^view_weight_exponent, then over levels and with shortfalls carried as in extract()). With
+  /// DuplicatePolicy::kMerge a candidate is dropped when it repeats a keypoint of an earlier stage
+  /// or of an earlier view of this stage. Earlier stages' keypoints are not changed: the union of
+  /// the stages so far is a superset of the stages before. Returns only the stage's keypoints
+  /// (Features::views index views()) and advances `cursor`; an empty result, the cursor unchanged,
+  /// when no view is left up to `up_to_tilt` (views beyond views.max_tilt do not exist).
+  ///
+  /// Throws std::invalid_argument for a cursor not returned by this Extractor's last
+  /// extract_image() (or a later extract() or extract_image() call), for up_to_tilt not finite,
+  /// or features outside [0, 1000000].
+  Features<kBits> extend(ViewCursor& cursor, double up_to_tilt, int features) {
+    detail::require(cursor.extracted_views_ > 0 && cursor.image_serial_ == image_serial_,
+                    "Extractor::extend: the cursor is not from this Extractor's last extract_image()");
+    detail::require(std::isfinite(up_to_tilt), "Extractor::extend: up_to_tilt must be finite");
+    detail::require(features >= 0 && features <= 1000000, "Extractor::extend: features must be in [0, 1000000]");
+    const int first = cursor.extracted_views_;
+    int last = first;
+    // The same 0.1 % tolerance as view_parameters(), so that 2.83 includes 2√2.
+    while (last < static_cast<int>(view_work_.size()) &&
+           tilts_[static_cast<std::size_t>(last)] <= up_to_tilt * (1.0 + 1e-3)) {
+      ++last;
+    }
+    if (last == first) return {};
+    // What the earlier stages finally kept is what this stage must not repeat.
+    if (merging()) {
+      repeats_.reset(cursor.image_.size(), options_.pyramid, options_.merge_radius, options_.repeat_levels);
+      for (int v = 0; v < first; ++v) enter_kept(v);
+    }
+    budgets_.share(tilts_, first, last, features, options_.view_weight_exponent, options_.pyramid.scale_factor);
+    run_views(cursor.image_, cursor.mask_, first, last);
+    cursor.extracted_views_ = last;
+    cursor.extracted_tilt_ = tilts_[static_cast<std::size_t>(last - 1)];
+    return assemble(first, last);
+  }
+
+ private:
+  using SpreadWork = detail::SpreadWork;
+  using LevelCandidates = detail::LevelCandidates;
+  using ThreadWork = detail::ThreadWork<Descriptor>;
+  using LevelWork = detail::LevelWork<kBits>;
+  using ViewWork = detail::ViewWork<kBits>;
+
+  /// Margin in level pixels around the original image within which a view and its pyramid levels
+  /// are computed: more than the reach beyond a valid keypoint's support of the rBRIEF smoothing
+  /// (3 level pixels) and of the bilinear interpolation between levels.
+  static constexpr double kRenderMargin = 8.0;
+
+  // ---- The walk of one image ------------------------------------------------------------------
+
+  /// Checks the arguments, prepares the view set for the image size and empties the repeat grids;
+  /// makes every earlier ViewCursor invalid.
+  void begin(const cv::Mat& image, const cv::Mat& mask) {
+    detail::require_gray8(image, "Extractor::extract");
+    detail::require_mask(mask, image.size(), "Extractor::extract");
+    prepare_views(image.size());
+    ++image_serial_;
+    if (merging()) repeats_.reset(image.size(), options_.pyramid, options_.merge_radius, options_.repeat_levels);
+  }
+
+  /// Steps 1–5 for views [first, last), whose budgets are set: every view processed (in parallel,
+  /// taking turns in view order), then the final selection of the shortlisted ones.
+  void run_views(const cv::Mat& image, const cv::Mat& mask, int first, int last) {
+    turns_->reset(first);
+    for_each(last - first,
+             [&](int i, int w) { process_view(first + i, image, mask, thread_work_[static_cast<std::size_t>(w)]); });
+    const int shortlisted = first == 0 && direct(0) ? 1 : first;
+    if (shortlisted < last) select_shortlisted(image.size(), shortlisted, last);
+  }
+
+  /// Steps 1–4 for view v on the thread owning `work`; a failure ends every turn still to come.
+  void process_view(int v, const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
+    try {
+      ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+      for (LevelWork& level : view.levels) level.clear();
+      const bool empty = v != 0 && budgets_.view(v) == 0;  // nothing of it could be kept
+      Pyramid& pyramid = v == 0 ? image_pyramid_ : work.pyramid;
+      if (!empty) {
+        view.renderer.render(image, &view.regions.front(), work.scratch, pyramid.level0(view.view.size));
+        pyramid.build_from_level0(view.view.is_identity() ? nullptr : &view.regions);
+        detect_view(v, image, mask, pyramid, work);
+      }
+      if (!turns_->wait(v)) return;
+      if (!empty) {
+        if (merging() && v > 0) detail::drop_repeats(repeats_, work.levels);
+        choose(v, image.size(), work);
+      }
+      turns_->pass(v);
+      if (!empty) describe_view(v, pyramid, mask, work);
+    } catch (...) {
+      turns_->fail();
+      throw;
+    }
+  }
+
+  /// Step 2 for view v: candidates of every level into work.levels (detail::detect_view()).
+  void detect_view(int v, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, ThreadWork& work) {
+    detail::detect_view(view_work_[static_cast<std::size_t>(v)], image, mask, pyramid, support_border(),
+                        options_.detector, work.detector, work.levels);
+  }
+
+  /// Step 3, in view v's turn: the candidates each level describes (its final keypoints when
+  /// direct(v), else its shortlist), entered in the repeat grids for the views after it.
+  void choose(int v, cv::Size size, ThreadWork& work) {
+    const int levels = options_.pyramid.levels;
+    if (direct(v)) {
+      available_.clear();
+      for (const LevelCandidates& c : work.levels) available_.push_back(static_cast<int>(c.responses.size()));
+      budgets_.allocate(v * levels, (v + 1) * levels, available_);
+    }
+    for (int l = 0; l < levels; ++l) {
+      LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+      const int g = v * levels + l;
+      const int target = direct(v) ? budgets_.take(g)
+                                   : detail::shortlist_size(static_cast<int>(c.responses.size()), budgets_.group(g),
+                                                            options_.shortlist);
+      const cv::Rect2f region = spread_region(v, l, size);
+      detail::spread(options_.spreading, c.original_points, c.responses, region, target, work.spread);
+      c.chosen = work.spread.kept;
+      if (merging()) {
+        detail::enter_repeat_references(options_.spreading, c, l, direct(v) ? target : budgets_.group(g), region,
+                                        work.spread, repeats_);
+      }
+    }
+  }
+
+  /// Step 4 for view v: every level's chosen candidates described and mapped back; a direct view's
+  /// are its output as they are.
+  void describe_view(int v, const Pyramid& pyramid, const cv::Mat& mask, ThreadWork& work) {
+    ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      describe_level(v, l, pyramid, mask, work);
+      if (direct(v)) {
+        LevelWork& level = view.levels[static_cast<std::size_t>(l)];
+        level.kept.resize(level.keypoints.size());
+        std::iota(level.kept.begin(), level.kept.end(), 0);
+      }
+    }
+  }
+
+  /// Step 4 for the chosen candidates of view v, level l (detail::describe_level()).
+  void describe_level(int v, int l, const Pyramid& pyramid, const cv::Mat& mask, ThreadWork& work) {
+    const int octave = std::min(l + octave_shift_[static_cast<std::size_t>(v)], options_.pyramid.levels - 1);
+    detail::describe_level(descriptor_, view_work_[static_cast<std::size_t>(v)].view, pyramid, l, octave, options_,
+                           image_pyramid_, mask, work, level_of(v, l));
+  }
+
+  /// Step 5 for the shortlisted views [first, last): their budgets with shortfalls carried among
+  /// all their (view, level) groups, and each group's final selection among its shortlist.
+  void select_shortlisted(cv::Size size, int first, int last) {
+    const int levels = options_.pyramid.levels;
+    available_.clear();
+    for (int g = first * levels; g < last * levels; ++g) {
+      available_.push_back(static_cast<int>(level_of(g / levels, g % levels).keypoints.size()));
+    }
+    budgets_.allocate(first * levels, last * levels, available_);
+    for_each(last - first, [&](int i, int w) {
+      ThreadWork& work = thread_work_[static_cast<std::size_t>(w)];
+      for (int l = 0; l < levels; ++l) {
+        LevelWork& level = level_of(i + first, l);
+        detail::spread(options_.spreading, level.original_points, level.responses, spread_region(i + first, l, size),
+                       budgets_.take((i + first) * levels + l), work.spread);
+        level.kept = work.spread.kept;
+      }
+    });
+  }
+
+  /// The output of views [first, last): keypoints grouped by octave (0 first), then by view, then
+  /// level, then raster order in the view.
+  Features<kBits> assemble(int first, int last) {
+    return detail::assemble(view_work_, first, last, options_.pyramid.levels, octave_start_);
+  }
+
+  // ---- The pieces the walk uses ---------------------------------------------------------------
+
+  LevelWork& level_of(int v, int l) {
+    return view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
+  }
+
+  bool additive() const { return options_.view_budget == ViewBudget::kAdditive; }
+  bool merging() const { return options_.duplicates == DuplicatePolicy::kMerge; }
+
+  /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
+  /// only view), rather than a shortlist chosen from once every view is done.
+  bool direct(int v) const { return v == 0 && (additive() || view_work_.size() == 1); }
+
+  /// The box, in original pixels, that the spreading of view v, level l divides
+  /// (detail::spread_region()).
+  cv::Rect2f spread_region(int v, int l, cv::Size size) const {
+    const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+    return detail::spread_region(view.view, view.levels[static_cast<std::size_t>(l)].valid, size, options_.pyramid, l);
+  }
+
+  /// Support radius in level pixels around a candidate: the descriptor's and the ranking's.
+  int support_border() const { return std::max(descriptor_.border(), options_.detector.support_radius()); }
+
+  /// (Re)builds the view set, the renderers and the valid regions when the image size changes;
+  /// buffers are kept otherwise.
+  void prepare_views(cv::Size size) {
+    if (size == views_size_ && !view_work_.empty()) return;
+    const std::vector<AffineView> views = make_views(options_.views, size);
+    view_work_.clear();
+    view_work_.resize(views.size());
+    tilts_.clear();
+    octave_shift_.clear();
+    cv::Size largest_tilted;
+    for (std::size_t v = 0; v < views.size(); ++v) {
+      ViewWork& work = view_work_[v];
+      detail::prepare_view(views[v], size, options_.views.antialias, options_.pyramid, support_border(), kRenderMargin,
+                           work);
+      if (v > 0) {
+        largest_tilted.width = std::max(largest_tilted.width, work.view.size.width);
+        largest_tilted.height = std::max(largest_tilted.height, work.view.size.height);
+      }
+      tilts_.push_back(views[v].tilt);
+      // The level nearest (in log scale) to the scale s^l·√t is l + round(log √t / log s).
+      octave_shift_.push_back(
+          static_cast<int>(std::lround(0.5 * std::log(views[v].tilt) / std::log(options_.pyramid.scale_factor))));
+    }
+    budgets_.resize(views.size(), options_.pyramid.levels);
+    // Every thread's buffers sized for the largest tilted view now, so that which thread gets
+    // which view in later frames never makes one allocate.
+    for (ThreadWork& work : thread_work_) {
+      work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      if (largest_tilted.area() > 0) {
+        work.pyramid.reserve(largest_tilted);
+        detail::fit_buffer(work.detector.scores, largest_tilted, CV_8UC1);
+      }
+    }
+    views_size_ = size;
+  }
+
+  /// Runs fn(i, w) for every i in [0, n), on options_.threads threads (the calling thread
+  /// included, the others kept in pool_ from the first call on); w in [0, threads) numbers the
+  /// thread, for per-thread scratch buffers. Indices are handed out in increasing order.
+  template <class Fn>
+  void for_each(int n, Fn fn) {
+    if (options_.threads <= 1 || n <= 1) {
+      for (int v = 0; v < n; ++v) fn(v, 0);
+      return;
+    }
+    if (!pool_) pool_ = std::make_unique<detail::WorkerPool>(options_.threads);
+    pool_->run(n, fn);
+  }
+
+  /// Enters the final keypoints of view v (its kept ones, unrefined positions) in the repeat grids.
+  void enter_kept(int v) {
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      const LevelWork& level = level_of(v, l);
+      for (int i : level.kept) repeats_.enter(level.original_points[static_cast<std::size_t>(i)], l);
+    }
+  }
+
+  ExtractorOptions options_;
+  Descriptor descriptor_;
+  /// Per view (fixed for a view set, prepare_views()): its tilt, and the octave shift: a keypoint
+  /// of its level l has the octave min(l + shift, levels − 1), the level nearest to its scale
+  /// s^l·√t.
+  std::vector<double> tilts_;
+  std::vector<int> octave_shift_;
+  /// Nominal budget and final take of every (view, level), set per run.
+  detail::ViewBudgets budgets_;
+  /// Per run: what each (view, level) of the groups being allocated offers.
+  std::vector<int> available_;
+  /// DuplicatePolicy::kMerge: the keypoints chosen by the views processed so far.
+  detail::RepeatGrids repeats_;
+  std::vector<int> octave_start_;  ///< buffer of assemble()
+  cv::Size views_size_;
+  std::vector<ViewWork> view_work_;
+  /// The image's pyramid, kept until the next call (pyramid(), RefineOptions).
+  Pyramid image_pyramid_;
+  /// Counts the images begun, so that extend() recognises the cursor of the current one.
+  std::uint64_t image_serial_ = 0;
+  /// Per worker thread: the buffers views are processed in.
+  std::vector<ThreadWork> thread_work_;
+  std::unique_ptr<detail::ViewTurns> turns_;
+  /// The worker threads when options_.threads > 1, started by the first extract().
+  std::unique_ptr<detail::WorkerPool> pool_;
+};
+
+}  // namespace affine_orb

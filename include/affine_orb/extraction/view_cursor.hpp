@@ -1,0 +1,57 @@
+#pragma once
+/// \file
+/// ViewCursor and StagedFeatures: views on demand as an object the caller holds
+/// (Extractor::extract_image(), Extractor::extend()).
+
+#include <cstdint>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/core/features.hpp"
+
+namespace affine_orb {
+
+template <class Descriptor>
+class Extractor;
+
+/// Where views on demand stand for one image: returned with the image's keypoints by
+/// Extractor::extract_image() and advanced by each Extractor::extend(). It holds the image and the
+/// mask (cv::Mat headers sharing their pixels, which must not change while the cursor is used) and
+/// how many of the Extractor's views are extracted. The keypoints of earlier stages stay in the
+/// Extractor's workspace, so a cursor is valid until that Extractor extracts another image;
+/// extend() throws std::invalid_argument for a cursor that is no longer valid.
+class ViewCursor {
+ public:
+  ViewCursor() = default;
+  /// Move-only: one cursor per staged image, so that no stage is extracted twice.
+  ViewCursor(ViewCursor&&) = default;
+  ViewCursor& operator=(ViewCursor&&) = default;
+  ViewCursor(const ViewCursor&) = delete;
+  ViewCursor& operator=(const ViewCursor&) = delete;
+
+  /// The largest tilt whose views are extracted: 1 after extract_image() (the image alone), 0 for
+  /// a default-constructed cursor.
+  double extracted_tilt() const { return extracted_tilt_; }
+  /// The views extracted so far, the image included: extend() continues with view index
+  /// extracted_views() (Extractor::views()).
+  int extracted_views() const { return extracted_views_; }
+
+ private:
+  template <class Descriptor>
+  friend class Extractor;
+  cv::Mat image_;
+  cv::Mat mask_;
+  int extracted_views_ = 0;
+  double extracted_tilt_ = 0.0;
+  std::uint64_t image_serial_ = 0;  ///< which extraction of its Extractor the cursor belongs to
+};
+
+/// What Extractor::extract_image() returns: the keypoints of stage 0 and the cursor that extend()
+/// advances.
+template <int Bits>
+struct StagedFeatures {
+  Features<Bits> features;
+  ViewCursor cursor;
+};
+
+}  // namespace affine_orb

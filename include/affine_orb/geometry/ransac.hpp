@@ -1,0 +1,330 @@
+#pragma once
+/// \file
+/// Generic, seeded RANSAC over a compile-time estimator interface (no virtual calls), with the
+/// truncated χ² score of ORB-SLAM's initializer (paper eqs. 20–21) as the scoring rule of the
+/// geometric estimators.
+///
+/// An estimator type `E` provides:
+///
+/// - `using Model = ...;` copyable and default-constructible;
+/// - `static constexpr int kSampleSize;` correspondences per minimal sample;
+/// - `static constexpr int kMaxModels;` most models one minimal sample can give;
+/// - `std::size_t size() const;` number of correspondences;
+/// - `ModelSet<Model, kMaxModels> generate(const std::array<int, kSampleSize>& sample) const;`
+///   the models through the sampled correspondences (indices in [0, size())); zero models for a
+///   degenerate sample (repeated or collinear points), never a non-finite model;
+/// - `PointScore score(const Model& model, std::size_t index) const;` the score contribution of
+///   one correspondence (larger is better) and whether it is an inlier;
+/// - `double max_point_score() const;` an upper bound of `score(...).value`, used to stop scoring
+///   a model as soon as it can no longer beat the best one (this never changes the result);
+/// - optionally `std::optional<Model> refine(const Model& model, const std::vector<std::uint8_t>&
+///   inliers) const;` a re-estimate from all inliers of `model` (mask of size() entries, non-zero
+///   = inlier), or nullopt; ransac() calls it repeatedly (local optimisation), so one step of an
+///   iterative method is enough.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/geometry/detail/ransac.hpp"
+#include "affine_orb/geometry/detail/ransac_sampler.hpp"
+
+namespace affine_orb {
+
+/// Iteration control of ransac().
+struct RansacOptions {
+  /// Most minimal samples drawn. With adaptive termination at 99 % confidence, 500 covers 8-point
+  /// samples (F) at up to ~44 % outliers: log(0.01) / log(1 − 0.56⁸) ≈ 474 (Hartley & Zisserman,
+  /// Multiple View Geometry, 2nd ed., Table 4.3, lists 1177 at 50 %). ORB-SLAM2's initializer
+  /// draws a fixed 200 (Initializer.cc, mMaxIterations).
+  int max_iterations = 500;
+  /// Fewest minimal samples drawn even when adaptive termination would stop earlier, so that a
+  /// first model with nearly all points as inliers is still compared with a few others. 20 is a
+  /// quarter of the ~78 8-point samples 30 % outliers call for.
+  int min_iterations = 20;
+  /// Probability that at least one drawn sample is outlier-free when the search stops: iterations
+  /// N = log(1 − confidence) / log(1 − w^s) for inlier ratio w of the best model so far and sample
+  /// size s (Fischler & Bolles 1981; Hartley & Zisserman eq. 4.18). 0.99 is the customary value
+  /// (Hartley & Zisserman Sec. 4.7.1).
+  double confidence = 0.99;
+  /// Seed of the std::mt19937_64 that draws the samples: the same data, options and seed give the
+  /// same result.
+  std::uint64_t seed = 0x5eed;
+  /// Adaptive termination treats the inlier ratio as at least this value (0 = off): the search
+  /// stops once a model supported by this share of the correspondences would have been sampled
+  /// with `confidence`, even when the best model so far has fewer inliers. For searches where only
+  /// models at least that well supported matter (select_model() stops the search for H once no
+  /// H that could change its decision can have been missed).
+  double termination_inlier_ratio = 0.0;
+  /// Local optimisation (LO-RANSAC, Chum, Matas & Kittler, DAGM 2003): every new best model is
+  /// re-estimated from its inliers and re-scored, up to this many times while the score improves
+  /// and the inlier set changes (0 = none). Only used when the estimator has refine(). A model from
+  /// a noisy minimal sample can start with a fraction of the inliers; the set grows pass by pass and
+  /// has settled after well under 10 passes in the tests and benchmarks.
+  int refinement_passes = 10;
+
+  /// Throws std::invalid_argument unless 1 <= max_iterations, 0 <= min_iterations <=
+  /// max_iterations, 0 < confidence < 1, 0 <= termination_inlier_ratio <= 1 and
+  /// refinement_passes >= 0.
+  void check() const {
+    detail::require(max_iterations >= 1,
+                    "RansacOptions: max_iterations must be >= 1, got " + std::to_string(max_iterations));
+    detail::require(
+        min_iterations >= 0 && min_iterations <= max_iterations,
+        "RansacOptions: min_iterations must be in [0, max_iterations], got " + std::to_string(min_iterations));
+    detail::require(std::isfinite(confidence) && confidence > 0.0 && confidence < 1.0,
+                    "RansacOptions: confidence must be in (0, 1), got " + std::to_string(confidence));
+    detail::require(
+        std::isfinite(termination_inlier_ratio) && termination_inlier_ratio >= 0.0 && termination_inlier_ratio <= 1.0,
+        "RansacOptions: termination_inlier_ratio must be in [0, 1], got " + std::to_string(termination_inlier_ratio));
+    detail::require(refinement_passes >= 0,
+                    "RansacOptions: refinement_passes must be >= 0, got " + std::to_string(refinement_passes));
+  }
+};
+
+/// Truncated χ² score of one measurement direction (ORB-SLAM initializer; paper eqs. 20–21):
+/// a squared error d² (pixels²) contributes score_constant − d²/σ² when d²/σ² < chi2_threshold and
+/// nothing otherwise.
+struct TruncatedChi2Score {
+  /// Standard deviation σ of the measurement, pixels (ORB-SLAM2: 1 px at pyramid level 0).
+  double sigma = 1.0;
+  /// Rejection threshold T_m on d²/σ². 5.991 is the 95 % quantile of χ² with 2 degrees of freedom
+  /// (homography transfer error); use 3.841 (1 degree of freedom) for epipolar distances.
+  double chi2_threshold = 5.991;
+  /// Scoring constant T (ORB-SLAM2 uses 5.991 for both models so that their scores compare).
+  double score_constant = 5.991;
+
+  /// Throws std::invalid_argument unless sigma and chi2_threshold are positive and finite and
+  /// chi2_threshold <= score_constant < infinity (so that every inlier term is positive).
+  void check() const {
+    detail::require(detail::positive_finite(sigma),
+                    "TruncatedChi2Score: sigma must be positive and finite, got " + std::to_string(sigma));
+    detail::require(
+        detail::positive_finite(chi2_threshold),
+        "TruncatedChi2Score: chi2_threshold must be positive and finite, got " + std::to_string(chi2_threshold));
+    detail::require(std::isfinite(score_constant) && score_constant >= chi2_threshold,
+                    "TruncatedChi2Score: score_constant must be finite and >= chi2_threshold, got " +
+                        std::to_string(score_constant));
+  }
+};
+
+/// Per-correspondence multipliers of a score's σ, one list per image: an error measured in image k
+/// (the distance of a point of image k to its predicted position or epipolar line) of
+/// correspondence i is divided by (σ · image_k[i])² instead of σ². For keypoints detected at
+/// different pyramid levels: a keypoint of octave o is located to about s^o level-0 pixels (scale
+/// factor s), so image_k[i] = s^o of its keypoint. Empty lists mean 1 for every correspondence.
+struct SigmaScales {
+  std::vector<double> image1;  ///< multiplier of σ for errors measured in image 1, unitless
+  std::vector<double> image2;  ///< multiplier of σ for errors measured in image 2, unitless
+
+  /// Throws std::invalid_argument unless both lists are empty, or both have `count` entries that
+  /// are all positive and finite.
+  void check(std::size_t count) const {
+    detail::require((image1.empty() && image2.empty()) || (image1.size() == count && image2.size() == count),
+                    "SigmaScales: image1 and image2 must both be empty or both have one entry per correspondence (" +
+                        std::to_string(count) + "), got " + std::to_string(image1.size()) + " and " +
+                        std::to_string(image2.size()));
+    for (const std::vector<double>* list : {&image1, &image2}) {
+      for (const double v : *list) {
+        detail::require(detail::positive_finite(v),
+                        "SigmaScales: every multiplier must be positive and finite, got " + std::to_string(v));
+      }
+    }
+  }
+};
+
+/// Score contribution of one correspondence under one model.
+struct PointScore {
+  double value = 0.0;   ///< added to the model's score; larger is better
+  bool inlier = false;  ///< whether the correspondence supports the model
+};
+
+/// A checked TruncatedChi2Score with 1/σ² computed once, as the estimators apply it to every
+/// squared residual of every model.
+class Chi2Scorer {
+ public:
+  /// Throws std::invalid_argument when `scoring` fails its check().
+  explicit Chi2Scorer(const TruncatedChi2Score& scoring)
+      : inv_sigma_squared_((scoring.check(), 1.0 / (scoring.sigma * scoring.sigma))),
+        threshold_(scoring.chi2_threshold),
+        constant_(scoring.score_constant) {}
+
+  /// Adds the term of one squared residual (pixels²) to `s`: T − d²/σ² when d²/σ² < T_m, else
+  /// marks the correspondence an outlier (also for NaN, an undefined residual).
+  /// `inverse_scale_squared` is 1/m² for a σ multiplied by m for this correspondence (SigmaScales;
+  /// 1 for σ itself).
+  void add(double squared, double inverse_scale_squared, PointScore& s) const {
+    const double chi2 = squared * inv_sigma_squared_ * inverse_scale_squared;
+    if (chi2 < threshold_) {
+      s.value += constant_ - chi2;
+    } else {
+      s.inlier = false;
+    }
+  }
+
+  /// Score of a correspondence with `residuals` residuals at zero.
+  double max_score(int residuals) const { return residuals * constant_; }
+
+ private:
+  double inv_sigma_squared_;
+  double threshold_;
+  double constant_;
+};
+
+/// SigmaScales as the factors 1/m² the squared errors are multiplied by (1 when the lists are empty).
+class InverseScaleSquares {
+ public:
+  InverseScaleSquares() = default;
+  /// Throws std::invalid_argument when `scales` fails check(count).
+  InverseScaleSquares(const SigmaScales& scales, std::size_t count) {
+    scales.check(count);
+    for (const double m : scales.image1) image1_.push_back(1.0 / (m * m));
+    for (const double m : scales.image2) image2_.push_back(1.0 / (m * m));
+  }
+  /// 1/m² of correspondence i for an error measured in image 1 (image1()) or image 2 (image2()).
+  double image1(std::size_t i) const { return image1_.empty() ? 1.0 : image1_[i]; }
+  double image2(std::size_t i) const { return image2_.empty() ? 1.0 : image2_[i]; }
+
+ private:
+  std::vector<double> image1_, image2_;
+};
+
+/// Up to `Capacity` models from one minimal sample, stored inline (no allocation).
+template <class Model, int Capacity>
+struct ModelSet {
+  std::array<Model, static_cast<std::size_t>(Capacity)> models{};
+  int count = 0;
+
+  /// Appends a model (ignored when full).
+  void push(const Model& model) {
+    if (count < Capacity) models[static_cast<std::size_t>(count++)] = model;
+  }
+};
+
+/// Outcome of ransac().
+template <class Model>
+struct RansacResult {
+  /// True when a model supported by at least a minimal sample's worth of inliers was found.
+  bool success = false;
+  /// The best model (after refinement); value-initialised when !success.
+  Model model{};
+  /// One entry per correspondence, 1 = inlier of `model`.
+  std::vector<std::uint8_t> inliers;
+  int inlier_count = 0;
+  /// Sum of the per-correspondence scores of `model`.
+  double score = 0.0;
+  /// Minimal samples drawn.
+  int iterations = 0;
+};
+
+/// RANSAC with the estimator's score (MSAC-style when the score is the truncated χ² one):
+/// draws `draw_size` distinct correspondence indices per iteration from a std::mt19937_64 seeded
+/// with options.seed, hands the first Estimator::kSampleSize of them to estimator.generate(),
+/// locally optimises every model that beats all earlier sample models (see
+/// RansacOptions::refinement_passes), keeps the optimised model of highest score and stops
+/// adaptively (see RansacOptions).
+///
+/// `draw_size` (>= kSampleSize) exists so that two estimators can be run on the same sample sets:
+/// runs with the same seed, number of correspondences and draw_size see the same index sets in the
+/// same order (a run that terminates earlier sees a prefix of the other's sets).
+///
+/// Throws std::invalid_argument for invalid options or draw_size < kSampleSize. Fewer
+/// correspondences than draw_size, or no sample giving a model, is not an error: success = false.
+template <class Estimator>
+RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const RansacOptions& options,
+                                               int draw_size) {
+  using Model = typename Estimator::Model;
+  constexpr int kSampleSize = Estimator::kSampleSize;
+  static_assert(kSampleSize >= 1, "an estimator needs a positive sample size");
+  options.check();
+  detail::require(draw_size >= kSampleSize, "ransac: draw_size must be >= the estimator's sample size (" +
+                                                std::to_string(kSampleSize) + "), got " + std::to_string(draw_size));
+
+  const std::size_t n = estimator.size();
+  RansacResult<Model> result;
+  result.inliers.assign(n, 0);
+  if (n < static_cast<std::size_t>(draw_size) || n > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    return result;
+  }
+
+  detail::IndexSampler sampler(n, options.seed);
+  std::vector<int> drawn(static_cast<std::size_t>(draw_size));
+  std::array<int, static_cast<std::size_t>(kSampleSize)> sample{};
+  std::vector<std::uint8_t> mask(n, 0);
+  const auto iterations_for = [&](double inlier_ratio) {
+    return detail::adaptive_iterations(std::max(inlier_ratio, options.termination_inlier_ratio), kSampleSize,
+                                       options.confidence, options.max_iterations);
+  };
+  int needed = iterations_for(0.0);
+
+  // Minimal-sample models compete with each other (best_sample_score); each new best one is
+  // locally optimised (LO-RANSAC, Chum, Matas & Kittler, DAGM 2003): re-estimated from its
+  // inliers and re-scored while the score improves. The best optimised model is the result, and
+  // termination counts its inliers, which noisy minimal samples underestimate. Comparing samples
+  // with samples keeps a sample near the optimum from being shadowed by an optimised mediocre one.
+  RansacResult<Model> candidate;
+  candidate.inliers.assign(n, 0);
+  double best_sample_score = -std::numeric_limits<double>::infinity();
+  bool found = false;
+  const auto optimise_candidate = [&] {
+    if constexpr (detail::HasRefine<Estimator>::value) {
+      for (int pass = 0; pass < options.refinement_passes; ++pass) {
+        const std::optional<Model> refined = estimator.refine(candidate.model, candidate.inliers);
+        if (!refined) break;
+        const auto scored = detail::score_model(estimator, *refined, candidate.score, mask);
+        if (!scored) break;
+        candidate.model = *refined;
+        candidate.score = scored->first;
+        candidate.inlier_count = scored->second;
+        candidate.inliers.swap(mask);
+        if (candidate.inliers == mask) break;  // same inliers: the next pass would refit the same set
+      }
+    }
+  };
+
+  int iteration = 0;
+  while (iteration < options.max_iterations && (iteration < options.min_iterations || iteration < needed)) {
+    ++iteration;
+    sampler.draw(drawn.data(), draw_size);
+    std::copy_n(drawn.begin(), kSampleSize, sample.begin());
+    const auto models = estimator.generate(sample);
+    for (int m = 0; m < models.count; ++m) {
+      const Model& model = models.models[static_cast<std::size_t>(m)];
+      const auto scored = detail::score_model(estimator, model, best_sample_score, mask);
+      if (!scored || !(scored->first > best_sample_score)) continue;
+      best_sample_score = scored->first;
+      candidate.model = model;
+      candidate.score = scored->first;
+      candidate.inlier_count = scored->second;
+      candidate.inliers.swap(mask);
+      optimise_candidate();
+      if (found && !(candidate.score > result.score)) continue;
+      found = true;
+      result.model = candidate.model;
+      result.score = candidate.score;
+      result.inlier_count = candidate.inlier_count;
+      result.inliers.swap(candidate.inliers);
+      needed = iterations_for(static_cast<double>(result.inlier_count) / static_cast<double>(n));
+    }
+  }
+  result.iterations = iteration;
+  if (!found) return result;
+  result.success = result.inlier_count >= kSampleSize;
+  return result;
+}
+
+/// ransac() drawing exactly the estimator's minimal sample size per iteration.
+template <class Estimator>
+RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const RansacOptions& options = {}) {
+  return ransac(estimator, options, Estimator::kSampleSize);
+}
+
+}  // namespace affine_orb

@@ -1,0 +1,167 @@
+#pragma once
+/// \file
+/// Matching of two affine feature sets (SPEC §4): every simulated view of one image against every
+/// view of the other, as ASIFT does, then removal of the duplicate correspondences that several
+/// view pairs find for the same scene point.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/matching/detail/affine_matching.hpp"
+#include "affine_orb/matching/matcher.hpp"
+
+namespace affine_orb {
+
+/// How two affine feature sets are matched.
+struct AffineMatchOptions {
+  /// Nearest-neighbour acceptance (ratio test, cross-check, maximum distance).
+  MatcherOptions matcher;
+  /// Radius in pixels of image 2 within which train keypoints count as the same scene point for
+  /// the ratio test: the second neighbour d2 is the nearest train descriptor whose keypoint lies
+  /// farther than this from the best neighbour's keypoint. Affine views describe one scene point
+  /// several times with nearly equal descriptors; without the exclusion a ratio test over all of
+  /// them rejects its true match. 4 px covers the spread of one corner mapped back from several
+  /// views. 0: every other descriptor competes (the plain ratio test). In [0, 1000];
+  /// bench/eval_viewpoint measures matching with it.
+  double ratio_exclusion_radius = 4.0;
+  /// Match each view of image 1 against each view of image 2 separately (ASIFT's scheme) instead of
+  /// one search over all descriptors; ratio_exclusion_radius does not apply then. Per view pair the
+  /// ratio test sees few competitors, which finds more correct matches at a much lower precision.
+  bool per_view_pairs = false;
+  /// Two correspondences are duplicates when their points are within this distance in image 1 and
+  /// in image 2 (pixels, in [0, 1000]); the one with the smaller Hamming distance is kept. SPEC §4
+  /// says "within a pixel or two": 2.
+  double duplicate_radius = 2.0;
+
+  void check() const {
+    matcher.check();
+    detail::require(
+        std::isfinite(ratio_exclusion_radius) && ratio_exclusion_radius >= 0.0 && ratio_exclusion_radius <= 1000.0,
+        "AffineMatchOptions::ratio_exclusion_radius must be in [0, 1000], got " +
+            std::to_string(ratio_exclusion_radius));
+    detail::require(
+        std::isfinite(duplicate_radius) && duplicate_radius >= 0.0 && duplicate_radius <= 1000.0,
+        "AffineMatchOptions::duplicate_radius must be in [0, 1000], got " + std::to_string(duplicate_radius));
+  }
+};
+
+/// Drops duplicate correspondences: visiting matches by increasing distance (ties: smaller query,
+/// then smaller train index), a match is dropped when an already kept one has its image-1 point
+/// and its image-2 point both closer than `radius` pixels (strictly) to this match's points.
+/// `points1[m.query]` and `points2[m.train]` are the matched positions. Returns the kept matches
+/// sorted by query index, then train index.
+inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, const std::vector<cv::Point2f>& points1,
+                                                   const std::vector<cv::Point2f>& points2, double radius) {
+  detail::require(std::isfinite(radius) && radius >= 0.0, "remove_duplicate_matches: radius must be finite and >= 0");
+  std::sort(matches.begin(), matches.end(), [](const Match& a, const Match& b) {
+    return a.distance < b.distance ||
+           (a.distance == b.distance && (a.query < b.query || (a.query == b.query && a.train < b.train)));
+  });
+  std::vector<Match> kept;
+  if (radius == 0.0) {
+    kept = std::move(matches);
+  } else {
+    // Kept matches hashed by the grid cell (side = radius) of their image-1 point.
+    std::unordered_map<long long, std::vector<std::size_t>> grid;
+    auto key = [](long long cx, long long cy) { return cx * 2000003LL + cy; };
+    const double r2 = radius * radius;
+    for (const Match& m : matches) {
+      const cv::Point2f& p = points1[static_cast<std::size_t>(m.query)];
+      const cv::Point2f& q = points2[static_cast<std::size_t>(m.train)];
+      const long long cx = static_cast<long long>(std::floor(p.x / radius));
+      const long long cy = static_cast<long long>(std::floor(p.y / radius));
+      bool duplicate = false;
+      for (long long dy = -1; dy <= 1 && !duplicate; ++dy) {
+        for (long long dx = -1; dx <= 1 && !duplicate; ++dx) {
+          const auto it = grid.find(key(cx + dx, cy + dy));
+          if (it == grid.end()) continue;
+          for (std::size_t k : it->second) {
+            const cv::Point2f& kp = points1[static_cast<std::size_t>(kept[k].query)];
+            const cv::Point2f& kq = points2[static_cast<std::size_t>(kept[k].train)];
+            const double d1 = (kp.x - p.x) * (kp.x - p.x) + (kp.y - p.y) * (kp.y - p.y);
+            const double d2 = (kq.x - q.x) * (kq.x - q.x) + (kq.y - q.y) * (kq.y - q.y);
+            if (d1 < r2 && d2 < r2) {
+              duplicate = true;
+              break;
+            }
+          }
+        }
+      }
+      if (duplicate) continue;
+      grid[key(cx, cy)].push_back(kept.size());
+      kept.push_back(m);
+    }
+  }
+  std::sort(kept.begin(), kept.end(), [](const Match& a, const Match& b) {
+    return a.query < b.query || (a.query == b.query && a.train < b.train);
+  });
+  return kept;
+}
+
+/// Matches two feature sets from Extractor::extract() (SPEC §4). Match::query indexes `a`,
+/// Match::train indexes `b`.
+/// - Default: one search over all descriptors with the location-aware ratio test
+///   (AffineMatchOptions::ratio_exclusion_radius), max distance and optional cross-check.
+/// - per_view_pairs: each view of `a` against each view of `b` (Features::views; an empty views
+///   vector means one view) with match() and MatcherOptions as they are.
+/// Either way the union is freed of duplicates by remove_duplicate_matches(). Sets of different
+/// descriptor widths cannot be mixed (the template parameter differs). Empty sets give no matches.
+template <int Bits>
+std::vector<Match> match_features(const Features<Bits>& a, const Features<Bits>& b,
+                                  const AffineMatchOptions& options = {}) {
+  options.check();
+  detail::require(a.descriptors.size() == a.keypoints.size() && b.descriptors.size() == b.keypoints.size(),
+                  "match_features: keypoints and descriptors differ in number");
+  detail::require((a.views.empty() || a.views.size() == a.size()) && (b.views.empty() || b.views.size() == b.size()),
+                  "match_features: views must be empty or one per keypoint");
+  if (a.empty() || b.empty()) return {};
+
+  std::vector<Match> all;
+  if (!options.per_view_pairs) {
+    all = detail::match_excluding_duplicates(a, b, options.matcher, options.ratio_exclusion_radius);
+  } else {
+    // Indices of each view's keypoints.
+    auto group = [](const Features<Bits>& f) {
+      std::vector<std::vector<int>> by_view;
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        const int v = f.views.empty() ? 0 : f.views[i];
+        detail::require(v >= 0, "match_features: negative view index");
+        if (static_cast<std::size_t>(v) >= by_view.size()) by_view.resize(static_cast<std::size_t>(v) + 1);
+        by_view[static_cast<std::size_t>(v)].push_back(static_cast<int>(i));
+      }
+      return by_view;
+    };
+    const std::vector<std::vector<int>> views_a = group(a);
+    const std::vector<std::vector<int>> views_b = group(b);
+    std::vector<BinaryDescriptor<Bits>> query;
+    std::vector<BinaryDescriptor<Bits>> train;
+    for (const std::vector<int>& ia : views_a) {
+      if (ia.empty()) continue;
+      query.clear();
+      for (int i : ia) query.push_back(a.descriptors[static_cast<std::size_t>(i)]);
+      for (const std::vector<int>& ib : views_b) {
+        if (ib.empty()) continue;
+        train.clear();
+        for (int j : ib) train.push_back(b.descriptors[static_cast<std::size_t>(j)]);
+        for (const Match& m : match(query, train, options.matcher)) {
+          all.push_back({ia[static_cast<std::size_t>(m.query)], ib[static_cast<std::size_t>(m.train)], m.distance});
+        }
+      }
+    }
+  }
+  std::vector<cv::Point2f> points_a;
+  std::vector<cv::Point2f> points_b;
+  points_a.reserve(a.size());
+  points_b.reserve(b.size());
+  for (const cv::KeyPoint& k : a.keypoints) points_a.push_back(k.pt);
+  for (const cv::KeyPoint& k : b.keypoints) points_b.push_back(k.pt);
+  return remove_duplicate_matches(std::move(all), points_a, points_b, options.duplicate_radius);
+}
+
+}  // namespace affine_orb

@@ -2,8 +2,8 @@
 /// \file
 /// The 128-bit SIMD instruction set the kernels compile for, chosen at compile time:
 /// AFFINE_ORB_SIMD128 is 1 with SSE2 (every x86-64) and with NEON on AArch64 (always present), 0
-/// elsewhere, where the scalar references run. The kernels written once over 16 lanes of bytes
-/// (FAST scores, non-maximum suppression, rBRIEF's tests) use these; each instruction set's
+/// elsewhere, where the scalar references run; AFFINE_ORB_NEON is 1 when that set is NEON. The kernels written once
+/// over 16 lanes of bytes (FAST scores, non-maximum suppression, rBRIEF's tests) use these; each instruction set's
 /// kernel equals the scalar reference byte for byte (the tests compare them, under qemu-user for
 /// AArch64: tests/cross_aarch64.sh).
 
@@ -12,11 +12,14 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #define AFFINE_ORB_SIMD128 1
+#define AFFINE_ORB_NEON 0
 #elif defined(__ARM_NEON) && defined(__aarch64__)
 #include <arm_neon.h>
 #define AFFINE_ORB_SIMD128 1
+#define AFFINE_ORB_NEON 1
 #else
 #define AFFINE_ORB_SIMD128 0
+#define AFFINE_ORB_NEON 0
 #endif
 
 #if defined(__GNUC__) || defined(__clang__)
@@ -25,7 +28,7 @@
 #define AFFINE_ORB_UNROLL
 #endif
 
-#if defined(__ARM_NEON) && defined(__aarch64__) && !defined(__SSE2__)
+#if AFFINE_ORB_NEON
 namespace affine_orb::detail {
 
 /// Bit i of the result set where lane i of `v` has its top bit set: SSE2's movemask on NEON (each

@@ -31,5 +31,11 @@ endforeach()
 list(JOIN affine_orb_aarch64_libs ":" affine_orb_aarch64_path)
 set(CMAKE_EXE_LINKER_FLAGS_INIT "-Wl,-rpath-link,${affine_orb_aarch64_path}")
 
+# -ffp-contract=off: GCC fuses a·b + c into one rounding on AArch64 by default, so the
+# floating-point code (angles, mapped positions, BRISK's sampling) would round differently from
+# x86's; without fusion the features are x86's bytes except rBRIEF's angles, which come from
+# cv::fastAtan2 and so from the arm64 OpenCV build's own rounding (docs/speed.md).
+set(CMAKE_CXX_FLAGS_INIT "-ffp-contract=off")
+
 find_program(AFFINE_ORB_QEMU_AARCH64 NAMES qemu-aarch64 qemu-aarch64-static REQUIRED)
 set(CMAKE_CROSSCOMPILING_EMULATOR "${AFFINE_ORB_QEMU_AARCH64};-L;${AFFINE_ORB_AARCH64_SYSROOT}")

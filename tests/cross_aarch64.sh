@@ -35,7 +35,8 @@ if [[ ! -f $sysroot/.complete ]]; then
   mkdir -p "$debs"
   # The arm64 packages the OpenCV modules depend on, recursively (Depends and Pre-Depends only).
   mapfile -t packages < <(apt-cache depends --recurse --no-recommends --no-suggests --no-conflicts --no-breaks \
-      --no-replaces --no-enhances libopencv-imgcodecs-dev:arm64 libopencv-features2d-dev:arm64 |
+      --no-replaces --no-enhances libopencv-imgcodecs-dev:arm64 libopencv-features2d-dev:arm64 \
+      libopencv-calib3d-dev:arm64 |
     grep -E '^[a-z0-9][^ ]*:arm64$' | sort -u)
   (cd "$debs" && apt-get download -q "${packages[@]}" libeigen3-dev doctest-dev)
   rm -rf "$sysroot" && mkdir -p "$sysroot"

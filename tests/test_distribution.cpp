@@ -547,11 +547,6 @@ TEST_CASE("every canvas sampler and resampler path gives the scalar references' 
       affine_orb::detail::resample_row_sse2(resampler, row.data(), first, x0, x1, out_b.data());
       mismatches += out_a != out_b;
 #endif
-#if AFFINE_ORB_NEON
-      std::fill(out_b.begin(), out_b.end(), 0);
-      affine_orb::detail::blend_columns_neon(work, rows_a.data(), x0, x1, out_b.data());
-      mismatches += out_a != out_b;
-#endif
 #if defined(__AVX2__)
       std::fill(out_b.begin(), out_b.end(), 0);
       affine_orb::detail::resample_row_avx2(resampler, row.data(), first, x0, x1, out_b.data());

@@ -14,8 +14,11 @@
 #      UBSan), with their executions per second;
 #   7. on a CPU with AVX2, the tests of the SIMD code again with -march=native
 #      (AFFINE_ORB_NATIVE), so that the AVX2 paths, which the default build does not compile, are
-#      checked against their scalar references too.
-# Build trees go to ${AFFINE_ORB_BUILD_ROOT:-build}/{release,package,asan,tsan,fuzz,native}.
+#      checked against their scalar references too;
+#   8. the tests of the SIMD code cross-compiled for aarch64 and run under qemu-user
+#      (tests/cross_aarch64.sh), so that the NEON paths are checked against their scalar
+#      references and the fixed data.
+# Build trees go to ${AFFINE_ORB_BUILD_ROOT:-build}/{release,package,asan,tsan,fuzz,native,aarch64}.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -91,4 +94,7 @@ if grep -qw avx2 /proc/cpuinfo; then
 else
   echo "== -march=native skipped: this CPU has no AVX2"
 fi
+
+echo "== aarch64 under qemu-user (SIMD tests)"
+bash tests/cross_aarch64.sh
 echo "all stages passed"

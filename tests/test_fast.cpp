@@ -283,8 +283,8 @@ TEST_CASE("suppression on row spans keeps the rectangle's maxima that lie on the
 TEST_CASE("every compiled suppression row path equals the scalar reference, ties included") {
   using Row = void (*)(const cv::Mat&, int, int, int, int, std::vector<affine_orb::Corner>&);
   std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::non_max_row}};
-#if defined(__SSE2__)
-  paths.emplace_back("sse2", &affine_orb::detail::non_max_row_sse2);
+#if AFFINE_ORB_SIMD128
+  paths.emplace_back("128-bit (SSE2 or NEON)", &affine_orb::detail::non_max_row_128);
 #endif
 #if defined(__AVX2__)
   paths.emplace_back("avx2", &affine_orb::detail::non_max_row_avx2);
@@ -331,9 +331,9 @@ TEST_CASE("every compiled SIMD row path of FAST equals the scalar reference") {
           std::vector<std::uint8_t> expected(static_cast<std::size_t>(image->cols), 99);
           affine_orb::detail::score_row_scalar(row, offset, x0, x1, threshold, expected.data());
           std::vector<std::vector<std::uint8_t>> paths;
-#if defined(__SSE2__)
+#if AFFINE_ORB_SIMD128
           paths.emplace_back(static_cast<std::size_t>(image->cols), 99);
-          affine_orb::detail::score_row_sse2(row, offset, x0, x1, lo, hi, threshold, paths.back().data());
+          affine_orb::detail::score_row_128(row, offset, x0, x1, lo, hi, threshold, paths.back().data());
 #endif
 #if defined(__AVX2__)
           paths.emplace_back(static_cast<std::size_t>(image->cols), 99);

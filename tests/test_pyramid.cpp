@@ -96,6 +96,11 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
       affine_orb::detail::blend_rows_sse2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
       mismatches += rows_a != rows_b;
 #endif
+#if AFFINE_ORB_NEON
+      std::fill(rows_b.begin(), rows_b.end(), 0);
+      affine_orb::detail::blend_rows_neon(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+      mismatches += rows_a != rows_b;
+#endif
 #if defined(__AVX2__)
       std::fill(rows_b.begin(), rows_b.end(), 0);
       affine_orb::detail::blend_rows_avx2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
@@ -111,6 +116,11 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
       affine_orb::detail::blend_columns_scalar(work, rows_a.data(), x0, x1, out_a.data());
 #if defined(__SSE2__)
       affine_orb::detail::blend_columns_sse2(work, rows_a.data(), x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+#if AFFINE_ORB_NEON
+      std::fill(out_b.begin(), out_b.end(), 0);
+      affine_orb::detail::blend_columns_neon(work, rows_a.data(), x0, x1, out_b.data());
       mismatches += out_a != out_b;
 #endif
 #if defined(__AVX2__)

@@ -297,7 +297,7 @@ TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on e
   }
 }
 
-TEST_CASE("rBRIEF smoothing: the SSE2 and AVX2 passes equal the scalar reference and the formula") {
+TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar reference and the formula") {
   namespace d = affine_orb::detail;
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> byte(0, 255);
@@ -354,6 +354,10 @@ TEST_CASE("rBRIEF smoothing: the SSE2 and AVX2 passes equal the scalar reference
 #if defined(__SSE2__)
       check(d::gaussian_q8_v_sse2<0>, d::gaussian_q8_h_sse2<0>);
       if (size == 7) check(d::gaussian_q8_v_sse2<7>, d::gaussian_q8_h_sse2<7>);
+#endif
+#if AFFINE_ORB_NEON
+      check(d::gaussian_q8_v_neon<0>, d::gaussian_q8_h_neon<0>);
+      if (size == 7) check(d::gaussian_q8_v_neon<7>, d::gaussian_q8_h_neon<7>);
 #endif
 #if defined(__AVX2__)
       check(d::gaussian_q8_v_avx2<0>, d::gaussian_q8_h_avx2<0>);

@@ -21,16 +21,13 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
-#include "affine_orb/descriptors/descriptor.hpp"
 #include "affine_orb/core/detail/buffer.hpp"
 #include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/core/detail/simd.hpp"
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/descriptors/descriptor.hpp"
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
-#include "affine_orb/core/features.hpp"
 #include "affine_orb/detection/orientation.hpp"
 
 namespace affine_orb {
@@ -90,7 +87,7 @@ class Rbrief {
     kernel_q8_ = options_.blur_kernel == defaults.blur_kernel && options_.blur_sigma == defaults.blur_sigma
                      ? default_kernel_q8()
                      : detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
-#if defined(__SSE2__)
+#if AFFINE_ORB_SIMD128
     disc_chunks_ = disc_chunks(options_.orientation_radius);
 #endif
   }
@@ -147,10 +144,10 @@ class Rbrief {
 
   /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it:
   /// CentroidDisc::angle(), whose integer moments are summed 8 columns at a time where the target
-  /// has SSE2 (the same sums, so the same angle).
+  /// has SSE2 or NEON (the same sums, so the same angle).
   float orientation(const LevelData& data, cv::Point2f pt) const {
-#if defined(__SSE2__)
-    return centroid_angle_sse2(data.image, cvRound(pt.x), cvRound(pt.y));
+#if AFFINE_ORB_SIMD128
+    return centroid_angle_128(data.image, cvRound(pt.x), cvRound(pt.y));
 #else
     return disc_.angle(data.image, cvRound(pt.x), cvRound(pt.y));
 #endif
@@ -170,21 +167,25 @@ class Rbrief {
     alignas(16) std::array<std::int32_t, 2 * kBits> offset;
     rotated_offsets(a, b, static_cast<std::int32_t>(step), offset.data());
     BinaryDescriptor<kBits> descriptor{};
-#if defined(__SSE2__)
-    // The two samples of every test gathered into byte arrays, then compared 16 tests at a time:
-    // I_a < I_b iff the saturated difference I_b − I_a is non-zero.
+#if AFFINE_ORB_SIMD128
+    // The two samples of every test gathered into byte arrays, then compared 16 tests at a time.
     alignas(16) std::array<std::uint8_t, kBits> first;
     alignas(16) std::array<std::uint8_t, kBits> second;
     for (std::size_t i = 0; i < static_cast<std::size_t>(kBits); ++i) {
       first[i] = center[offset[2 * i]];
       second[i] = center[offset[2 * i + 1]];
     }
-    const __m128i zero = _mm_setzero_si128();
     for (int i = 0; i < kBits; i += 16) {
+#if defined(__SSE2__)
+      // I_a < I_b iff the saturated difference I_b − I_a is non-zero.
       const __m128i va = _mm_load_si128(reinterpret_cast<const __m128i*>(first.data() + i));
       const __m128i vb = _mm_load_si128(reinterpret_cast<const __m128i*>(second.data() + i));
-      const int not_less = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(vb, va), zero));
+      const int not_less = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(vb, va), _mm_setzero_si128()));
       const std::uint64_t bits = static_cast<std::uint64_t>(~not_less & 0xFFFF);
+#else
+      const uint8x16_t less = vcltq_u8(vld1q_u8(first.data() + i), vld1q_u8(second.data() + i));
+      const std::uint64_t bits = detail::top_bits_neon(less);
+#endif
       descriptor[static_cast<std::size_t>(i / 64)] |= bits << (i % 64);
     }
 #else
@@ -254,7 +255,7 @@ class Rbrief {
 #endif
   }
 
-#if defined(__SSE2__)
+#if AFFINE_ORB_SIMD128
   /// The disc of CentroidDisc in 8-column chunks from column −r: for chunk j (columns
   /// chunk_x[j] .. chunk_x[j] + 7, the last one ending at r and overlapping the one before) and row
   /// v, the weight u of column u inside the disc and not in an earlier chunk (else 0), and the
@@ -290,24 +291,27 @@ class Rbrief {
     return d;
   }
 
-  /// CentroidDisc::angle() with the moments m10 = Σ u·I, m01 = Σ v·I summed by 16-bit multiply-adds:
-  /// per row pair ±v, u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|, |v| <= 64, sums below
-  /// 2^15 per lane product), exactly the integers of the scalar loop.
-  float centroid_angle_sse2(const cv::Mat& image, int cx, int cy) const {
+  /// CentroidDisc::angle() with the moments m10 = Σ u·I, m01 = Σ v·I summed by 16-bit multiplies
+  /// into 32-bit lanes (SSE2's multiply-add, NEON's widening multiply-accumulate): per row pair ±v,
+  /// u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|, |v| <= 64, each product below 2^15),
+  /// exactly the integers of the scalar loop.
+  float centroid_angle_128(const cv::Mat& image, int cx, int cy) const {
     const int r = options_.orientation_radius;
     const std::size_t chunks = disc_chunks_.x.size();
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
     const std::uint8_t* center = image.ptr<std::uint8_t>(cy) + cx;
+#if defined(__SSE2__)
     const __m128i zero = _mm_setzero_si128();
     __m128i m10 = zero;
     __m128i m01 = zero;
     auto load8 = [&](const std::uint8_t* p) {
       return _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
     };
+    auto weights = [](const std::array<std::int16_t, 8>& w) {
+      return _mm_loadu_si128(reinterpret_cast<const __m128i*>(w.data()));
+    };
     for (std::size_t j = 0; j < chunks; ++j) {
-      m10 = _mm_add_epi32(m10,
-                          _mm_madd_epi16(load8(center + disc_chunks_.x[j]),
-                                         _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.u[j].data()))));
+      m10 = _mm_add_epi32(m10, _mm_madd_epi16(load8(center + disc_chunks_.x[j]), weights(disc_chunks_.u[j])));
     }
     for (int v = 1; v <= r; ++v) {
       const std::uint8_t* below = center + v * step;
@@ -316,12 +320,8 @@ class Rbrief {
         const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
         const __m128i b = load8(below + disc_chunks_.x[j]);
         const __m128i a = load8(above + disc_chunks_.x[j]);
-        m10 = _mm_add_epi32(
-            m10, _mm_madd_epi16(_mm_add_epi16(a, b),
-                                _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.u[k].data()))));
-        m01 = _mm_add_epi32(
-            m01, _mm_madd_epi16(_mm_sub_epi16(b, a),
-                                _mm_loadu_si128(reinterpret_cast<const __m128i*>(disc_chunks_.v[k].data()))));
+        m10 = _mm_add_epi32(m10, _mm_madd_epi16(_mm_add_epi16(a, b), weights(disc_chunks_.u[k])));
+        m01 = _mm_add_epi32(m01, _mm_madd_epi16(_mm_sub_epi16(b, a), weights(disc_chunks_.v[k])));
       }
     }
     alignas(16) std::int32_t x[4];
@@ -330,13 +330,38 @@ class Rbrief {
     _mm_store_si128(reinterpret_cast<__m128i*>(y), m01);
     const std::int64_t sx = static_cast<std::int64_t>(x[0]) + x[1] + x[2] + x[3];
     const std::int64_t sy = static_cast<std::int64_t>(y[0]) + y[1] + y[2] + y[3];
+#else
+    int32x4_t m10 = vdupq_n_s32(0);
+    int32x4_t m01 = vdupq_n_s32(0);
+    auto load8 = [](const std::uint8_t* p) { return vreinterpretq_s16_u16(vmovl_u8(vld1_u8(p))); };
+    auto weights = [](const std::array<std::int16_t, 8>& w) { return vld1q_s16(w.data()); };
+    auto accumulate = [](int32x4_t sum, int16x8_t a, int16x8_t w) {
+      return vmlal_high_s16(vmlal_s16(sum, vget_low_s16(a), vget_low_s16(w)), a, w);
+    };
+    for (std::size_t j = 0; j < chunks; ++j) {
+      m10 = accumulate(m10, load8(center + disc_chunks_.x[j]), weights(disc_chunks_.u[j]));
+    }
+    for (int v = 1; v <= r; ++v) {
+      const std::uint8_t* below = center + v * step;
+      const std::uint8_t* above = center - v * step;
+      for (std::size_t j = 0; j < chunks; ++j) {
+        const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
+        const int16x8_t b = load8(below + disc_chunks_.x[j]);
+        const int16x8_t a = load8(above + disc_chunks_.x[j]);
+        m10 = accumulate(m10, vaddq_s16(a, b), weights(disc_chunks_.u[k]));
+        m01 = accumulate(m01, vsubq_s16(b, a), weights(disc_chunks_.v[k]));
+      }
+    }
+    const std::int64_t sx = vaddlvq_s32(m10);
+    const std::int64_t sy = vaddlvq_s32(m01);
+#endif
     return orb_angle(sy, sx);
   }
 #endif
 
   Options options_;
   CentroidDisc disc_;
-#if defined(__SSE2__)
+#if AFFINE_ORB_SIMD128
   DiscChunks disc_chunks_;
 #endif
   int border_ = 0;

@@ -41,8 +41,8 @@ inline int fast_score(const std::uint8_t* p, std::ptrdiff_t step) {
 /// Writes the FAST scores of the pixels of `rect` whose score is at least `threshold` into the
 /// CV_8UC1 map `scores` (of the image size), 0 for the other pixels of `rect`; pixels outside `rect`
 /// are left as they are. `rect` is clipped to the pixels whose circle lies inside the image.
-/// Uses AVX2 or SSE2 where the target has them (SSE2: every x86-64), a scalar loop elsewhere; all
-/// write identical maps.
+/// Uses AVX2 or SSE2 where the target has them (SSE2: every x86-64), NEON on AArch64, a scalar loop
+/// elsewhere; all write identical maps.
 inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, cv::Mat& scores) {
   detail::require_gray8(image, "fast_score_rect");
   detail::require(threshold >= 1 && threshold <= 255,
@@ -53,7 +53,7 @@ inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, 
   if (rect.empty()) return;
   const std::array<std::ptrdiff_t, 16> offset = detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
-#if defined(__SSE2__)
+#if AFFINE_ORB_SIMD128
     detail::score_row_simd(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, kFastRadius,
                            image.cols - kFastRadius, threshold, scores.ptr<std::uint8_t>(y));
 #else

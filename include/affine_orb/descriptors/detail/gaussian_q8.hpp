@@ -20,9 +20,9 @@
 
 #if defined(__AVX2__)
 #include <immintrin.h>
-#elif defined(__SSE2__)
-#include <emmintrin.h>
 #endif
+
+#include "affine_orb/core/detail/simd.hpp"
 
 namespace affine_orb::detail {
 
@@ -212,6 +212,57 @@ inline void gaussian_q8_h_sse2(const std::int16_t* v, int width, const std::uint
 }
 #endif
 
+#if AFFINE_ORB_NEON
+/// gaussian_q8_v_scalar() eight columns at a time on NEON (the last eight overlapping), identical
+/// values: the same symmetric 16-bit sums as gaussian_q8_v_sse2(), wrapping the same way.
+template <int kTaps>
+inline void gaussian_q8_v_neon(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k,
+                               int n_runtime, std::int16_t* v) {
+  const int n = kTaps > 0 ? kTaps : n_runtime;
+  if (width < 8) {
+    gaussian_q8_v_scalar<kTaps>(rows, x0, width, k, n, v);
+    return;
+  }
+  const int half = n / 2;
+  const uint16x8_t offset = vdupq_n_u16(0x8000);
+  uint16x8_t weight[16];
+  for (int j = 0; j <= half; ++j) weight[j] = vdupq_n_u16(k[j]);
+  for (int x = 0;; x = std::min(x + 8, width - 8)) {
+    auto at = [&](int j) { return vmovl_u8(vld1_u8(rows[j] + x0 + x)); };
+    uint16x8_t sum = vmulq_u16(at(half), weight[half]);
+    for (int j = 0; j < half; ++j) sum = vmlaq_u16(sum, vaddq_u16(at(j), at(n - 1 - j)), weight[j]);
+    vst1q_s16(v + x, vreinterpretq_s16_u16(veorq_u16(sum, offset)));
+    if (x + 8 >= width) break;
+  }
+}
+
+/// gaussian_q8_h_scalar() eight columns at a time on NEON (the last eight overlapping), identical
+/// bytes: each column's 32-bit sum by widening multiply-accumulates, shifted and narrowed (the sums
+/// lie in [0, 2^24), so out(x) is in [0, 255]). Reads v up to v[width + n − 2].
+template <int kTaps>
+inline void gaussian_q8_h_neon(const std::int16_t* v, int width, const std::uint16_t* k, int n_runtime,
+                               std::uint8_t* out) {
+  const int n = kTaps > 0 ? kTaps : n_runtime;
+  if (width < 8) {
+    gaussian_q8_h_scalar<kTaps>(v, width, k, n, out);
+    return;
+  }
+  const int32x4_t bias = vdupq_n_s32((1 << 23) + (1 << 15));
+  for (int x = 0;; x = std::min(x + 8, width - 8)) {
+    int32x4_t low = bias;
+    int32x4_t high = bias;
+    for (int i = 0; i < n; ++i) {
+      const int16x8_t column = vld1q_s16(v + x + i);
+      const int16x8_t weight = vdupq_n_s16(static_cast<std::int16_t>(k[i]));
+      low = vmlal_s16(low, vget_low_s16(column), vget_low_s16(weight));
+      high = vmlal_high_s16(high, column, weight);
+    }
+    vst1_u8(out + x, vqmovun_s16(vcombine_s16(vshrn_n_s32(low, 16), vshrn_n_s32(high, 16))));
+    if (x + 8 >= width) break;
+  }
+}
+#endif
+
 #if defined(__AVX2__)
 /// gaussian_q8_v_sse2() sixteen columns at a time, identical values.
 template <int kTaps>
@@ -273,7 +324,7 @@ inline void gaussian_q8_h_avx2(const std::int16_t* v, int width, const std::uint
 }
 #endif
 
-/// The y pass of the widest vector path the target has (AVX2, SSE2, else the scalar reference).
+/// The y pass of the widest vector path the target has (AVX2, SSE2, NEON, else the scalar reference).
 template <int kTaps>
 inline void gaussian_q8_v(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k, int n,
                           std::int16_t* v) {
@@ -281,18 +332,22 @@ inline void gaussian_q8_v(const std::uint8_t* const* rows, int x0, int width, co
   gaussian_q8_v_avx2<kTaps>(rows, x0, width, k, n, v);
 #elif defined(__SSE2__)
   gaussian_q8_v_sse2<kTaps>(rows, x0, width, k, n, v);
+#elif AFFINE_ORB_NEON
+  gaussian_q8_v_neon<kTaps>(rows, x0, width, k, n, v);
 #else
   gaussian_q8_v_scalar<kTaps>(rows, x0, width, k, n, v);
 #endif
 }
 
-/// The x pass of the widest vector path the target has (AVX2, SSE2, else the scalar reference).
+/// The x pass of the widest vector path the target has (AVX2, SSE2, NEON, else the scalar reference).
 template <int kTaps>
 inline void gaussian_q8_h(const std::int16_t* v, int width, const std::uint16_t* k, int n, std::uint8_t* out) {
 #if defined(__AVX2__)
   gaussian_q8_h_avx2<kTaps>(v, width, k, n, out);
 #elif defined(__SSE2__)
   gaussian_q8_h_sse2<kTaps>(v, width, k, n, out);
+#elif AFFINE_ORB_NEON
+  gaussian_q8_h_neon<kTaps>(v, width, k, n, out);
 #else
   gaussian_q8_h_scalar<kTaps>(v, width, k, n, out);
 #endif

@@ -11,15 +11,13 @@
 
 #include <opencv2/core.hpp>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #if defined(__AVX2__)
 #include <immintrin.h>
 #endif
 
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/detail/simd.hpp"
 
 namespace affine_orb {
 namespace detail {
@@ -104,13 +102,8 @@ inline void score_row_scalar(const std::uint8_t* row, const std::array<std::ptrd
   }
 }
 
+#if AFFINE_ORB_SIMD128
 #if defined(__SSE2__)
-#if defined(__GNUC__) || defined(__clang__)
-#define AFFINE_ORB_UNROLL _Pragma("GCC unroll 16")
-#else
-#define AFFINE_ORB_UNROLL
-#endif
-
 /// 8-bit lane operations of SSE2 (16 lanes), for the FAST code written once for every width.
 struct Lanes128 {
   using V = __m128i;
@@ -130,6 +123,27 @@ struct Lanes128 {
   /// Bit i set where lane i has its top bit set.
   static unsigned mask(V v) { return static_cast<unsigned>(_mm_movemask_epi8(v)); }
 };
+#else
+/// 8-bit lane operations of NEON (16 lanes), the same operations as SSE2's.
+struct Lanes128 {
+  using V = uint8x16_t;
+  static constexpr int kLanes = 16;
+  static V load(const std::uint8_t* p) { return vld1q_u8(p); }
+  static void store(std::uint8_t* p, V v) { vst1q_u8(p, v); }
+  static V set1(int v) { return vdupq_n_u8(static_cast<std::uint8_t>(v)); }
+  static V zero() { return vdupq_n_u8(0); }
+  static V adds(V a, V b) { return vqaddq_u8(a, b); }
+  static V subs(V a, V b) { return vqsubq_u8(a, b); }
+  static V min(V a, V b) { return vminq_u8(a, b); }
+  static V max(V a, V b) { return vmaxq_u8(a, b); }
+  static V eq(V a, V b) { return vceqq_u8(a, b); }
+  static V or_(V a, V b) { return vorrq_u8(a, b); }
+  static V andnot(V a, V b) { return vbicq_u8(b, a); }
+  static bool none(V v) { return (vmaxvq_u8(v) & 0x80) == 0; }
+  /// Bit i set where lane i has its top bit set.
+  static unsigned mask(V v) { return top_bits_neon(v); }
+};
+#endif
 
 #if defined(__AVX2__)
 /// 8-bit lane operations of AVX2 (32 lanes).
@@ -226,50 +240,41 @@ inline typename S::V score_chunk_simd(const std::uint8_t* p, const std::array<st
   return S::andnot(not_corner, S::subs(strength, S::set1(1)));
 }
 
-/// score_chunk_simd() on 16 lanes.
-inline __m128i score_chunk_sse2(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset, __m128i t) {
-  return score_chunk_simd<Lanes128>(p, offset, t);
-}
-
-/// SSE2 scoring of pixels [x0, x1) of one row, 16 at a time, equal to score_row_scalar() bit for
-/// bit. [lo, hi) ⊇ [x0, x1) are the columns whose circle lies inside the image: a run shorter
-/// than 16 is scored as the 16 pixels from clamp(x0, lo, hi − 16) and only its own lanes are
-/// stored (the scalar path remains for rows narrower than 16 such columns).
-inline void score_row_sse2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
-                           int lo, int hi, int threshold, std::uint8_t* out) {
-  const __m128i t = _mm_set1_epi8(static_cast<char>(threshold));
+/// Scoring of pixels [x0, x1) of one row 16 at a time (SSE2 or NEON: Lanes128), equal to
+/// score_row_scalar() bit for bit. [lo, hi) ⊇ [x0, x1) are the columns whose circle lies inside the
+/// image: a run shorter than 16 is scored as the 16 pixels from clamp(x0, lo, hi − 16) and only its
+/// own lanes are stored (the scalar path remains for rows narrower than 16 such columns).
+inline void score_row_128(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1, int lo,
+                          int hi, int threshold, std::uint8_t* out) {
+  using S = Lanes128;
   if (x1 <= x0) return;
-  if (x1 - x0 < 16) {
-    if (hi - lo < 16) {
+  const S::V t = S::set1(threshold);
+  if (x1 - x0 < S::kLanes) {
+    if (hi - lo < S::kLanes) {
       score_row_scalar(row, offset, x0, x1, threshold, out);
       return;
     }
-    const int c = std::clamp(x0, lo, hi - 16);
-    const __m128i lane = _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    // Lanes i with x0 − c <= i < x1 − c (signed compares of small values).
-    const __m128i keep = _mm_andnot_si128(_mm_cmpgt_epi8(_mm_set1_epi8(static_cast<char>(x0 - c)), lane),
-                                          _mm_cmpgt_epi8(_mm_set1_epi8(static_cast<char>(x1 - c)), lane));
-    const __m128i scores = score_chunk_sse2(row + c, offset, t);
-    const __m128i old = _mm_loadu_si128(reinterpret_cast<const __m128i*>(out + c));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c),
-                     _mm_or_si128(_mm_and_si128(keep, scores), _mm_andnot_si128(keep, old)));
+    const int c = std::clamp(x0, lo, hi - S::kLanes);
+    alignas(16) std::uint8_t scores[S::kLanes];
+    S::store(scores, score_chunk_simd<S>(row + c, offset, t));
+    std::memcpy(out + x0, scores + (x0 - c), static_cast<std::size_t>(x1 - x0));
     return;
   }
   // The last chunk overlaps the previous one so that it ends exactly at x1: scoring a pixel twice
   // writes the same value, and nothing outside [x0, x1) is touched.
-  for (int x = x0;; x = std::min(x + 16, x1 - 16)) {
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), score_chunk_sse2(row + x, offset, t));
-    if (x + 16 >= x1) break;
+  for (int x = x0;; x = std::min(x + S::kLanes, x1 - S::kLanes)) {
+    S::store(out + x, score_chunk_simd<S>(row + x, offset, t));
+    if (x + S::kLanes >= x1) break;
   }
 }
 
 #if defined(__AVX2__)
-/// score_row_sse2() 32 pixels at a time where the run is that long (the last 32 overlapping the
-/// previous ones), identical bytes; shorter runs go to score_row_sse2().
+/// score_row_128() 32 pixels at a time where the run is that long (the last 32 overlapping the
+/// previous ones), identical bytes; shorter runs go to score_row_128().
 inline void score_row_avx2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
                            int lo, int hi, int threshold, std::uint8_t* out) {
   if (x1 - x0 < 32) {
-    score_row_sse2(row, offset, x0, x1, lo, hi, threshold, out);
+    score_row_128(row, offset, x0, x1, lo, hi, threshold, out);
     return;
   }
   const __m256i t = _mm256_set1_epi8(static_cast<char>(threshold));
@@ -280,13 +285,13 @@ inline void score_row_avx2(const std::uint8_t* row, const std::array<std::ptrdif
 }
 #endif
 
-/// score_row_avx2() where the target has AVX2, score_row_sse2() where it has SSE2.
+/// score_row_avx2() where the target has AVX2, score_row_128() where it has SSE2 or NEON.
 inline void score_row_simd(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
                            int lo, int hi, int threshold, std::uint8_t* out) {
 #if defined(__AVX2__)
   score_row_avx2(row, offset, x0, x1, lo, hi, threshold, out);
 #else
-  score_row_sse2(row, offset, x0, x1, lo, hi, threshold, out);
+  score_row_128(row, offset, x0, x1, lo, hi, threshold, out);
 #endif
 }
 #endif
@@ -321,7 +326,7 @@ inline void score_spans(const cv::Mat& image, const RowSpans& region, int thresh
     }
     std::memset(out + x0, 0, static_cast<std::size_t>(s0 - x0));
     std::memset(out + s1, 0, static_cast<std::size_t>(x1 - s1));
-#if defined(__SSE2__)
+#if AFFINE_ORB_SIMD128
     score_row_simd(image.ptr<std::uint8_t>(y), offset, s0, s1, kFastRadius, image.cols - kFastRadius, threshold, out);
 #else
     score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
@@ -356,7 +361,7 @@ inline void non_max_row_scalar(const cv::Mat& scores, int y, int x0, int x1, int
   }
 }
 
-#if defined(__SSE2__)
+#if AFFINE_ORB_SIMD128
 /// Bit i of the result is set when pixel row[i] (i < S::kLanes) is a local maximum at `t` per
 /// non_max_row_scalar(), `above` and `below` pointing at the same columns of the rows around: in
 /// saturated arithmetic a > b iff (a − b) != 0 and a >= b iff (b − a) == 0, so a pixel is a
@@ -408,8 +413,7 @@ inline void non_max_run_simd(const cv::Mat& scores, int y, int x0, int x1, int t
 }
 
 /// non_max_row_scalar() 16 pixels at a time (runs shorter than 16: the scalar reference).
-inline void non_max_row_sse2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
-                             std::vector<Corner>& corners) {
+inline void non_max_row_128(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
   if (x1 - x0 < Lanes128::kLanes) {
     non_max_row_scalar(scores, y, x0, x1, threshold, corners);
   } else {
@@ -418,11 +422,11 @@ inline void non_max_row_sse2(const cv::Mat& scores, int y, int x0, int x1, int t
 }
 
 #if defined(__AVX2__)
-/// non_max_row_scalar() 32 pixels at a time (runs shorter than 32: non_max_row_sse2()).
+/// non_max_row_scalar() 32 pixels at a time (runs shorter than 32: non_max_row_128()).
 inline void non_max_row_avx2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
                              std::vector<Corner>& corners) {
   if (x1 - x0 < Lanes256::kLanes) {
-    non_max_row_sse2(scores, y, x0, x1, threshold, corners);
+    non_max_row_128(scores, y, x0, x1, threshold, corners);
   } else {
     non_max_run_simd<Lanes256>(scores, y, x0, x1, threshold, corners);
   }
@@ -430,13 +434,13 @@ inline void non_max_row_avx2(const cv::Mat& scores, int y, int x0, int x1, int t
 #endif
 #endif
 
-/// non_max_row_avx2() where the target has AVX2, non_max_row_sse2() where it has SSE2, else the
+/// non_max_row_avx2() where the target has AVX2, non_max_row_128() where it has SSE2 or NEON, else the
 /// scalar reference.
 inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
 #if defined(__AVX2__)
   non_max_row_avx2(scores, y, x0, x1, threshold, corners);
-#elif defined(__SSE2__)
-  non_max_row_sse2(scores, y, x0, x1, threshold, corners);
+#elif AFFINE_ORB_SIMD128
+  non_max_row_128(scores, y, x0, x1, threshold, corners);
 #else
   non_max_row_scalar(scores, y, x0, x1, threshold, corners);
 #endif

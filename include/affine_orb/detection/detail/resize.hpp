@@ -22,11 +22,10 @@
 
 #if defined(__AVX2__)
 #include <immintrin.h>
-#elif defined(__SSE2__)
-#include <emmintrin.h>
 #endif
 
 #include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/detail/simd.hpp"
 
 namespace affine_orb::detail {
 
@@ -189,6 +188,47 @@ inline void blend_columns_avx2(const ResizeWork& w, const std::int16_t* row, int
 #endif
 #endif
 
+#if AFFINE_ORB_NEON
+/// blend_rows_scalar() on NEON, 16 columns at a time, identical values (each sum is below 2^15).
+inline void blend_rows_neon(const std::uint8_t* top, const std::uint8_t* bottom, int b, int c0, int c1,
+                            std::int16_t* row) {
+  const uint8x16_t wt = vdupq_n_u8(static_cast<std::uint8_t>(128 - b));
+  const uint8x16_t wb = vdupq_n_u8(static_cast<std::uint8_t>(b));
+  int c = c0;
+  for (; c + 16 <= c1; c += 16) {
+    const uint8x16_t t = vld1q_u8(top + c);
+    const uint8x16_t u = vld1q_u8(bottom + c);
+    const uint16x8_t lo = vmlal_u8(vmull_u8(vget_low_u8(t), vget_low_u8(wt)), vget_low_u8(u), vget_low_u8(wb));
+    const uint16x8_t hi = vmlal_high_u8(vmull_high_u8(t, wt), u, wb);
+    vst1q_s16(row + c, vreinterpretq_s16_u16(lo));
+    vst1q_s16(row + c + 8, vreinterpretq_s16_u16(hi));
+  }
+  blend_rows_scalar(top, bottom, b, c, c1, row);
+}
+
+/// blend_columns_scalar() on NEON, eight columns at a time, identical bytes: each column's pair
+/// (row[i], row[i + 1]) times its weights (128 − a, a), the products of a pair added, rounded,
+/// shifted and narrowed with saturation as SSE2's pack instructions do.
+inline void blend_columns_neon(const ResizeWork& w, const std::int16_t* row, int x0, int x1, std::uint8_t* out) {
+  const int* index = w.x.index.data();
+  const int32x4_t round = vdupq_n_s32(1 << 13);
+  // Columns x .. x + 3, rounded, in 32-bit lanes.
+  auto four = [&](int x) {
+    std::int32_t pairs[4];
+    for (int i = 0; i < 4; ++i) std::memcpy(&pairs[i], row + index[x + i], sizeof(pairs[i]));
+    const int16x8_t p = vreinterpretq_s16_s32(vld1q_s32(pairs));
+    const int16x8_t q = vreinterpretq_s16_s32(vld1q_s32(w.x_weights.data() + x));
+    const int32x4_t sums = vpaddq_s32(vmull_s16(vget_low_s16(p), vget_low_s16(q)), vmull_high_s16(p, q));
+    return vshrq_n_s32(vaddq_s32(sums, round), 14);
+  };
+  int x = x0;
+  for (; x + 8 <= x1; x += 8) {
+    vst1_u8(out + x, vqmovun_s16(vcombine_s16(vqmovn_s32(four(x)), vqmovn_s32(four(x + 4)))));
+  }
+  blend_columns_scalar(w, row, x, x1, out);
+}
+#endif
+
 /// Resizes `src` (CV_8UC1) to `size` into `dst` (its buffer reused). With `region`, only the
 /// columns of each row's run are computed (the whole row where the run is empty) and the other
 /// pixels of the row repeat the nearest computed one.
@@ -221,6 +261,10 @@ inline void resize_bilinear(const cv::Mat& src, cv::Mat& dst, cv::Size size, con
     blend_rows_sse2(top, bottom, b, c0, c1, row);
     row[src.cols] = row[src.cols - 1];
     blend_columns_sse2(w, row, x0, x1, out);
+#elif AFFINE_ORB_NEON
+    blend_rows_neon(top, bottom, b, c0, c1, row);
+    row[src.cols] = row[src.cols - 1];
+    blend_columns_neon(w, row, x0, x1, out);
 #else
     blend_rows_scalar(top, bottom, b, c0, c1, row);
     row[src.cols] = row[src.cols - 1];

@@ -52,7 +52,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "../examples/sequence_io.hpp"
+#include "sequence_io.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/model_selection.hpp"

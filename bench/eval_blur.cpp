@@ -24,7 +24,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "../examples/sequence_io.hpp"
+#include "sequence_io.hpp"
 #include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
 

@@ -39,9 +39,9 @@ class Hash {
       value_ *= 1099511628211ull;
     }
   }
-  template <class T>
-  void value(const T& v) {
-    bytes(&v, sizeof(v));
+  template <class... T>
+  void value(const T&... v) {
+    (bytes(&v, sizeof(v)), ...);
   }
   template <class T>
   void vector(const std::vector<T>& v) {
@@ -57,15 +57,8 @@ class Hash {
 template <int Bits>
 void add_features(Hash& hash, const affine_orb::Features<Bits>& f) {
   hash.value(f.size());
-  for (const cv::KeyPoint& k : f.keypoints) {
-    hash.value(k.pt.x);
-    hash.value(k.pt.y);
-    hash.value(k.size);
-    hash.value(k.angle);
-    hash.value(k.response);
-    hash.value(k.octave);
-    hash.value(k.class_id);
-  }
+  for (const cv::KeyPoint& k : f.keypoints)
+    hash.value(k.pt.x, k.pt.y, k.size, k.angle, k.response, k.octave, k.class_id);
   hash.vector(f.descriptors);
   hash.vector(f.views);
 }
@@ -178,37 +171,25 @@ void hash_two_view(const std::string& data, const std::string& samples) {
       }
       const auto result = matcher.match(a, b);
       Hash hash;
-      hash.value(result.verified);
-      hash.value(result.stage);
+      hash.value(result.verified, result.stage);
       add_features(hash, result.features1);
       add_features(hash, result.features2);
-      for (const affine_orb::Match& m : result.matches) {
-        hash.value(m.query);
-        hash.value(m.train);
-        hash.value(m.distance);
-      }
+      for (const affine_orb::Match& m : result.matches) hash.value(m.query, m.train, m.distance);
       hash.vector(result.inliers);
       add_model(hash, result.model);
-      for (const auto& stage : result.stages) {
-        hash.value(stage.max_tilt);
-        hash.value(stage.keypoints1);
-        hash.value(stage.keypoints2);
-        hash.value(stage.matches);
-        hash.value(stage.inliers);
-        hash.value(stage.model);
-      }
+      for (const auto& s : result.stages)
+        hash.value(s.max_tilt, s.keypoints1, s.keypoints2, s.matches, s.inliers, s.model);
       print(all_stages ? "two-view, all stages" : "two-view, default", pair.name, result.matches.size(), hash);
 
       // Every selection rule on the same matches, with and without octaves.
-      std::vector<cv::Point2f> p1, p2;
+      const affine_orb::MatchedPoints pairs =
+          affine_orb::matched_points(result.features1.keypoints, result.features2.keypoints, result.matches);
+      const std::vector<cv::Point2f>& p1 = pairs.points1;
+      const std::vector<cv::Point2f>& p2 = pairs.points2;
       std::vector<int> o1, o2;
       for (const affine_orb::Match& m : result.matches) {
-        const cv::KeyPoint& k1 = result.features1.keypoints[static_cast<std::size_t>(m.query)];
-        const cv::KeyPoint& k2 = result.features2.keypoints[static_cast<std::size_t>(m.train)];
-        p1.push_back(k1.pt);
-        p2.push_back(k2.pt);
-        o1.push_back(k1.octave);
-        o2.push_back(k2.octave);
+        o1.push_back(result.features1.keypoints[static_cast<std::size_t>(m.query)].octave);
+        o2.push_back(result.features2.keypoints[static_cast<std::size_t>(m.train)].octave);
       }
       if (all_stages || p1.size() < 8) continue;
       for (const auto rule : {affine_orb::SelectionRule::kScoreRatio, affine_orb::SelectionRule::kGric,

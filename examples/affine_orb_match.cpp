@@ -28,8 +28,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/affine_orb.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 #include "cli.hpp"
 #include "homography_io.hpp"
 
@@ -109,17 +109,6 @@ struct Outcome {
   std::string rectified_from;
 };
 
-const char* model_name(affine_orb::GeometricModel m) {
-  switch (m) {
-    case affine_orb::GeometricModel::kHomography:
-      return "homography";
-    case affine_orb::GeometricModel::kFundamental:
-      return "fundamental";
-    default:
-      return "none";
-  }
-}
-
 /// How the images are matched: views on demand (TwoViewMatcher) or every view at once.
 struct Plan {
   affine_orb::ExtractorOptions extractor;
@@ -140,19 +129,6 @@ affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
   options.all_stages = plan.all_stages;
   options.min_inliers = plan.min_inliers;
   return options;
-}
-
-/// The matched positions, original pixels: image 1's and image 2's point of each match.
-template <int Bits>
-std::pair<std::vector<cv::Point2f>, std::vector<cv::Point2f>> matched_points(
-    const affine_orb::Features<Bits>& f1, const affine_orb::Features<Bits>& f2,
-    const std::vector<affine_orb::Match>& matches) {
-  std::pair<std::vector<cv::Point2f>, std::vector<cv::Point2f>> points;
-  for (const auto& m : matches) {
-    points.first.push_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt);
-    points.second.push_back(f2.keypoints[static_cast<std::size_t>(m.train)].pt);
-  }
-  return points;
 }
 
 template <class Descriptor>
@@ -177,9 +153,9 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
     start = std::chrono::steady_clock::now();
     matches = affine_orb::match_features(f1, f2);
     o.ms_match = ms_since(start);
-    const auto [p1, p2] = matched_points(f1, f2, matches);
+    const affine_orb::MatchedPoints pairs = affine_orb::matched_points(f1.keypoints, f2.keypoints, matches);
     start = std::chrono::steady_clock::now();
-    if (p1.size() >= 8) o.selection = affine_orb::select_model(p1, p2);
+    if (pairs.points1.size() >= 8) o.selection = affine_orb::select_model(pairs.points1, pairs.points2);
     o.ms_model = ms_since(start);
   } else {
     affine_orb::TwoViewMatcher<Descriptor> matcher(two_view_options(plan));
@@ -207,21 +183,20 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
   o.keypoints1 = f1.size();
   o.keypoints2 = f2.size();
   o.matches = matches.size();
-  const auto [p1, p2] = matched_points(f1, f2, matches);
-  const std::vector<std::uint8_t>& inlier_mask = o.selection.model == affine_orb::GeometricModel::kFundamental
-                                                     ? o.selection.fundamental_inliers
-                                                     : o.selection.homography_inliers;
-  for (std::uint8_t v : inlier_mask) o.inliers += v;
+  const affine_orb::MatchedPoints pairs = affine_orb::matched_points(f1.keypoints, f2.keypoints, matches);
+  const std::vector<std::uint8_t> inlier_mask = o.selection.chosen_inliers();
+  o.inliers = o.selection.chosen_inlier_count();
 
   std::vector<char> correct(matches.size(), 0);
   if (truth) {
     o.ground_truth = true;
     std::set<std::pair<int, int>> cells;
     for (std::size_t k = 0; k < matches.size(); ++k) {
-      const cv::Vec3d q = *truth * cv::Vec3d(p1[k].x, p1[k].y, 1.0);
-      correct[k] = std::hypot(q[0] / q[2] - p2[k].x, q[1] / q[2] - p2[k].y) < 3.0;
+      const cv::Vec3d q = *truth * cv::Vec3d(pairs.points1[k].x, pairs.points1[k].y, 1.0);
+      correct[k] = std::hypot(q[0] / q[2] - pairs.points2[k].x, q[1] / q[2] - pairs.points2[k].y) < 3.0;
       if (correct[k])
-        cells.insert({static_cast<int>(std::floor(p1[k].x / 2)), static_cast<int>(std::floor(p1[k].y / 2))});
+        cells.insert({static_cast<int>(std::floor(pairs.points1[k].x / 2)),
+                      static_cast<int>(std::floor(pairs.points1[k].y / 2))});
     }
     o.correct = static_cast<std::size_t>(std::count(correct.begin(), correct.end(), 1));
     o.distinct = cells.size();
@@ -234,7 +209,8 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
     // from the file counts what the program counted.
     file << std::setprecision(std::numeric_limits<float>::max_digits10);
     for (std::size_t k = 0; k < matches.size(); ++k)
-      file << p1[k].x << ' ' << p1[k].y << ' ' << p2[k].x << ' ' << p2[k].y << '\n';
+      file << pairs.points1[k].x << ' ' << pairs.points1[k].y << ' ' << pairs.points2[k].x << ' ' << pairs.points2[k].y
+           << '\n';
   }
   if (!out.empty()) {
     const int height = std::max(image1.rows, image2.rows);
@@ -244,9 +220,9 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
     for (std::size_t k = 0; k < matches.size(); ++k) {
       const bool good = truth ? correct[k] != 0 : (k < inlier_mask.size() && inlier_mask[k] != 0);
       const cv::Scalar colour = good ? cv::Scalar(0, 200, 0) : cv::Scalar(0, 0, 230);
-      const cv::Point2f q = p2[k] + cv::Point2f(static_cast<float>(image1.cols), 0.0f);
-      cv::line(canvas, p1[k], q, colour, 1, cv::LINE_AA);
-      cv::circle(canvas, p1[k], 3, colour, 1, cv::LINE_AA);
+      const cv::Point2f q = pairs.points2[k] + cv::Point2f(static_cast<float>(image1.cols), 0.0f);
+      cv::line(canvas, pairs.points1[k], q, colour, 1, cv::LINE_AA);
+      cv::circle(canvas, pairs.points1[k], 3, colour, 1, cv::LINE_AA);
       cv::circle(canvas, q, 3, colour, 1, cv::LINE_AA);
     }
     if (!cv::imwrite(out, canvas)) throw std::runtime_error("cannot write " + out);
@@ -340,7 +316,7 @@ int main(int argc, char** argv) {
       std::printf(
           "\"model\": \"%s\", \"parallax_significance\": %.3f, \"parallax_significance_threshold\": %.2f, "
           "\"homography_ratio\": %.4f, \"inliers\": %zu, ",
-          model_name(o.selection.model), o.selection.parallax_significance,
+          affine_orb::model_name(o.selection.model), o.selection.parallax_significance,
           affine_orb::ModelSelectionOptions{}.parallax_significance, o.selection.homography_ratio, o.inliers);
       if (o.rectified_from.empty()) {
         std::printf("\"rectified\": null, \"rectified_from\": null, ");
@@ -369,7 +345,7 @@ int main(int argc, char** argv) {
       if (o.ground_truth)
         std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
       std::printf("\nmodel %s (parallax off the plane: z = %.1f, H when <= %.1f), %zu inliers\n",
-                  model_name(o.selection.model), o.selection.parallax_significance,
+                  affine_orb::model_name(o.selection.model), o.selection.parallax_significance,
                   affine_orb::ModelSelectionOptions{}.parallax_significance, o.inliers);
       if (plan.one_shot) {
         std::printf(

@@ -24,10 +24,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/extraction/extractor.hpp"
-#include "affine_orb/slam/keyframe_tracker.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
+#include "affine_orb/slam/keyframe_tracker.hpp"
 #include "cli.hpp"
 #include "sequence_io.hpp"
 
@@ -95,17 +95,6 @@ struct Run {
   Summary summary;
   std::vector<FrameRecord> frames;
 };
-
-const char* model_name(affine_orb::GeometricModel m) {
-  switch (m) {
-    case affine_orb::GeometricModel::kHomography:
-      return "H";
-    case affine_orb::GeometricModel::kFundamental:
-      return "F";
-    default:
-      return "-";
-  }
-}
 
 std::string json_string(const std::string& s) {
   std::string out = "\"";
@@ -253,9 +242,9 @@ std::string frame_json(const FrameRecord& r) {
                 "\"lost\": %s, \"keyframe\": %s, \"initialised\": %s, \"previous_matches\": %d, "
                 "\"previous_inliers\": %d, \"previous_model\": \"%s\", \"rotation_recovered\": %s, ",
                 r.sequence_index, r.timestamp, t.features, t.reference_keyframe, r.matches, t.inliers,
-                model_name(t.model), t.homography_ratio, t.inlier_ratio, t.lost ? "true" : "false",
+                affine_orb::model_name(t.model), t.homography_ratio, t.inlier_ratio, t.lost ? "true" : "false",
                 t.keyframe ? "true" : "false", t.initialised ? "true" : "false", t.previous_matches, t.previous_inliers,
-                model_name(t.previous_model), t.relative_pose.success ? "true" : "false");
+                affine_orb::model_name(t.previous_model), t.relative_pose.success ? "true" : "false");
   return std::string(buffer) + "\"truth_rotation_deg\": " + json_number(r.truth_angle) +
          ", \"rotation_error_deg\": " + json_number(r.rotation_error) +
          ", \"ms_extract\": " + json_number(r.ms_extract, "%.2f") +
@@ -501,16 +490,16 @@ int main(int argc, char** argv) {
                 dir.c_str(), sequence.format.c_str(), count, step, run.frames.size(), extractor_options.views.max_tilt,
                 views, extractor_options.features, extractor_options.threads,
                 rotation ? "" : (camera ? "; no poses: no rotation check" : "; no intrinsics: no rotation check"));
-    std::printf("%6s %10s %5s %6s %5s %5s %5s %6s %-16s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match", "inl",
-                "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
+    std::printf("%6s %10s %5s %6s %5s %-11s %5s %6s %-16s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match",
+                "inl", "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
     for (const FrameRecord& r : run.frames) {
       const affine_orb::TrackedFrame& t = r.tracked;
       std::string state = t.lost ? "LOST" : "tracked";
       if (t.keyframe) state += t.initialised ? "+KF(init)" : "+KF";
       const std::string truth = r.truth_angle ? json_number(r.truth_angle, "%.3f") : "-";
       const std::string error = r.rotation_error ? json_number(r.rotation_error, "%.3f") : "-";
-      std::printf("%6d %10.3f %5d %6d %5d %5s %5.2f %6.3f %-16s %8d %8s %8s %7.1f %7.1f\n", r.sequence_index,
-                  r.timestamp, t.features, r.matches, t.inliers, model_name(t.model), t.homography_ratio,
+      std::printf("%6d %10.3f %5d %6d %5d %-11s %5.2f %6.3f %-16s %8d %8s %8s %7.1f %7.1f\n", r.sequence_index,
+                  r.timestamp, t.features, r.matches, t.inliers, affine_orb::model_name(t.model), t.homography_ratio,
                   t.inlier_ratio, state.c_str(), t.previous_inliers, truth.c_str(), error.c_str(), r.ms_extract,
                   r.ms_track);
     }

@@ -85,7 +85,7 @@ done
 
 if grep -qw avx2 /proc/cpuinfo; then
   echo "== -march=native (AVX2 paths)"
-  simd_tests="test_fast|test_distribution|test_rbrief|test_extractor|test_matcher|test_brisk"
+  simd_tests="test_fast|test_pyramid|test_distribution|test_rbrief|test_extractor|test_affine_views|test_matcher|test_brisk"
   cmake -S . -B "$root/native" -G Ninja -DCMAKE_BUILD_TYPE=Release -DAFFINE_ORB_NATIVE=ON \
     -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
     -DAFFINE_ORB_BUILD_PYTHON=OFF

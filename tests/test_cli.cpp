@@ -1,4 +1,4 @@
-// The examples' command-line helpers (examples/cli.hpp): numeric values parsed whole, errors that
+// The examples' command-line helpers (support/cli.hpp): numeric values parsed whole, errors that
 // name the flag and the value, and the plot title fitted before the legend.
 #include <doctest/doctest.h>
 
@@ -9,7 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "../examples/cli.hpp"
+#include "cli.hpp"
 
 namespace {
 

@@ -9,11 +9,18 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <numeric>
 #include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/detection/detector.hpp"
+#include "affine_orb/detection/distribution.hpp"
+#include "affine_orb/detection/orientation.hpp"
+#include "affine_orb/extraction/detail/view_regions.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/matching/matcher.hpp"
-#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/views/affine_views.hpp"
 #include "test_data.hpp"
+#include "test_regions.hpp"
 
 namespace {
 
@@ -208,5 +215,146 @@ TEST_CASE("zoom + rotation (Oxford boat and bark): both descriptors match correc
     MESSAGE(c.sequence << " 1->" << c.image << ": rBRIEF " << rbrief << ", BRISK " << brisk << " correct of 1000");
     CHECK(rbrief >= c.rbrief_floor);
     CHECK(brisk >= c.brisk_floor);
+  }
+}
+
+TEST_CASE("the extractor returns exactly the budget, geometric per level, spread over a real image") {
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  for (int n : {500, 1000, 2000}) {
+    CAPTURE(n);
+    affine_orb::ExtractorOptions options;
+    options.features = n;
+    options.views.max_tilt = 1.0;
+    affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
+    const auto features = extractor.extract(image);
+    REQUIRE(static_cast<int>(features.size()) == n);
+    std::vector<int> per_level(8, 0);
+    for (const auto& kp : features.keypoints) ++per_level[static_cast<std::size_t>(kp.octave)];
+    const auto budgets = affine_orb::level_budgets(n, 1.2, 8);
+    // graf is richly textured: every level fills its own budget.
+    CHECK(per_level == budgets);
+
+    // Spread at level 0 against the strongest-N selection of the same candidates.
+    affine_orb::Pyramid pyramid;
+    pyramid.build(image);
+    cv::Mat scores;
+    const int border = extractor.descriptor().border();
+    const cv::Rect roi(border, border, image.cols - 2 * border, image.rows - 2 * border);
+    const auto candidates = affine_orb::detect_candidates(image, roi, options.detector, scores);
+    std::vector<cv::Point2f> points;
+    for (const auto& c : candidates.corners) points.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+    std::vector<int> strongest(points.size());
+    std::iota(strongest.begin(), strongest.end(), 0);
+    std::stable_sort(strongest.begin(), strongest.end(), [&](int a, int b) {
+      return candidates.responses[static_cast<std::size_t>(a)] > candidates.responses[static_cast<std::size_t>(b)];
+    });
+    strongest.resize(static_cast<std::size_t>(budgets[0]));
+    std::vector<cv::Point2f> ours;
+    for (const auto& kp : features.keypoints) {
+      if (kp.octave == 0) ours.push_back(kp.pt);
+    }
+    std::vector<int> all(ours.size());
+    std::iota(all.begin(), all.end(), 0);
+    const cv::Rect2f region(roi);
+    const int spread = affine_orb::test::occupied_cells(ours, all, region, 10);
+    const int greedy = affine_orb::test::occupied_cells(points, strongest, region, 10);
+    CAPTURE(spread);
+    CAPTURE(greedy);
+    CHECK(spread >= greedy + 5);
+    CHECK(spread >= std::min(100, budgets[0]) * 6 / 10);
+  }
+}
+
+TEST_CASE("the support region of a view level is exactly the set of pixels whose support maps inside") {
+  const cv::Size size(320, 240);
+  const int border = 18;
+  affine_orb::PyramidOptions pyramid;
+  for (const auto& view : affine_orb::make_views(affine_orb::AffineViewOptions{}, size)) {
+    for (int level : {0, 2, 5}) {
+      CAPTURE(view.tilt);
+      CAPTURE(view.rotation_degrees);
+      CAPTURE(level);
+      const cv::Size level_size = affine_orb::pyramid_level_size(view.size, pyramid, level);
+      const affine_orb::RowSpans region = affine_orb::detail::support_region(view, size, level_size, border);
+      const cv::Matx23d& m = view.to_original;
+      const double radius = border * static_cast<double>(view.size.width) / level_size.width;
+      const double ex = radius * std::hypot(m(0, 0), m(0, 1));
+      const double ey = radius * std::hypot(m(1, 0), m(1, 1));
+      int mismatches = 0;
+      long inside = 0;
+      for (int y = 0; y < level_size.height; ++y) {
+        for (int x = 0; x < level_size.width; ++x) {
+          const cv::Point2f p0 = affine_orb::Pyramid::to_level0(
+              cv::Point2f(static_cast<float>(x), static_cast<float>(y)), view.size, level_size);
+          const cv::Point2d q = affine_orb::apply_affine(m, p0);
+          const bool expected =
+              x >= border && y >= border && x < level_size.width - border && y < level_size.height - border &&
+              (view.is_identity() ||
+               (q.x - ex >= 0.0 && q.y - ey >= 0.0 && q.x + ex <= size.width - 1.0 && q.y + ey <= size.height - 1.0));
+          inside += expected;
+          mismatches += expected != affine_orb::test::in_region(region, x, y);
+        }
+      }
+      CHECK(mismatches == 0);
+      if (level == 0) CHECK(inside > 0);
+    }
+  }
+}
+
+TEST_CASE("the area split's merge keeps exactly what a brute-force merge keeps") {
+  // With an unbounded budget every candidate is returned, so kKeepAll lists all of them (by
+  // octave, view, level, then raster order in the view) and kMerge the ones the merge kept.
+  cv::Mat image;
+  cv::resize(affine_orb::test::oxford_image("graf", 1), image, cv::Size(320, 256), 0, 0, cv::INTER_AREA);
+  for (const auto score : {affine_orb::ScoreType::kFast, affine_orb::ScoreType::kHarris}) {
+    affine_orb::ExtractorOptions options;
+    options.features = 1000000;
+    options.pyramid.levels = 3;
+    options.detector.score = score;
+    options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
+    options.view_budget = affine_orb::ViewBudget::kAreaSplit;
+    affine_orb::Extractor<affine_orb::Rbrief> keep_all(options);
+    const auto all = keep_all.extract(image);
+    const std::vector<affine_orb::AffineView> views = keep_all.views();
+    options.duplicates = affine_orb::DuplicatePolicy::kMerge;
+    const auto merged = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
+    // The level a keypoint was detected at in its view, from its size 31·s^l·√t.
+    auto level_of = [&](std::size_t i) {
+      const double tilt = views[static_cast<std::size_t>(all.views[i])].tilt;
+      return static_cast<int>(std::lround(std::log(all.keypoints[i].size / (31.0 * std::sqrt(tilt))) /
+                                          std::log(options.pyramid.scale_factor)));
+    };
+
+    // Views in index order; a candidate is dropped when a survivor of an earlier view of its
+    // level lies within the merge radius (repeat_levels 0).
+    std::vector<std::size_t> expected;
+    for (int view = 0; view < static_cast<int>(views.size()); ++view) {
+      std::vector<std::size_t> survivors;
+      for (std::size_t i = 0; i < all.size(); ++i) {
+        if (all.views[i] != view) continue;
+        const int level = level_of(i);
+        const double radius = options.merge_radius * std::pow(options.pyramid.scale_factor, level);
+        bool duplicate = false;
+        for (std::size_t k : expected) {
+          if (level_of(k) != level) continue;
+          const cv::Point2f d = all.keypoints[k].pt - all.keypoints[i].pt;
+          duplicate = duplicate || std::hypot(d.x, d.y) < radius;
+        }
+        if (!duplicate) survivors.push_back(i);
+      }
+      expected.insert(expected.end(), survivors.begin(), survivors.end());
+    }
+    // The merged output is the kept subset in the output order of all candidates.
+    std::sort(expected.begin(), expected.end());
+    CAPTURE(static_cast<int>(score));
+    REQUIRE(merged.size() == expected.size());
+    CHECK(merged.size() < all.size());
+    int mismatches = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      const std::size_t j = expected[i];
+      mismatches += merged.keypoints[i].pt != all.keypoints[j].pt || merged.views[i] != all.views[j] ||
+                    merged.descriptors[i] != all.descriptors[j];
+    }
+    CHECK(mismatches == 0);
   }
 }

@@ -9,9 +9,12 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
-#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/detection/orientation.hpp"
+#include "affine_orb/extraction/extractor.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -65,7 +68,8 @@ std::vector<uchar> naive_rbrief(const cv::Mat& smoothed, cv::Point2f pt, float a
     const int ay = cy + cvRound(p.xa * b + p.ya * a);
     const int bx = cx + cvRound(p.xb * a - p.yb * b);
     const int by = cy + cvRound(p.xb * b + p.yb * a);
-    if (smoothed.at<uchar>(ay, ax) < smoothed.at<uchar>(by, bx)) bytes[static_cast<std::size_t>(i / 8)] |= 1u << (i % 8);
+    if (smoothed.at<uchar>(ay, ax) < smoothed.at<uchar>(by, bx))
+      bytes[static_cast<std::size_t>(i / 8)] |= 1u << (i % 8);
   }
   return bytes;
 }
@@ -94,14 +98,16 @@ TEST_CASE("ORB's published pair table is the one in the ORB paper's distribution
 }
 
 TEST_CASE("ORB's disc: the published radius-15 rows, and symmetric under transposition for every radius") {
-  CHECK(affine_orb::orb_disc_half_widths(15) == std::vector<int>{15, 15, 15, 15, 14, 14, 14, 13, 13, 12, 11, 10, 9, 8, 6, 3});
+  CHECK(affine_orb::orb_disc_half_widths(15) ==
+        std::vector<int>{15, 15, 15, 15, 14, 14, 14, 13, 13, 12, 11, 10, 9, 8, 6, 3});
   for (int r = 1; r <= 64; ++r) {
     CAPTURE(r);
     const std::vector<int> w = affine_orb::orb_disc_half_widths(r);
     CHECK(w == naive_orb_disc(r));
     int asymmetric = 0;
     for (int v = 0; v <= r; ++v) {
-      for (int u = 0; u <= r; ++u) asymmetric += (u <= w[static_cast<std::size_t>(v)]) != (v <= w[static_cast<std::size_t>(u)]);
+      for (int u = 0; u <= r; ++u)
+        asymmetric += (u <= w[static_cast<std::size_t>(v)]) != (v <= w[static_cast<std::size_t>(u)]);
     }
     CHECK(asymmetric == 0);
   }
@@ -140,10 +146,10 @@ TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every 
     CHECK(std::abs(p.y - static_cast<float>(y)) < 1e-3f);
     const float angle = naive_centroid_angle(level_image, x, y, 15);
     angle_mismatch += affine_orb::radians_to_degrees_0_360(angle) != kp.angle;
-    const std::vector<uchar> expected =
-        naive_rbrief(smoothed[static_cast<std::size_t>(level)], cv::Point2f(static_cast<float>(x), static_cast<float>(y)),
-                     angle);
-    for (int b = 0; b < 32; ++b) bit_mismatch += expected[static_cast<std::size_t>(b)] != mat.at<uchar>(static_cast<int>(i), b);
+    const std::vector<uchar> expected = naive_rbrief(smoothed[static_cast<std::size_t>(level)],
+                                                     cv::Point2f(static_cast<float>(x), static_cast<float>(y)), angle);
+    for (int b = 0; b < 32; ++b)
+      bit_mismatch += expected[static_cast<std::size_t>(b)] != mat.at<uchar>(static_cast<int>(i), b);
   }
   CHECK(angle_mismatch == 0);
   CHECK(bit_mismatch == 0);
@@ -358,5 +364,104 @@ TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar ref
       if (size == 7) check(d::gaussian_q8_v_avx2<7>, d::gaussian_q8_h_avx2<7>);
 #endif
     }
+  }
+}
+
+TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole photos") {
+  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(0, 0, 333, 222));
+  for (const auto& [size, sigma] : {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}}) {
+    CAPTURE(size);
+    CAPTURE(sigma);
+    const std::vector<std::uint16_t> kernel = affine_orb::detail::gaussian_kernel_q8(size, sigma);
+    REQUIRE(static_cast<int>(kernel.size()) == size);
+    int sum = 0;
+    for (std::uint16_t k : kernel) sum += k;
+    CHECK(sum == 256);
+    for (const cv::Mat* image : {&graf, &boat}) {
+      const cv::Mat copy = image->clone();
+      cv::Mat expected;
+      cv::GaussianBlur(copy, expected, cv::Size(size, size), sigma, sigma, cv::BORDER_REFLECT_101);
+      cv::Mat ours(copy.size(), CV_8UC1, cv::Scalar(0));
+      affine_orb::detail::GaussianQ8Work work;
+      affine_orb::detail::smooth_square_q8(copy, cv::Rect(0, 0, copy.cols, copy.rows), kernel, work, ours);
+      CHECK(cv::countNonZero(ours != expected) == 0);
+    }
+  }
+  // Squares of every small width (the narrow ones take the scalar path), some at the image edges.
+  const std::vector<std::uint16_t> kernel = affine_orb::detail::gaussian_kernel_q8(7, 2.0);
+  cv::Mat expected;
+  cv::GaussianBlur(boat, expected, cv::Size(7, 7), 2.0, 2.0, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+  affine_orb::detail::GaussianQ8Work work;
+  cv::Mat ours(boat.size(), CV_8UC1, cv::Scalar(0));
+  for (int width = 1; width <= 12; ++width) {
+    for (const cv::Point corner : {cv::Point(0, 0), cv::Point(100, 50), cv::Point(boat.cols - width, boat.rows - 9)}) {
+      const cv::Rect square(corner, cv::Size(width, 9));
+      affine_orb::detail::smooth_square_q8(boat, square, kernel, work, ours);
+      CAPTURE(width);
+      CHECK(cv::countNonZero(ours(square) != expected(square)) == 0);
+    }
+  }
+  // σ = 2, 7 taps (ORB's smoothing): the kernel is the one OpenCV measures to.
+  CHECK(affine_orb::detail::gaussian_kernel_q8(7, 2.0) == std::vector<std::uint16_t>{18, 34, 48, 56, 48, 34, 18});
+}
+
+TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianBlur") {
+  const cv::Mat image = affine_orb::test::oxford_image("bark", 1)(cv::Rect(10, 20, 500, 400));
+  affine_orb::RbriefOptions small_kernel;
+  small_kernel.blur_kernel = 5;
+  small_kernel.blur_sigma = 1.3;
+  for (const affine_orb::Rbrief& rbrief : {affine_orb::Rbrief(), affine_orb::Rbrief(small_kernel)}) {
+    const int border = rbrief.border();
+    const int size = rbrief.options().blur_kernel;
+    const double sigma = rbrief.options().blur_sigma;
+    cv::Mat expected;
+    cv::GaussianBlur(image, expected, cv::Size(size, size), sigma, sigma, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+    affine_orb::Rbrief::LevelData full;
+    rbrief.prepare(image, full);
+    CHECK(cv::countNonZero(full.smoothed != expected) == 0);
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> px(static_cast<float>(border), static_cast<float>(image.cols - 1 - border));
+    std::uniform_real_distribution<float> py(static_cast<float>(border), static_cast<float>(image.rows - 1 - border));
+    std::vector<cv::Point2f> points;
+    for (int i = 0; i < 60; ++i) points.emplace_back(px(rng), py(rng));
+    // At the border distance exactly, so that the smoothing reflects at the level border.
+    points.emplace_back(static_cast<float>(border), static_cast<float>(border));
+    points.emplace_back(static_cast<float>(image.cols - 1 - border), static_cast<float>(image.rows - 1 - border));
+    points.emplace_back(static_cast<float>(border) + 0.4f, static_cast<float>(image.rows - 1 - border));
+    affine_orb::Rbrief::LevelData sparse;
+    rbrief.prepare(image, points, sparse);
+    int mismatches = 0;
+    for (const cv::Point2f& p : points) {
+      const cv::Rect square(cvRound(p.x) - border, cvRound(p.y) - border, 2 * border + 1, 2 * border + 1);
+      mismatches += cv::countNonZero(expected(square) != sparse.smoothed(square));
+      CHECK(rbrief.describe(sparse, p, 0.7f) == rbrief.describe(full, p, 0.7f));
+    }
+    CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("rBRIEF orientation equals the intensity-centroid angle of the scalar disc") {
+  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(30, 40, 600, 500));
+  std::mt19937 rng(12);
+  for (int radius : {3, 8, 15, 22, 64}) {
+    affine_orb::RbriefOptions options;
+    options.orientation_radius = radius;
+    const affine_orb::Rbrief rbrief(options);
+    const affine_orb::CentroidDisc disc(radius);
+    affine_orb::Rbrief::LevelData data;
+    rbrief.prepare(image, {}, data);
+    const int border = rbrief.border();
+    std::uniform_int_distribution<int> px(border, image.cols - 1 - border);
+    std::uniform_int_distribution<int> py(border, image.rows - 1 - border);
+    int mismatches = 0;
+    for (int k = 0; k < 300; ++k) {
+      const int x = px(rng);
+      const int y = py(rng);
+      mismatches += rbrief.orientation(data, cv::Point2f(static_cast<float>(x), static_cast<float>(y))) !=
+                    disc.angle(image, x, y);
+    }
+    CAPTURE(radius);
+    CHECK(mismatches == 0);
   }
 }

@@ -1,4 +1,4 @@
-// Sequences: the readers of examples/sequence_io.hpp (KITTI, TUM with time-stamp association,
+// Sequences: the readers of support/sequence_io.hpp (KITTI, TUM with time-stamp association,
 // folders in name order) on fixtures written to a temporary directory; KeyframeTracker
 // (keyframe_tracker.hpp) on synthetic sequences with known breaks (a real photo seen by a rotating
 // camera, x_i ~ K R_i K⁻¹ x_0, with a noise frame or a scene cut) and on the first 20 frames of
@@ -25,12 +25,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "../examples/homography_io.hpp"
-#include "../examples/sequence_io.hpp"
-#include "affine_orb/extraction/extractor.hpp"
-#include "affine_orb/slam/keyframe_tracker.hpp"
+#include "homography_io.hpp"
+#include "sequence_io.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
+#include "affine_orb/slam/keyframe_tracker.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -306,8 +306,7 @@ TEST_CASE("homography reader: Oxford numbers and OpenCV XML equal the files; bad
   CHECK_THROWS_WITH_AS(ex::parse_homography("<?xml version=\"1.0\"?><opencv_storage><a>1</a></opencv_storage>", "h"),
                        doctest::Contains("no 3x3 matrix"), std::runtime_error);
   // Truncated storage (OpenCV 4.6's own in-memory XML parser crashes on this one) and a 2x3 matrix.
-  CHECK_THROWS_AS(ex::parse_homography("<?xml version=\"1.0\"?><opencv_storage><H type_id=", "h"),
-                  std::runtime_error);
+  CHECK_THROWS_AS(ex::parse_homography("<?xml version=\"1.0\"?><opencv_storage><H type_id=", "h"), std::runtime_error);
   CHECK_THROWS_WITH_AS(ex::parse_homography("%YAML:1.0\nH: !!opencv-matrix\n rows: 2\n cols: 3\n dt: d\n"
                                             " data: [ 1, 0, 0, 0, 1, 0 ]\n",
                                             "h"),

@@ -10,6 +10,10 @@ What an install does to the fork (FORK below), and what --uninstall undoes byte 
 - FORK/CMakeLists.txt gets, just before the add_library() that compiles src/ORBextractor.cc, a block
   of lines between two marker comments: the checkout's include/ and adapters/common/ on the include
   path, and src/ORBextractor.cc compiled as C++17;
+- nothing at all when FORK/build/CMakeCache.txt was configured for another source tree (a fork copied
+  with `cp -a` from a built one): `make` in that build/ would rebuild the original tree, and the
+  copy's programs would still load the original's library. The refusal says to remove build/ and
+  configure afresh; --ignore-build-dir goes ahead anyway (for a user who builds elsewhere);
 - with --recovery, FORK/src/Tracking.cc gets one marked line at the top of each
   Tracking::GrabImage{Stereo,RGBD,Monocular}: ORBextractor::SetRecovering(<tracking is lost>), so that
   frames are extracted with the adapter's recovery options while tracking is lost (adapters/README.md,
@@ -65,6 +69,13 @@ ADD_LIBRARY = re.compile(r"^\s*add_library\s*\(", re.IGNORECASE)
 GRAB_IMAGE = re.compile(r"^[^;/]*\bTracking::GrabImage(Stereo|RGBD|Monocular)\s*\(")
 
 
+BUILD_CACHE = "build/CMakeCache.txt"
+# CMakeCache.txt entries that name the source tree a build folder was configured for: the top-level
+# source directory, and each project()'s <Project>_SOURCE_DIR (inside that tree).
+CACHE_HOME = re.compile(r"^CMAKE_HOME_DIRECTORY:INTERNAL=(.*)$", re.MULTILINE)
+CACHE_SOURCE_DIR = re.compile(r"^(\w+)_SOURCE_DIR:STATIC=(.*)$", re.MULTILINE)
+
+
 class Refusal(Exception):
     """The tree is not one this script may change; the message says why and what to do."""
 
@@ -101,6 +112,32 @@ def check_fork(tree, fork):
     for path in ("CMakeLists.txt", HEADER, SOURCE):
         if not (tree / path).is_file():
             raise Refusal("%s is not an %s checkout: %s is missing" % (tree, name, path))
+
+
+def same_or_inside(path, tree):
+    """Whether `path` (as CMake cached it) is `tree` or a folder inside it, links resolved."""
+    resolved = Path(path).resolve()
+    return resolved == tree or tree in resolved.parents
+
+
+def check_build_dir(tree):
+    """Refuses a fork whose build/CMakeCache.txt was configured for another source tree (the fork
+    copied with cp -a from a built one): `make` there rebuilds the original, not this tree."""
+    cache = tree / BUILD_CACHE
+    if not cache.is_file():
+        return
+    text = cache.read_text(errors="replace")
+    named = [("CMAKE_HOME_DIRECTORY", match.group(1).strip()) for match in CACHE_HOME.finditer(text)]
+    named += [(match.group(1) + "_SOURCE_DIR", match.group(2).strip()) for match in CACHE_SOURCE_DIR.finditer(text)]
+    foreign = [(entry, path) for entry, path in named if path and not same_or_inside(path, tree)]
+    if foreign:
+        entry, path = foreign[0]
+        raise Refusal("%s was configured for another source tree (%s=%s; a copy of a built fork?): "
+                      "`make` there would rebuild %s, and this tree's programs would load its library. "
+                      "Remove it and configure afresh (rm -rf %s; mkdir %s; cd %s; cmake .. "
+                      "-DCMAKE_BUILD_TYPE=Release), then run this again; --ignore-build-dir goes ahead "
+                      "without that" % (cache, entry, path, path, tree / "build", tree / "build",
+                                        tree / "build"))
 
 
 def check_project(project, fork):
@@ -308,9 +345,11 @@ def report(tree, changes, done, nothing):
     print("%s: %s" % (tree, done if changes else nothing))
 
 
-def install(tree, fork, project, recovery=None):
+def install(tree, fork, project, recovery=None, ignore_build_dir=False):
     """recovery: True adds the recovery lines to src/Tracking.cc, False removes them, None leaves them."""
     check_fork(tree, fork)
+    if not ignore_build_dir:
+        check_build_dir(tree)
     check_project(project, fork)
     cmake = CMakeLists(tree / "CMakeLists.txt")
     block = cmake.block()
@@ -355,8 +394,10 @@ def install(tree, fork, project, recovery=None):
            "affine_orb's adapter is already installed and up to date (affine_orb: %s); nothing changed" % project)
 
 
-def uninstall(tree, fork):
+def uninstall(tree, fork, ignore_build_dir=False):
     check_fork(tree, fork)
+    if not ignore_build_dir:
+        check_build_dir(tree)
     cmake = CMakeLists(tree / "CMakeLists.txt")
     block = cmake.block()
     state = read_state(tree, fork)
@@ -416,6 +457,9 @@ def main(argv):
                            "GrabImageRGBD and GrabImageMonocular in %s (marked, one line each): the adapter's "
                            "recovery mode while tracking is lost" % (FORKS[fork]["lost"], TRACKING))
     mode.add_argument("--no-recovery", action="store_true", help="remove those lines again")
+    parser.add_argument("--ignore-build-dir", action="store_true",
+                        help="go ahead although FORK_DIR/%s names another source tree (by default that "
+                             "is refused: rebuilding in that build/ would rebuild the other tree)" % BUILD_CACHE)
     parser.add_argument("--affine-orb", metavar="DIR", type=Path, default=PROJECT,
                         help="the affine_orb checkout whose adapter files are copied and whose include/ and "
                              "adapters/common/ the fork compiles against (default: %(default)s, the "
@@ -424,10 +468,11 @@ def main(argv):
     tree = args.fork_dir.resolve()
     try:
         if args.uninstall:
-            uninstall(tree, fork)
+            uninstall(tree, fork, ignore_build_dir=args.ignore_build_dir)
         else:
             install(tree, fork, args.affine_orb.resolve(),
-                    recovery=True if args.recovery else (False if args.no_recovery else None))
+                    recovery=True if args.recovery else (False if args.no_recovery else None),
+                    ignore_build_dir=args.ignore_build_dir)
     except Refusal as refusal:
         print("%s: error: %s" % (script_name(fork), refusal), file=sys.stderr)
         sys.exit(1)

@@ -21,12 +21,12 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/descriptors/brisk.hpp"
-#include "affine_orb/extraction/extractor.hpp"
-#include "affine_orb/matching/matcher.hpp"
-#include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/geometry/model_selection.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/matching/matcher.hpp"
 #include "affine_orb/two_view/two_view.hpp"
 #include "affine_orb/version.hpp"
 
@@ -211,12 +211,6 @@ py::array_t<bool> flag_array(const std::vector<std::uint8_t>& v) {
   return out;
 }
 
-const char* model_name(affine_orb::GeometricModel model) {
-  return model == affine_orb::GeometricModel::kHomography    ? "homography"
-         : model == affine_orb::GeometricModel::kFundamental ? "fundamental"
-                                                             : "none";
-}
-
 /// match_images() for one descriptor: the C++ TwoViewMatcher, its result as Python objects.
 template <class Descriptor>
 py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const cv::Mat& mask1, const cv::Mat& mask2,
@@ -243,9 +237,9 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
     stage["keypoints2"] = s.keypoints2;
     stage["matches"] = s.matches;
     stage["inliers"] = s.inliers;
-    stage["homography_inliers"] = s.homography_inliers;
-    stage["fundamental_inliers"] = s.fundamental_inliers;
-    stage["model"] = model_name(s.model);
+    stage["homography_inlier_count"] = s.homography_inlier_count;
+    stage["fundamental_inlier_count"] = s.fundamental_inlier_count;
+    stage["model"] = affine_orb::model_name(s.model);
     stage["extract_ms"] = s.extract_ms;
     stage["match_ms"] = s.match_ms;
     stage["verify_ms"] = s.verify_ms;
@@ -262,7 +256,7 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
   out["views2"] = views(r.features2.views);
   out["matches"] = matches;
   out["inliers"] = flag_array(r.inliers);
-  out["model"] = model_name(r.model.model);
+  out["model"] = affine_orb::model_name(r.model.model);
   out["homography"] = r.model.homography_found ? py::object(matrix_array(r.model.homography)) : py::none();
   out["fundamental"] = r.model.fundamental_found ? py::object(matrix_array(r.model.fundamental)) : py::none();
   out["stages"] = stages;
@@ -365,7 +359,7 @@ PYBIND11_MODULE(affine_orb, m) {
         }
         py::dict out;
         out["success"] = r.success;
-        out["model"] = model_name(r.model);
+        out["model"] = affine_orb::model_name(r.model);
         out["homography_ratio"] = r.homography_ratio;
         out["parallax_significance"] = r.parallax_significance;
         out["homography"] = r.homography_found ? py::object(matrix_array(r.homography)) : py::none();

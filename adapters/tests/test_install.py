@@ -414,6 +414,61 @@ class InstallTest:
                                 cmake.read_text(), count=1, flags=re.DOTALL))
         self.assert_refused(self.tree, "has no add_library(...) that compiles src/ORBextractor.cc")
 
+    def write_cache(self, source):
+        """A build/CMakeCache.txt in the fork as CMake writes it for the source tree `source`."""
+        write(self.tree / "build/CMakeCache.txt",
+              "# This is the CMakeCache file.\nCMAKE_BUILD_TYPE:STRING=Release\n"
+              "%s_BINARY_DIR:STATIC=%s/build\n%s_SOURCE_DIR:STATIC=%s\n"
+              "CMAKE_CACHEFILE_DIR:INTERNAL=%s/build\nCMAKE_HOME_DIRECTORY:INTERNAL=%s\n"
+              % (self.name.replace("-", "_"), source, self.name.replace("-", "_"), source, source, source))
+
+    def test_refuses_a_build_folder_of_another_tree(self):
+        # Configured here (also through a link to the tree): installs as usual.
+        self.write_cache(self.tree)
+        self.assert_succeeds(self.tree, says="installed")
+        self.assert_succeeds("--uninstall", self.tree, says="uninstalled")
+        link = self.work / "link"
+        link.symlink_to(self.tree)
+        self.write_cache(link)
+        self.assert_succeeds(self.tree, says="installed")
+        self.assert_succeeds("--uninstall", self.tree, says="uninstalled")
+
+        # Copied from a built tree: the cache names the original; install and uninstall change nothing.
+        stock = self.work / "stock"
+        self.write_cache(stock)
+        says = "build/CMakeCache.txt was configured for another source tree (CMAKE_HOME_DIRECTORY=%s" % stock
+        self.assert_refused(self.tree, says)
+        self.assert_refused(self.tree, "rm -rf %s" % (self.tree / "build"), "--recovery")
+        self.assert_succeeds("--ignore-build-dir", self.tree, says="installed")
+        self.assert_refused(self.tree, says, "--uninstall")
+        self.assert_succeeds("--ignore-build-dir", "--uninstall", self.tree, says="uninstalled")
+
+        # Only the project's source directory names the original (a cache edited by hand).
+        self.write_cache(self.tree)
+        cache = self.tree / "build/CMakeCache.txt"
+        cache.write_text(cache.read_text().replace("_SOURCE_DIR:STATIC=%s" % self.tree, "_SOURCE_DIR:STATIC=%s" % stock))
+        self.assert_refused(self.tree, "(%s_SOURCE_DIR=%s" % (self.name.replace("-", "_"), stock))
+
+        # Removed as the message says: installs.
+        shutil.rmtree(str(self.tree / "build"))
+        self.assert_succeeds(self.tree, says="installed")
+
+    @unittest.skipUnless(os.environ.get("AFFINE_ORB_CMAKE") and os.environ.get("AFFINE_ORB_CXX"),
+                         "AFFINE_ORB_CMAKE and AFFINE_ORB_CXX name no CMake and compiler")
+    def test_refuses_a_copy_of_a_configured_fork(self):
+        # The user's way: configure the fork in its build/, copy the whole tree with its build/.
+        stock = self.work / "stock"
+        shutil.move(str(self.tree), str(stock))
+        configure = [os.environ["AFFINE_ORB_CMAKE"], "-S", str(stock), "-B", str(stock / "build"),
+                     "-DCMAKE_CXX_COMPILER=" + os.environ["AFFINE_ORB_CXX"]]
+        if os.environ.get("AFFINE_ORB_CMAKE_GENERATOR"):
+            configure += ["-G", os.environ["AFFINE_ORB_CMAKE_GENERATOR"]]
+        result = subprocess.run(configure, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+        self.assertEqual(result.returncode, 0, result.stdout)
+        shutil.copytree(str(stock), str(self.tree), symlinks=True)
+        self.assert_refused(self.tree, "was configured for another source tree")
+        self.assert_succeeds(stock, says="installed")
+
     @unittest.skipUnless(os.environ.get("AFFINE_ORB_CMAKE") and os.environ.get("AFFINE_ORB_CXX"),
                          "AFFINE_ORB_CMAKE and AFFINE_ORB_CXX name no CMake and compiler")
     def test_installed_fork_compiles_the_adapter_as_cxx17(self):

@@ -6,6 +6,7 @@
   slam_tables.py monocular RUNS_CSV CONF...          mono rows of ../shared/slam/analyze.py's runs.csv
   slam_tables.py rgbd RUNS_CSV CONF...               RGB-D rows of the same
   slam_tables.py kitti RUNS GROUNDTRUTH CONF...      KITTI 00 monocular runs
+  slam_tables.py suite RUNS SEQS CONF...             bench/slam/suite.sh's tables (the first CONF is stock)
 
 Every cell is the median (min–max) over a configuration's runs. Needs ../shared/slam/ate.py (found
 beside this project, or through SLAM_HARNESS) and numpy; use /usr/bin/python3 on Debian.
@@ -19,6 +20,14 @@ monocular: per sequence, the runs whose keyframe map is correct (Sim(3) ATE <= k
   least kCoverage of the frames), then ATE and coverage of all runs.
 rgbd: per sequence, frames with a pose, ATE (SE(3), every pose), median and mean tracking time, and
   the median of the mean tracking time against the first configuration's.
+suite: one table per sequence type (SEQS/TYPE_sSEED, every seed pooled) and mode from RUNS/runs.csv
+  (../shared/slam/analyze.py): keyframes, the frame of the second keyframe (RGB-D ORB-SLAM2 takes
+  it only once fewer than 40 % of the first keyframe's points are tracked), runs with a reset, runs that relocalise and the obliquity
+  there (revisit_sweep, RGB-D, as `relocalisation`), correct maps (monocular, as `monocular`), ATE,
+  mean tracking time against stock's; RUNS/kitti as `kitti`; then every sequence and mode where a
+  configuration is worse than stock beyond the run-to-run range: all of its runs worse than all of
+  stock's in a metric (fewer keyframes, frames with a pose, relocalisations or correct maps, more
+  resets, a larger ATE), judged where both have at least kMinRuns runs.
 kitti: the runs whose map starts (>= 3 keyframes), when the first keyframe was taken (s from the
   first frame), keyframes, Sim(3) ATE of the keyframes (m), mean tracking time (ms).
 """
@@ -39,6 +48,7 @@ import ate  # noqa: E402  (../shared/slam/ate.py)
 kCorrectM = 0.10      # a relocalised pose counts when within 10 cm of the ground truth
 kCorrectMapM = 0.10   # a monocular map counts as correct with Sim(3) ATE <= 10 cm ...
 kCoverage = 0.50      # ... over at least half of the sequence's frames
+kMinRuns = 2          # suite: runs per side below which a sequence has no run-to-run range to judge by
 
 
 def cell(values, fmt="%.1f"):
@@ -63,45 +73,53 @@ def read_log(directory):
     return ""
 
 
+def revisit_side(seqs, seq):
+    """(stamps, parts, obliquities, ground-truth times, ground-truth poses) of a revisit sequence, or None."""
+    side = os.path.join(seqs, seq, "obliquity.txt")
+    if not os.path.exists(side):
+        return None
+    rows = [l.split() for l in open(side) if l.strip() and not l.startswith("#")]
+    t_gt, p_gt = ate.read_tum(os.path.join(seqs, seq, "groundtruth.txt"))
+    return (np.array([float(r[1]) for r in rows]), [r[2] for r in rows], [float(r[4]) for r in rows], t_gt, p_gt)
+
+
+def relocalised_at(directory, side):
+    """(obliquity of the first correct pose after the cut or None, frames with a pose, correct poses after it)."""
+    stamps, part, obliquity, t_gt, p_gt = side
+    trajectory = os.path.join(directory, "CameraTrajectory.txt")
+    if not os.path.exists(trajectory):
+        return None, 0, 0
+    t_e, p_e = ate.read_tum(trajectory)
+    ie, ig = ate.associate(t_e, t_gt)
+    frame = [int(np.argmin(np.abs(stamps - t_e[i]))) for i in ie]
+    in_a = [k for k, f in enumerate(frame) if part[f] == "A"]
+    if len(in_a) < 3:
+        return None, len(t_e), 0
+    s, R, t = ate.umeyama(p_e[ie[in_a], :3], p_gt[ig[in_a], :3])
+    first, correct = None, 0
+    for k, f in enumerate(frame):
+        if part[f] != "B":
+            continue
+        if np.linalg.norm(s * R @ p_e[ie[k], :3] + t - p_gt[ig[k], :3]) < kCorrectM:
+            correct += 1
+            if first is None:
+                first = obliquity[f]
+    return first, len(t_e), correct
+
+
 def relocalisation(runs, seqs, confs):
     print("| sequence | configuration | relocalised | obliquity at the first pose after the cut, ° | frames with a pose "
           "| correct poses after the cut | tracking ms, median | tracking ms, mean |")
     print("|---|---|---|---|---|---|---|---|")
     for seq in sorted(os.listdir(seqs)):
-        side = os.path.join(seqs, seq, "obliquity.txt")
-        if not seq.startswith("revisit_sweep") or not os.path.exists(side):
+        side = revisit_side(seqs, seq) if seq.startswith("revisit_sweep") else None
+        if side is None:
             continue
-        rows = [l.split() for l in open(side) if l.strip() and not l.startswith("#")]
-        stamps = np.array([float(r[1]) for r in rows])
-        part = [r[2] for r in rows]
-        obliquity = [float(r[4]) for r in rows]
-        t_gt, p_gt = ate.read_tum(os.path.join(seqs, seq, "groundtruth.txt"))
         for conf in confs:
             results = []
             for d in sorted(glob.glob(os.path.join(runs, conf, seq, "rgbd_*"))):
-                trajectory = os.path.join(d, "CameraTrajectory.txt")
                 median_ms, mean_ms = tracking_times(read_log(d))
-                if not os.path.exists(trajectory):
-                    results.append((None, 0, 0, median_ms, mean_ms))
-                    continue
-                t_e, p_e = ate.read_tum(trajectory)
-                ie, ig = ate.associate(t_e, t_gt)
-                frame = [int(np.argmin(np.abs(stamps - t_e[i]))) for i in ie]
-                in_a = [k for k, f in enumerate(frame) if part[f] == "A"]
-                if len(in_a) < 3:
-                    results.append((None, len(t_e), 0, median_ms, mean_ms))
-                    continue
-                s, R, t = ate.umeyama(p_e[ie[in_a], :3], p_gt[ig[in_a], :3])
-                first, correct = None, 0
-                for k, f in enumerate(frame):
-                    if part[f] != "B":
-                        continue
-                    error = np.linalg.norm(s * R @ p_e[ie[k], :3] + t - p_gt[ig[k], :3])
-                    if error < kCorrectM:
-                        correct += 1
-                        if first is None:
-                            first = obliquity[f]
-                results.append((first, len(t_e), correct, median_ms, mean_ms))
+                results.append(relocalised_at(d, side) + (median_ms, mean_ms))
             if not results:
                 continue
             print("| %s | %s | %d/%d | %s | %s | %s | %s | %s |" % (
@@ -168,10 +186,116 @@ def kitti(runs, groundtruth, confs):
                 continue
             res, _ = ate.evaluate(t_gt, p_gt, t, p, sim3=True)
             results.append((t[0] - t_gt[0], len(t), res["ate"]["rmse"] if "ate" in res else None, mean_ms))
+        if not results:
+            continue
         maps = [r for r in results if r[0] is not None]
         print("| %s | %d/%d | %s | %s | %s | %s |" % (
             conf, len(maps), len(results), cell([r[0] for r in maps]), cell([r[1] for r in maps], "%.0f"),
             cell([r[2] for r in maps], "%.3f"), cell([r[3] for r in results])))
+
+
+def sequence_type(seq):
+    """'oblique' for SEQS/oblique_s3 (suite.sh's names), else the name itself."""
+    base, _, seed = seq.rpartition("_s")
+    return base if base and seed.isdigit() else seq
+
+
+# Metrics of the regression list: (runs.csv column or derived key, label, True when larger is better).
+REGRESSION_METRICS = [("keyframes", "keyframes", True), ("poses", "frames with a pose", True),
+                      ("reset", "runs with a reset", False), ("relocalised", "relocalises", True),
+                      ("correct", "correct map", True), ("ate", "ATE m", False)]
+
+
+def suite_rows(runs, seqs):
+    """runs.csv's rows with derived per-run fields: reset (0/1), relocalised (0/1) and the obliquity
+    (revisit_sweep RGB-D), correct (0/1, monocular), ate, track_ms."""
+    number = lambda v: float(v) if v not in ("", "None", None) else None
+    sides = {}
+    rows = []
+    for r in csv.DictReader(open(os.path.join(runs, "runs.csv"))):
+        row = dict(r)
+        row["type"] = sequence_type(r["seq"])
+        row["keyframes"] = number(r["keyframes"])
+        row["second"] = number(r["kf_second_idx"])
+        row["poses"] = number(r["poses"]) if r["mode"] == "rgbd" else None
+        row["reset"] = 1.0 if (number(r["msg_reset"]) or 0) > 0 else 0.0
+        row["ate"] = number(r["ate_rmse"])
+        mean = number(r["mean_track_s"])
+        row["track_ms"] = mean * 1e3 if mean else None
+        row["relocalised"], row["obliquity"], row["correct"] = None, None, None
+        if r["mode"] == "rgbd" and row["type"] == "revisit_sweep":
+            if r["seq"] not in sides:
+                sides[r["seq"]] = revisit_side(seqs, r["seq"])
+            if sides[r["seq"]] is not None and "B" in sides[r["seq"]][1]:
+                first = relocalised_at(os.path.join(runs, r["conf"], r["seq"], "rgbd_" + r["run"]), sides[r["seq"]])[0]
+                row["relocalised"], row["obliquity"] = (0.0 if first is None else 1.0), first
+        if r["mode"] == "mono":
+            span = number(r["kf_span_frac"])
+            row["correct"] = 1.0 if (row["ate"] is not None and span is not None and row["ate"] <= kCorrectMapM
+                                     and span >= kCoverage) else 0.0
+        rows.append(row)
+    return rows
+
+
+def count(rows, key):
+    values = [r[key] for r in rows if r[key] is not None]
+    return "%d/%d" % (sum(values), len(values)) if values else "–"
+
+
+def suite(runs, seqs, confs):
+    rows = suite_rows(runs, seqs)
+    stock = confs[0]
+    for kind in sorted({r["type"] for r in rows}):
+        for mode in ("rgbd", "mono"):
+            group = [r for r in rows if r["type"] == kind and r["mode"] == mode]
+            if not group:
+                continue
+            seeds = sorted({r["seq"] for r in group})
+            print("\n%s, %s: %d sequences (%s)\n" % (kind, "RGB-D" if mode == "rgbd" else "monocular", len(seeds),
+                                                    " ".join(s.rpartition("_s")[2] for s in seeds)))
+            print("| configuration | runs | keyframes | second keyframe at frame | runs with a reset | relocalised "
+                  "| obliquity there, ° | correct maps | ATE m | tracking ms, mean | / %s's |" % stock)
+            print("|---|---|---|---|---|---|---|---|---|---|---|")
+            base = [r["track_ms"] for r in group if r["conf"] == stock and r["track_ms"]]
+            for conf in confs:
+                rs = [r for r in group if r["conf"] == conf]
+                if not rs:
+                    continue
+                times = [r["track_ms"] for r in rs if r["track_ms"]]
+                ratio = "%.2f" % (statistics.median(times) / statistics.median(base)) if base and times else "–"
+                print("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                    conf, len(rs), cell([r["keyframes"] for r in rs], "%.0f"), cell([r["second"] for r in rs], "%.0f"),
+                    count(rs, "reset"),
+                    count(rs, "relocalised"), cell([r["obliquity"] for r in rs]), count(rs, "correct"),
+                    cell([r["ate"] for r in rs], "%.3f"), cell(times), ratio))
+    groundtruth = os.path.join(runs, "kitti", "groundtruth.txt")
+    if os.path.exists(groundtruth):
+        print("\nKITTI 00 (frames 0–159), monocular\n")
+        kitti(os.path.join(runs, "kitti"), groundtruth, confs)
+
+    print("\nWorse than %s beyond the run-to-run range (every run of the configuration worse than every run of "
+          "%s):\n" % (stock, stock))
+    found = 0
+    for seq in sorted({r["seq"] for r in rows}):
+        for mode in ("rgbd", "mono"):
+            base = [r for r in rows if r["seq"] == seq and r["mode"] == mode and r["conf"] == stock]
+            for conf in confs[1:]:
+                rs = [r for r in rows if r["seq"] == seq and r["mode"] == mode and r["conf"] == conf]
+                for key, label, larger_better in REGRESSION_METRICS:
+                    a = [r[key] for r in rs if r[key] is not None]
+                    b = [r[key] for r in base if r[key] is not None]
+                    if key == "ate":  # a run without a trajectory has no ATE: it is not better
+                        a += [float("inf")] * sum(1 for r in rs if r[key] is None and r["keyframes"] is not None)
+                    if len(a) < kMinRuns or len(b) < kMinRuns:
+                        continue
+                    worse = max(a) < min(b) if larger_better else min(a) > max(b)
+                    if worse:
+                        found += 1
+                        print("- %s %s %s: %s %s against %s's %s" % (
+                            seq, mode, conf, label, " ".join("%.3g" % v for v in a), stock,
+                            " ".join("%.3g" % v for v in b)))
+    if not found:
+        print("- none")
 
 
 def main(argv):
@@ -181,6 +305,8 @@ def main(argv):
         monocular(argv[1], argv[2:])
     elif len(argv) >= 3 and argv[0] == "rgbd":
         rgbd(argv[1], argv[2:])
+    elif len(argv) >= 4 and argv[0] == "suite":
+        suite(argv[1], argv[2], argv[3:])
     elif len(argv) >= 4 and argv[0] == "kitti":
         kitti(argv[1], argv[2], argv[3:])
     else:

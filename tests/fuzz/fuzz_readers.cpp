@@ -1,5 +1,5 @@
-// libFuzzer target: the text readers of the examples (examples/homography_io.hpp,
-// examples/sequence_io.hpp). The first byte picks the reader, the rest is the file's text. A
+// libFuzzer target: the text readers of the examples (support/homography_io.hpp,
+// support/sequence_io.hpp). The first byte picks the reader, the rest is the file's text. A
 // reader must either throw std::runtime_error or return what its documentation promises; any other
 // exception, a crash or a sanitizer report is a finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)

@@ -6,9 +6,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
+
+#include "affine_orb/core/detail/check.hpp"
 
 namespace affine_orb {
 
@@ -56,6 +59,21 @@ cv::Mat descriptors_to_mat(const std::vector<std::array<std::uint64_t, Words>>& 
   cv::Mat mat(static_cast<int>(descriptors.size()), static_cast<int>(8 * Words), CV_8U);
   if (!descriptors.empty()) std::memcpy(mat.data, descriptors.data(), descriptors.size() * 8 * Words);
   return mat;
+}
+
+/// The inverse of descriptors_to_mat(): the rows of an N x (8·Words) CV_8U matrix (cv::ORB's,
+/// cv::BRISK's or ORB-SLAM's descriptors) as descriptors of Words 64-bit words. Throws
+/// std::invalid_argument for another type or width.
+template <std::size_t Words>
+std::vector<std::array<std::uint64_t, Words>> descriptors_from_mat(const cv::Mat& mat) {
+#if defined(__BYTE_ORDER__) && (__BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__)
+  static_assert(Words == 0, "descriptors_from_mat assumes a little-endian host");
+#endif
+  detail::require(mat.empty() || (mat.type() == CV_8UC1 && mat.cols == static_cast<int>(8 * Words)),
+                  "descriptors_from_mat: expected CV_8UC1 rows of " + std::to_string(8 * Words) + " bytes");
+  std::vector<std::array<std::uint64_t, Words>> out(static_cast<std::size_t>(mat.rows));
+  for (int r = 0; r < mat.rows; ++r) std::memcpy(out[static_cast<std::size_t>(r)].data(), mat.ptr(r), 8 * Words);
+  return out;
 }
 
 }  // namespace affine_orb

@@ -36,6 +36,19 @@ enum class GeometricModel {
   kFundamental,  ///< general scene with parallax: x2ᵀ F x1 = 0
 };
 
+/// "homography", "fundamental" or "none": the name affine_orb_match prints and the Python module
+/// returns.
+inline const char* model_name(GeometricModel model) {
+  switch (model) {
+    case GeometricModel::kHomography:
+      return "homography";
+    case GeometricModel::kFundamental:
+      return "fundamental";
+    default:
+      return "none";
+  }
+}
+
 /// How select_model() chooses between the two estimates. bench/bench_model_selection measures
 /// every rule on its labelled real and synthetic pairs (README, "Choosing H or F").
 enum class SelectionRule {
@@ -192,6 +205,20 @@ struct ModelSelectionResult {
   int parallax_inlier_count = 0;
   double parallax_expected_count = 0.0;
   double parallax_significance = 0.0;
+
+  /// The chosen model's inlier flags, one per correspondence (homography_inliers or
+  /// fundamental_inliers); all 0 when no model was chosen.
+  std::vector<std::uint8_t> chosen_inliers() const {
+    if (model == GeometricModel::kHomography) return homography_inliers;
+    if (model == GeometricModel::kFundamental) return fundamental_inliers;
+    return std::vector<std::uint8_t>(std::max(homography_inliers.size(), fundamental_inliers.size()), 0);
+  }
+  /// The chosen model's inlier count; 0 when no model was chosen.
+  int chosen_inlier_count() const {
+    if (model == GeometricModel::kHomography) return homography_inlier_count;
+    if (model == GeometricModel::kFundamental) return fundamental_inlier_count;
+    return 0;
+  }
 };
 
 /// select_model() with the σ of correspondence i multiplied by scales.image1[i] for errors measured in

@@ -73,6 +73,37 @@ struct Match {
   int distance = 0;
 };
 
+/// The positions of matched keypoints, pixels: points1[i] is the query keypoint's and points2[i]
+/// the train keypoint's position of match i (image 1 and image 2 of a pair).
+struct MatchedPoints {
+  std::vector<cv::Point2f> points1;
+  std::vector<cv::Point2f> points2;
+};
+
+/// Fills `out` (its buffers reused, for callers that match frame after frame) with the positions
+/// of `matches`' keypoints: Match::query indexes keypoints1, Match::train keypoints2. Throws
+/// std::invalid_argument for an index outside its list.
+inline void matched_points(const std::vector<cv::KeyPoint>& keypoints1, const std::vector<cv::KeyPoint>& keypoints2,
+                           const std::vector<Match>& matches, MatchedPoints& out) {
+  out.points1.clear();
+  out.points2.clear();
+  for (const Match& m : matches) {
+    detail::require(m.query >= 0 && static_cast<std::size_t>(m.query) < keypoints1.size() && m.train >= 0 &&
+                        static_cast<std::size_t>(m.train) < keypoints2.size(),
+                    "matched_points: a match indexes past its keypoints");
+    out.points1.push_back(keypoints1[static_cast<std::size_t>(m.query)].pt);
+    out.points2.push_back(keypoints2[static_cast<std::size_t>(m.train)].pt);
+  }
+}
+
+/// The positions of `matches`' keypoints (see the overload that fills a MatchedPoints).
+inline MatchedPoints matched_points(const std::vector<cv::KeyPoint>& keypoints1,
+                                    const std::vector<cv::KeyPoint>& keypoints2, const std::vector<Match>& matches) {
+  MatchedPoints out;
+  matched_points(keypoints1, keypoints2, matches, out);
+  return out;
+}
+
 /// One neighbour of a query descriptor: index into the train descriptors and distance in bits. The
 /// defaults mark an entry that holds no neighbour (distance larger than any real one).
 using detail::Neighbour;
@@ -147,7 +178,7 @@ inline std::vector<Match> match(const cv::Mat& query, const cv::Mat& train, cons
       "match: descriptor rows must be 8, 16, ..., 64 bytes (a multiple of 64 bits), got " + std::to_string(query.cols));
   const auto run = [&](auto words) {
     constexpr std::size_t kWords = decltype(words)::value;
-    return match(detail::descriptors_from_mat<kWords>(query), detail::descriptors_from_mat<kWords>(train), options);
+    return match(descriptors_from_mat<kWords>(query), descriptors_from_mat<kWords>(train), options);
   };
   switch (query.cols / 8) {
     case 1:

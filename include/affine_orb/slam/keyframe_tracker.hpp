@@ -34,12 +34,12 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/features.hpp"
-#include "affine_orb/matching/matcher.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/matching/matcher.hpp"
 
 namespace affine_orb {
 
@@ -153,19 +153,19 @@ class KeyframeTracker {
     const bool can_be_keyframe = out.features >= options_.min_inliers;
 
     ModelSelectionResult keyframe_selection;
-    std::vector<cv::Point2f> keyframe_points, frame_points;
+    MatchedPoints keyframe_pairs;
     if (keyframe_index_ < 0) {
       out.lost = !can_be_keyframe;
       out.keyframe = out.initialised = can_be_keyframe;
     } else {
       out.reference_keyframe = keyframe_index_;
       out.matches = match_features(keyframe_, frame, options_.matching);
-      matched_points(keyframe_, frame, out.matches, keyframe_points, frame_points);
-      keyframe_selection = select(keyframe_points, frame_points);
+      matched_points(keyframe_.keypoints, frame.keypoints, out.matches, keyframe_pairs);
+      keyframe_selection = select(keyframe_pairs);
       out.model = keyframe_selection.model;
       out.homography_ratio = keyframe_selection.homography_ratio;
-      out.inlier_mask = chosen_inliers(keyframe_selection, out.matches.size());
-      for (std::uint8_t v : out.inlier_mask) out.inliers += v != 0 ? 1 : 0;
+      out.inlier_mask = keyframe_selection.chosen_inliers();
+      out.inliers = keyframe_selection.chosen_inlier_count();
       out.inlier_ratio =
           keyframe_.empty() ? 0.0 : static_cast<double>(out.inliers) / static_cast<double>(keyframe_.size());
       out.lost = !keyframe_selection.success || out.inliers < options_.min_inliers;
@@ -182,16 +182,16 @@ class KeyframeTracker {
         out.previous_matches = static_cast<int>(out.matches.size());
         out.previous_inliers = out.inliers;
         out.previous_model = out.model;
-        out.relative_pose = relative_pose(keyframe_selection, *camera_, keyframe_points, frame_points, options_.pose);
+        out.relative_pose =
+            relative_pose(keyframe_selection, *camera_, keyframe_pairs.points1, keyframe_pairs.points2, options_.pose);
       } else {
         const std::vector<Match> matches = match_features(previous_, frame, options_.matching);
-        std::vector<cv::Point2f> previous_points, points;
-        matched_points(previous_, frame, matches, previous_points, points);
-        const ModelSelectionResult selection = select(previous_points, points);
+        const MatchedPoints pairs = matched_points(previous_.keypoints, frame.keypoints, matches);
+        const ModelSelectionResult selection = select(pairs);
         out.previous_matches = static_cast<int>(matches.size());
-        for (std::uint8_t v : chosen_inliers(selection, matches.size())) out.previous_inliers += v != 0 ? 1 : 0;
+        out.previous_inliers = selection.chosen_inlier_count();
         out.previous_model = selection.model;
-        out.relative_pose = relative_pose(selection, *camera_, previous_points, points, options_.pose);
+        out.relative_pose = relative_pose(selection, *camera_, pairs.points1, pairs.points2, options_.pose);
       }
     }
 
@@ -233,31 +233,9 @@ class KeyframeTracker {
   const Features<Bits>& keyframe() const { return keyframe_; }
 
  private:
-  static void matched_points(const Features<Bits>& a, const Features<Bits>& b, const std::vector<Match>& matches,
-                             std::vector<cv::Point2f>& points_a, std::vector<cv::Point2f>& points_b) {
-    points_a.clear();
-    points_b.clear();
-    for (const Match& m : matches) {
-      points_a.push_back(a.keypoints[static_cast<std::size_t>(m.query)].pt);
-      points_b.push_back(b.keypoints[static_cast<std::size_t>(m.train)].pt);
-    }
-  }
-
   /// select_model() on the matched points; an unsuccessful result for fewer than 8 matches.
-  ModelSelectionResult select(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) const {
-    return select_model(a, b, options_.model_selection);
-  }
-
-  /// The inlier mask of the chosen model (all zeros when none was chosen).
-  static std::vector<std::uint8_t> chosen_inliers(const ModelSelectionResult& selection, std::size_t matches) {
-    switch (selection.model) {
-      case GeometricModel::kHomography:
-        return selection.homography_inliers;
-      case GeometricModel::kFundamental:
-        return selection.fundamental_inliers;
-      default:
-        return std::vector<std::uint8_t>(matches, 0);
-    }
+  ModelSelectionResult select(const MatchedPoints& pairs) const {
+    return select_model(pairs.points1, pairs.points2, options_.model_selection);
   }
 
   KeyframeTrackerOptions options_;

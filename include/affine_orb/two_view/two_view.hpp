@@ -111,13 +111,13 @@ struct TwoViewOptions {
 
 /// What one stage of TwoViewMatcher::match() did.
 struct TwoViewStageReport {
-  double max_tilt = 1.0;        ///< largest tilt extracted so far (1: the images alone)
-  int keypoints1 = 0;           ///< keypoints of image 1 so far
-  int keypoints2 = 0;           ///< keypoints of image 2 so far
-  int matches = 0;              ///< correspondences after the stage
-  int inliers = 0;              ///< inliers of the chosen model (0 when none was chosen)
-  int homography_inliers = 0;   ///< inliers of the estimated H (0 when none was found)
-  int fundamental_inliers = 0;  ///< inliers of the estimated F (0 when none was found)
+  double max_tilt = 1.0;             ///< largest tilt extracted so far (1: the images alone)
+  int keypoints1 = 0;                ///< keypoints of image 1 so far
+  int keypoints2 = 0;                ///< keypoints of image 2 so far
+  int matches = 0;                   ///< correspondences after the stage
+  int inliers = 0;                   ///< inliers of the chosen model (0 when none was chosen)
+  int homography_inlier_count = 0;   ///< inliers of the estimated H (0 when none was found)
+  int fundamental_inlier_count = 0;  ///< inliers of the estimated F (0 when none was found)
   GeometricModel model = GeometricModel::kNone;
   double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
   double match_ms = 0.0;    ///< matching, milliseconds
@@ -205,8 +205,8 @@ class TwoViewMatcher {
       report.keypoints2 = static_cast<int>(result.features2.size());
       report.matches = static_cast<int>(result.matches.size());
       report.inliers = result.inlier_count;
-      report.homography_inliers = result.model.homography_inlier_count;
-      report.fundamental_inliers = result.model.fundamental_inlier_count;
+      report.homography_inlier_count = result.model.homography_inlier_count;
+      report.fundamental_inlier_count = result.model.fundamental_inlier_count;
       report.model = result.model.model;
       report.extract_ms = milliseconds(start, extracted);
       report.match_ms = milliseconds(extracted, matched);
@@ -234,24 +234,14 @@ class TwoViewMatcher {
 
   /// select_model() on the matched positions; the chosen model's inlier flags and count.
   void verify(TwoViewResult<kBits>& result) {
-    points1_.clear();
-    points2_.clear();
-    for (const Match& m : result.matches) {
-      points1_.push_back(result.features1.keypoints[static_cast<std::size_t>(m.query)].pt);
-      points2_.push_back(result.features2.keypoints[static_cast<std::size_t>(m.train)].pt);
-    }
+    matched_points(result.features1.keypoints, result.features2.keypoints, result.matches, points_);
     result.model = ModelSelectionResult{};
     result.inliers.assign(result.matches.size(), 0);
     result.inlier_count = 0;
-    if (points1_.size() < 8) return;
-    result.model = select_model(points1_, points2_, options_.model);
-    if (result.model.model == GeometricModel::kHomography) {
-      result.inliers = result.model.homography_inliers;
-      result.inlier_count = result.model.homography_inlier_count;
-    } else if (result.model.model == GeometricModel::kFundamental) {
-      result.inliers = result.model.fundamental_inliers;
-      result.inlier_count = result.model.fundamental_inlier_count;
-    }
+    if (points_.points1.size() < 8) return;
+    result.model = select_model(points_.points1, points_.points2, options_.model);
+    result.inliers = result.model.chosen_inliers();
+    result.inlier_count = result.model.chosen_inlier_count();
   }
 
   bool is_verified(const TwoViewResult<kBits>& result) const {
@@ -262,8 +252,7 @@ class TwoViewMatcher {
   TwoViewOptions options_;
   Extractor<Descriptor> extractor1_;
   Extractor<Descriptor> extractor2_;
-  std::vector<cv::Point2f> points1_;  ///< matched positions, reused across stages
-  std::vector<cv::Point2f> points2_;
+  MatchedPoints points_;  ///< matched positions, reused across stages
 };
 
 /// TwoViewMatcher<Rbrief>(options).match(image1, image2): two-view matching with views on demand

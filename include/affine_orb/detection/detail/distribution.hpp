@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/detection/distribution.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): the quadtree's cell behind distribute_quadtree()
+/// (detection/distribution.hpp).
 
 #include <algorithm>
 #include <cmath>

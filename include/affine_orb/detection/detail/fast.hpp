@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/detection/fast.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): the FAST circle, the arc-strength score (scalar reference, SSE2
+/// and AVX2 lanes) and the row-wise non-maximum suppression behind detection/fast.hpp.
 
 #include <algorithm>
 #include <array>

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/extraction/opencv_feature2d.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): the cv::Feature2D class behind create_feature2d()
+/// (extraction/opencv_feature2d.hpp).
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/geometry/fundamental.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): the 8-point equations, least squares with the rank-2 projection
+/// and denormalisation behind geometry/fundamental.hpp.
 
 #include <array>
 #include <cmath>

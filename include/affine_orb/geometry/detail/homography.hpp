@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/geometry/homography.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): the DLT equations, the sample consistency test and the normalised
+/// 4-point solver behind geometry/homography.hpp.
 
 #include <array>
 #include <cmath>

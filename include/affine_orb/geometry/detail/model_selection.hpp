@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/geometry/model_selection.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): the degeneracy test, GRIC, and the plane-and-parallax completion
+/// behind select_model() (geometry/model_selection.hpp).
 
 #include <algorithm>
 #include <array>

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/geometry/ransac.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): early-exit scoring of a model, the adaptive iteration count and
+/// the detection of an estimator's optional refine(), behind geometry/ransac.hpp.
 
 #include <algorithm>
 #include <array>

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/geometry/relative_pose.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): triangulation and the input checks behind
+/// geometry/relative_pose.hpp.
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/matching/affine_matching.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API): the location-aware ratio test of match_features()
+/// (matching/affine_matching.hpp).
 
 #include <algorithm>
 #include <cmath>

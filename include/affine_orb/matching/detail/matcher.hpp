@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Internals of affine_orb/matching/matcher.hpp (namespace detail): not part of the API.
+/// Internals (namespace detail, not part of the API) of matching/matcher.hpp: the bit-sliced and
+/// VPOPCNTDQ k = 2 searches.
 ///
 /// How the k = 2 search is fast: the train descriptors are transposed into bit planes, so that one
 /// machine word (or SIMD register) holds the same bit of 64 (128, 256) train descriptors, one per
@@ -395,15 +396,6 @@ std::vector<KnnMatch> knn2_vpopcntdq(const std::vector<std::array<std::uint64_t,
   return result;
 }
 #endif
-
-/// Copies the rows of a CV_8UC1 matrix with 8 · Words columns into descriptors.
-template <std::size_t Words>
-std::vector<std::array<std::uint64_t, Words>> descriptors_from_mat(const cv::Mat& mat) {
-  std::vector<std::array<std::uint64_t, Words>> descriptors(static_cast<std::size_t>(mat.rows));
-  for (int r = 0; r < mat.rows; ++r)
-    std::memcpy(descriptors[static_cast<std::size_t>(r)].data(), mat.ptr(r), 8 * Words);
-  return descriptors;
-}
 
 }  // namespace detail
 }  // namespace affine_orb

@@ -1,0 +1,134 @@
+// Tests of the pyramid (detection/pyramid.hpp): resizing against its per-pixel definition, cv::resize
+// and the scalar references of every SIMD path.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "affine_orb/detection/detail/resize.hpp"
+#include "affine_orb/detection/fast.hpp"
+#include "affine_orb/detection/pyramid.hpp"
+#include "test_data.hpp"
+
+TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a grey level of cv::resize") {
+  const cv::Mat image = affine_orb::test::oxford_image("boat", 1)(cv::Rect(13, 7, 611, 433));  // a ROI
+  std::mt19937 rng(8);
+  for (const cv::Size size : {cv::Size(509, 361), cv::Size(424, 301), cv::Size(611, 433), cv::Size(700, 500),
+                              cv::Size(1, 1), cv::Size(3, 200), cv::Size(17, 2)}) {
+    CAPTURE(size);
+    cv::Mat reference;
+    affine_orb::detail::resize_bilinear_reference(image, reference, size);
+    affine_orb::detail::ResizeWork work;
+    cv::Mat ours;
+    affine_orb::detail::resize_bilinear(image, ours, size, nullptr, work);
+    CHECK(cv::countNonZero(ours != reference) == 0);
+    cv::Mat opencv;
+    cv::resize(image, opencv, size, 0, 0, cv::INTER_LINEAR);
+    cv::Mat difference;
+    cv::absdiff(ours, opencv, difference);
+    double worst = 0.0;
+    cv::minMaxLoc(difference, nullptr, &worst);
+    CHECK(worst <= 1.0);
+    // A region: its runs as the whole image, the rest of each row its nearest computed pixel.
+    affine_orb::RowSpans region;
+    region.reset(0, size.height);
+    for (int y = 0; y < size.height; ++y) {
+      if (rng() % 5 == 0) continue;  // empty run: the whole row
+      int a = static_cast<int>(rng() % static_cast<unsigned>(size.width));
+      int b = static_cast<int>(rng() % static_cast<unsigned>(size.width));
+      if (a > b) std::swap(a, b);
+      region.begin[static_cast<std::size_t>(y)] = a;
+      region.end[static_cast<std::size_t>(y)] = b + 1;
+    }
+    cv::Mat partial;
+    affine_orb::detail::resize_bilinear(image, partial, size, &region, work);
+    int mismatches = 0;
+    for (int y = 0; y < size.height; ++y) {
+      const auto [b, e] = region.run(y);
+      for (int x = 0; x < size.width; ++x) {
+        const int source = b < e ? std::clamp(x, b, e - 1) : x;
+        mismatches += partial.at<uchar>(y, x) != reference.at<uchar>(y, source);
+      }
+    }
+    CHECK(mismatches == 0);
+  }
+  // The pyramid chains the resizes.
+  affine_orb::Pyramid pyramid;
+  pyramid.build(image);
+  cv::Mat level = image.clone();
+  for (int l = 1; l < pyramid.levels(); ++l) {
+    cv::Mat next;
+    affine_orb::detail::resize_bilinear_reference(level, next, affine_orb::pyramid_level_size(image.size(), {}, l));
+    CHECK(cv::countNonZero(pyramid.level(l) != next) == 0);
+    level = next;
+  }
+}
+
+TEST_CASE("every resize row and column blend path gives the scalar references' values") {
+  // Random source rows (extremes included) and column tables of several ratios; column ranges of
+  // every remainder modulo 8.
+  std::mt19937 rng(34);
+  for (const auto& [from, to] : {std::pair<int, int>(640, 533), {533, 444}, {37, 31}, {100, 100}, {90, 200}}) {
+    CAPTURE(from);
+    CAPTURE(to);
+    affine_orb::detail::ResizeWork work;
+    work.prepare(cv::Size(from, 4), cv::Size(to, 3));
+    std::vector<std::uint8_t> top(static_cast<std::size_t>(from));
+    std::vector<std::uint8_t> bottom(top.size());
+    int mismatches = 0;
+    for (int trial = 0; trial < 40; ++trial) {
+      for (std::size_t i = 0; i < top.size(); ++i) {
+        top[i] = static_cast<std::uint8_t>(trial % 3 == 0 ? 255 * (rng() % 2) : rng() % 256);
+        bottom[i] = static_cast<std::uint8_t>(rng() % 256);
+      }
+      const int b = trial % 5 == 0 ? 128 * (trial % 2) : static_cast<int>(rng() % 129);
+      const int c0 = static_cast<int>(rng() % static_cast<unsigned>(from));
+      const int c1 = c0 + static_cast<int>(rng() % static_cast<unsigned>(from - c0 + 1));
+      std::vector<std::int16_t> rows_a(static_cast<std::size_t>(from) + 1, 0);
+      std::vector<std::int16_t> rows_b(rows_a.size(), 0);
+      affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, c0, c1, rows_a.data());
+#if defined(__SSE2__)
+      affine_orb::detail::blend_rows_sse2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+      mismatches += rows_a != rows_b;
+#endif
+#if AFFINE_ORB_NEON
+      std::fill(rows_b.begin(), rows_b.end(), 0);
+      affine_orb::detail::blend_rows_neon(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+      mismatches += rows_a != rows_b;
+#endif
+#if defined(__AVX2__)
+      std::fill(rows_b.begin(), rows_b.end(), 0);
+      affine_orb::detail::blend_rows_avx2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+      mismatches += rows_a != rows_b;
+#endif
+      // The column blend reads the whole blended row (plus the repeated last column).
+      affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, 0, from, rows_a.data());
+      rows_a[static_cast<std::size_t>(from)] = rows_a[static_cast<std::size_t>(from) - 1];
+      const int x0 = static_cast<int>(rng() % static_cast<unsigned>(to));
+      const int x1 = x0 + 1 + static_cast<int>(rng() % static_cast<unsigned>(to - x0));
+      std::vector<std::uint8_t> out_a(static_cast<std::size_t>(to), 0);
+      std::vector<std::uint8_t> out_b(out_a.size(), 0);
+      affine_orb::detail::blend_columns_scalar(work, rows_a.data(), x0, x1, out_a.data());
+#if defined(__SSE2__)
+      affine_orb::detail::blend_columns_sse2(work, rows_a.data(), x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+#if AFFINE_ORB_NEON
+      std::fill(out_b.begin(), out_b.end(), 0);
+      affine_orb::detail::blend_columns_neon(work, rows_a.data(), x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+#if defined(__AVX2__)
+      std::fill(out_b.begin(), out_b.end(), 0);
+      affine_orb::detail::blend_columns_avx2(work, rows_a.data(), x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+    }
+    CHECK(mismatches == 0);
+  }
+}

@@ -288,8 +288,8 @@ BENCHMARK(view_render_cv)->Name("view_render/cv::warpAffine+GaussianBlur+resize"
 // ---- matching
 void knn2_ours(benchmark::State& state) {
   const Inputs& in = inputs();
-  const auto query = affine_orb::detail::descriptors_from_mat<4>(in.orb1);
-  const auto train = affine_orb::detail::descriptors_from_mat<4>(in.orb3);
+  const auto query = affine_orb::descriptors_from_mat<4>(in.orb1);
+  const auto train = affine_orb::descriptors_from_mat<4>(in.orb3);
   for (auto _ : state) {
     const auto result = affine_orb::knn2(query, train);
     benchmark::DoNotOptimize(result.data());

@@ -53,11 +53,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sequence_io.hpp"
-#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
-#include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 
 namespace {
 
@@ -374,8 +374,8 @@ void labelled_table() {
       make_rule("COLMAP inlier ratio H/F > 0.8", SelectionRule::kInlierRatio, false),
       make_rule("COLMAP inlier ratio H/F > 0.8, octave sigma", SelectionRule::kInlierRatio, true),
   };
-  rules[4].options.homography_ratio_threshold = 0.40;
-  rules[7].options.gric_sigma = 2.0;
+  rules[4].options.score_ratio.threshold = 0.40;
+  rules[7].options.gric.sigma = 2.0;
   std::printf(
       "\n## H or F on labelled pairs\n\n%zu pairs; right = H chosen on planar and rotation pairs, F on 3-D "
       "pairs; corner error = median px of the chosen H on the pairs with a ground-truth H where H was "
@@ -422,8 +422,8 @@ void labelled_table() {
   }
   // The statistics of the default rule and of eq. 22 per pair, to show the margins.
   std::printf("\nPer pair: parallax z-score of the default rule (H when <= %.1f), R_H of eq. 22 (H when > %.2f):\n\n",
-              affine_orb::ModelSelectionOptions{}.parallax_significance,
-              affine_orb::ModelSelectionOptions{}.homography_ratio_threshold);
+              affine_orb::ModelSelectionOptions{}.plane_parallax.significance,
+              affine_orb::ModelSelectionOptions{}.score_ratio.threshold);
   std::printf(
       "| pair | label | matches | parallax inliers | expected by chance | z | R_H "
       "|\n|---|---|---:|---:|---:|---:|---:|\n");

@@ -3,7 +3,9 @@
 // Oxford sequences in ../shared/data/oxford and Debian opencv-doc's graf1/graf3), and the judge
 // itself: correct and distinct correct matches, and whether an estimated homography solves a pair.
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <stdexcept>
@@ -26,7 +28,11 @@ struct ViewpointPair {
   int image = 0;
   std::string path1, path2;
   cv::Matx33d h;
+  /// "oxford" (Oxford and opencv-doc), "hpatches", "homogr" or "evd" (../shared/data/pairs/).
+  std::string subset = "oxford";
   std::string name() const { return sequence + " 1->" + std::to_string(image); }
+  /// EVD pairs are judged on the overlap grid (grid_error()), the others on the corners.
+  bool judged_on_grid() const { return subset == "evd"; }
 };
 
 inline cv::Mat read_gray(const std::string& path) {
@@ -66,6 +72,40 @@ inline std::vector<ViewpointPair> viewpoint_pairs(const std::string& only = "") 
     if (fs.isOpened()) fs.getFirstTopLevelNode() >> h;
     if (h.empty()) throw std::runtime_error("cannot read " + doc + "/H1to3p.xml");
     pairs.push_back({"opencv-doc graf", 3, doc + "/graf1.png", doc + "/graf3.png", cv::Matx33d(h)});
+  }
+  return pairs;
+}
+
+/// The pairs of ../shared/data/pairs/: every `<subset>/<name>/H_1_j` with its images `1.*` and
+/// `j.*`, subsets in the order hpatches, homogr, evd and names sorted; `subsets`, when not empty, is
+/// a comma-framed list (",hpatches,evd,") of the subsets to keep. Sequence names are
+/// "<subset>/<name>".
+inline std::vector<ViewpointPair> data_pairs(const std::string& subsets = "") {
+  namespace fs = std::filesystem;
+  const auto image_path = [](const fs::path& folder, int index) {
+    for (const char* ext : {".png", ".ppm", ".jpg", ".jpeg", ".pgm"}) {
+      const fs::path p = folder / (std::to_string(index) + ext);
+      if (fs::exists(p)) return p.string();
+    }
+    throw std::runtime_error("no image " + std::to_string(index) + " in " + folder.string());
+  };
+  std::vector<ViewpointPair> pairs;
+  for (const std::string subset : {"hpatches", "homogr", "evd"}) {
+    if (!subsets.empty() && subsets.find("," + subset + ",") == std::string::npos) continue;
+    const fs::path root = fs::path(data_dir()) / "pairs" / subset;
+    std::vector<fs::path> folders;
+    for (const auto& entry : fs::directory_iterator(root)) {
+      if (entry.is_directory()) folders.push_back(entry.path());
+    }
+    std::sort(folders.begin(), folders.end());
+    for (const fs::path& folder : folders) {
+      for (int j = 2; j <= 6; ++j) {
+        const fs::path h = folder / ("H_1_" + std::to_string(j));
+        if (!fs::exists(h)) continue;
+        pairs.push_back({subset + "/" + folder.filename().string(), j, image_path(folder, 1), image_path(folder, j),
+                         read_oxford_homography(h.string()), subset});
+      }
+    }
   }
   return pairs;
 }
@@ -111,6 +151,30 @@ inline double corner_error(const cv::Matx33d& estimate, const cv::Matx33d& truth
 }
 
 inline constexpr double kSolvedCornerError = 5.0;
+
+/// Mean distance, pixels of image 2, between `estimate` and the ground truth on a 20 x 20 grid of
+/// image-1 points (cell centres) that the ground truth maps inside image 2: the judge of the EVD
+/// pairs, whose corners fall far outside the other image (../shared/data/README.md). Solved, as
+/// for the corners, at most 5 px; 1e9 when no grid point lands inside image 2.
+inline double grid_error(const cv::Matx33d& estimate, const cv::Matx33d& truth, cv::Size size1, cv::Size size2) {
+  constexpr int kGrid = 20;
+  double sum = 0.0;
+  int count = 0;
+  for (int gy = 0; gy < kGrid; ++gy) {
+    for (int gx = 0; gx < kGrid; ++gx) {
+      const cv::Point2f p(static_cast<float>((gx + 0.5) * size1.width / kGrid),
+                          static_cast<float>((gy + 0.5) * size1.height / kGrid));
+      const cv::Vec3d tq = truth * cv::Vec3d(p.x, p.y, 1.0);
+      if (tq[2] == 0.0) continue;
+      const cv::Point2d t(tq[0] / tq[2], tq[1] / tq[2]);
+      if (t.x < 0 || t.y < 0 || t.x > size2.width - 1 || t.y > size2.height - 1) continue;
+      const cv::Point2d e = map_point(estimate, p);
+      sum += std::hypot(e.x - t.x, e.y - t.y);
+      ++count;
+    }
+  }
+  return count > 0 && std::isfinite(sum) ? sum / count : 1e9;
+}
 
 /// Float descriptors (SIFT, ASIFT; CV_32F rows) matched by the rules of
 /// affine_orb::match_features with its default AffineMatchOptions, on L2 distances: ratio 0.8

@@ -317,7 +317,7 @@ int main(int argc, char** argv) {
           "\"model\": \"%s\", \"parallax_significance\": %.3f, \"parallax_significance_threshold\": %.2f, "
           "\"homography_ratio\": %.4f, \"inliers\": %zu, ",
           affine_orb::model_name(o.selection.model), o.selection.parallax_significance,
-          affine_orb::ModelSelectionOptions{}.parallax_significance, o.selection.homography_ratio, o.inliers);
+          affine_orb::ModelSelectionOptions{}.plane_parallax.significance, o.selection.homography_ratio, o.inliers);
       if (o.rectified_from.empty()) {
         std::printf("\"rectified\": null, \"rectified_from\": null, ");
       } else {
@@ -346,7 +346,7 @@ int main(int argc, char** argv) {
         std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
       std::printf("\nmodel %s (parallax off the plane: z = %.1f, H when <= %.1f), %zu inliers\n",
                   affine_orb::model_name(o.selection.model), o.selection.parallax_significance,
-                  affine_orb::ModelSelectionOptions{}.parallax_significance, o.inliers);
+                  affine_orb::ModelSelectionOptions{}.plane_parallax.significance, o.inliers);
       if (plan.one_shot) {
         std::printf(
             "time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
@@ -362,7 +362,7 @@ int main(int argc, char** argv) {
         std::printf("image 2 rectified into image 1's frame: %s\n", rectified.c_str());
       } else if (!o.rectified_from.empty()) {
         std::printf("image 2 rectified with the estimated homography although F was chosen (z = %.1f > %.1f): %s\n",
-                    o.selection.parallax_significance, affine_orb::ModelSelectionOptions{}.parallax_significance,
+                    o.selection.parallax_significance, affine_orb::ModelSelectionOptions{}.plane_parallax.significance,
                     rectified.c_str());
       }
     }

@@ -456,9 +456,9 @@ TEST_CASE("degenerate input and bad options: success = false or std::invalid_arg
   bad([](ModelSelectionOptions& o) { o.fundamental_chi2 = 0.0; });
   bad([&](ModelSelectionOptions& o) { o.score_constant = nan; });
   bad([](ModelSelectionOptions& o) { o.score_constant = 1.0; });  // below the χ² thresholds
-  bad([&](ModelSelectionOptions& o) { o.homography_ratio_threshold = nan; });
-  bad([](ModelSelectionOptions& o) { o.homography_ratio_threshold = 0.0; });
-  bad([](ModelSelectionOptions& o) { o.homography_ratio_threshold = 1.0; });
+  bad([&](ModelSelectionOptions& o) { o.score_ratio.threshold = nan; });
+  bad([](ModelSelectionOptions& o) { o.score_ratio.threshold = 0.0; });
+  bad([](ModelSelectionOptions& o) { o.score_ratio.threshold = 1.0; });
   bad([](ModelSelectionOptions& o) { o.ransac.max_iterations = 0; });
   bad([](ModelSelectionOptions& o) { o.ransac.min_iterations = -3; });
   bad([](ModelSelectionOptions& o) { o.ransac.confidence = 0.0; });
@@ -467,10 +467,10 @@ TEST_CASE("degenerate input and bad options: success = false or std::invalid_arg
   bad([&](ModelSelectionOptions& o) { o.ransac.confidence = nan; });
   bad([](ModelSelectionOptions& o) { o.ransac.refinement_passes = -1; });
   bad([](ModelSelectionOptions& o) { o.rule = static_cast<affine_orb::SelectionRule>(42); });
-  bad([](ModelSelectionOptions& o) { o.homography_inlier_ratio_threshold = 0.0; });
-  bad([&](ModelSelectionOptions& o) { o.homography_inlier_ratio_threshold = nan; });
-  bad([&](ModelSelectionOptions& o) { o.parallax_significance = nan; });
-  bad([](ModelSelectionOptions& o) { o.parallax_significance = std::numeric_limits<double>::infinity(); });
+  bad([](ModelSelectionOptions& o) { o.inlier_ratio.threshold = 0.0; });
+  bad([&](ModelSelectionOptions& o) { o.inlier_ratio.threshold = nan; });
+  bad([&](ModelSelectionOptions& o) { o.plane_parallax.significance = nan; });
+  bad([](ModelSelectionOptions& o) { o.plane_parallax.significance = std::numeric_limits<double>::infinity(); });
   bad([](ModelSelectionOptions& o) { o.level_scale_factor = 0.9; });
   bad([](ModelSelectionOptions& o) { o.level_scale_factor = 5.0; });
   bad([&](ModelSelectionOptions& o) { o.level_scale_factor = nan; });
@@ -679,7 +679,7 @@ TEST_CASE("default rule (plane-and-parallax): planes and rotations H, 3-D scenes
       for (const ModelSelectionResult* r : {&plain, &octaves}) {
         REQUIRE(r->success);
         CHECK(r->model == (planar ? GeometricModel::kHomography : GeometricModel::kFundamental));
-        CHECK((r->parallax_significance <= ModelSelectionOptions{}.parallax_significance) == planar);
+        CHECK((r->parallax_significance <= ModelSelectionOptions{}.plane_parallax.significance) == planar);
         CHECK(r->parallax_significance ==
               doctest::Approx((std::max(0, r->parallax_inlier_count - 2) - r->parallax_expected_count) /
                               std::sqrt(std::max(1.0, r->parallax_expected_count))));
@@ -753,25 +753,37 @@ TEST_CASE("every rule on a plane (H) and a 3-D scene (F); eq. 22 and the others 
     CHECK(f.model == GeometricModel::kFundamental);
     // Each rule decides by its own statistic.
     if (rule == SelectionRule::kScoreRatio) {
-      CHECK(h.homography_ratio > o.homography_ratio_threshold);
-      CHECK(f.homography_ratio <= o.homography_ratio_threshold);
+      CHECK(h.homography_ratio > o.score_ratio.threshold);
+      CHECK(f.homography_ratio <= o.score_ratio.threshold);
     } else if (rule == SelectionRule::kInlierRatio) {
-      CHECK(h.homography_inlier_count > o.homography_inlier_ratio_threshold * h.fundamental_inlier_count);
-      CHECK(f.homography_inlier_count <= o.homography_inlier_ratio_threshold * f.fundamental_inlier_count);
+      CHECK(h.homography_inlier_count > o.inlier_ratio.threshold * h.fundamental_inlier_count);
+      CHECK(f.homography_inlier_count <= o.inlier_ratio.threshold * f.fundamental_inlier_count);
     } else if (rule == SelectionRule::kGric) {
       CHECK(h.homography_gric < h.fundamental_gric);
       CHECK(f.homography_gric >= f.fundamental_gric);
     }
-    if (rule != SelectionRule::kPlaneParallax) CHECK(h.parallax_inlier_count == 0);
+    // Each rule computes only its own statistic: GRIC under kGric, the parallax test under
+    // kPlaneParallax; the same decision and models under every rule's nested options.
+    for (const ModelSelectionResult* r : {&h, &f}) {
+      if (rule != SelectionRule::kPlaneParallax) {
+        CHECK(r->parallax_inlier_count == 0);
+        CHECK(r->parallax_expected_count == 0.0);
+        CHECK(r->parallax_significance == 0.0);
+      }
+      if (rule != SelectionRule::kGric) {
+        CHECK(r->homography_gric == 0.0);
+        CHECK(r->fundamental_gric == 0.0);
+      }
+    }
   }
   // The decision moves with its threshold: eq. 22 at θ just above the plane's R_H chooses F.
   ModelSelectionOptions strict;
   strict.rule = SelectionRule::kScoreRatio;
   const double rh = affine_orb::select_model(plane.points1, plane.points2, strict).homography_ratio;
-  strict.homography_ratio_threshold = std::min(0.99, rh + 0.01);
+  strict.score_ratio.threshold = std::min(0.99, rh + 0.01);
   CHECK(affine_orb::select_model(plane.points1, plane.points2, strict).model == GeometricModel::kFundamental);
   ModelSelectionOptions lax;  // a significance no 3-D scene reaches: H
-  lax.parallax_significance = 1e6;
+  lax.plane_parallax.significance = 1e6;
   CHECK(affine_orb::select_model(scene.points1, scene.points2, lax).model == GeometricModel::kHomography);
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <random>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -207,6 +208,7 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
       [](auto& o) { o.stages.front().view_features = -1.0; },
       [](auto& o) { o.min_inliers = 7; },
       [](auto& o) { o.min_inlier_ratio = 1.5; },
+      [](auto& o) { o.max_half_disagreement = -1.0; },
       [](auto& o) { o.extractor.view_budget = affine_orb::ViewBudget::kAreaSplit; },
   };
   for (const auto& change : invalid) {
@@ -216,4 +218,43 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
     CHECK_THROWS_AS(affine_orb::TwoViewMatcher<affine_orb::Rbrief>{bad}, std::invalid_argument);
   }
   CHECK_NOTHROW(affine_orb::TwoViewOptions{}.check());
+}
+
+TEST_CASE("the precision test tells a homography supported over the image from one supported in a corner") {
+  // A plane at a large tilt with a known homography (camera turned by 45°), 200 correspondences
+  // with 1 px Gaussian noise in image 2: spread over image 1, the two half estimates agree at the
+  // corners within a few pixels; packed into a 60 x 60 px patch of one corner, the same noise
+  // makes their extrapolations to the far corners disagree by far more than the 5 px of the
+  // judge, so the stage would escalate.
+  const cv::Size size(800, 640);
+  const cv::Matx33d truth = turned_camera(45.0, size);
+  Eigen::Matrix3d h;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) h(r, c) = truth(r, c);
+  std::mt19937 random(7);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const auto correspondences = [&](double x0, double y0, double width, double height) {
+    std::vector<cv::Point2f> p1, p2;
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < 200; ++i) {
+      const cv::Point2d x(x0 + width * u(random), y0 + height * u(random));
+      const cv::Point2d y = affine_orb::test::apply_homography(truth, x);
+      p1.emplace_back(static_cast<float>(x.x), static_cast<float>(x.y));
+      p2.emplace_back(static_cast<float>(y.x + noise(random)), static_cast<float>(y.y + noise(random)));
+    }
+    return std::make_pair(p1, p2);
+  };
+  const std::vector<std::uint8_t> all(200, 1);
+  const auto [spread1, spread2] = correspondences(0.0, 0.0, size.width - 1.0, size.height - 1.0);
+  const auto [corner1, corner2] = correspondences(20.0, 20.0, 60.0, 60.0);
+  const double spread = affine_orb::half_disagreement(spread1, spread2, all, h, size);
+  const double corner = affine_orb::half_disagreement(corner1, corner2, all, h, size);
+  CHECK(spread < 3.0);
+  CHECK(corner > 10.0);
+  // Too few inliers for two halves of four: no estimate, infinite disagreement.
+  std::vector<std::uint8_t> few(200, 0);
+  for (int i = 0; i < 6; ++i) few[static_cast<std::size_t>(i)] = 1;
+  CHECK(std::isinf(affine_orb::half_disagreement(spread1, spread2, few, h, size)));
+  CHECK_THROWS_AS(affine_orb::half_disagreement(spread1, spread2, std::vector<std::uint8_t>(3, 1), h, size),
+                  std::invalid_argument);
 }

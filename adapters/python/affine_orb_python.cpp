@@ -342,7 +342,7 @@ PYBIND11_MODULE(affine_orb, m) {
          const std::optional<std::vector<int>>& octaves1, const std::optional<std::vector<int>>& octaves2) {
         affine_orb::ModelSelectionOptions options;
         options.sigma = sigma;
-        options.homography_ratio_threshold = homography_ratio_threshold;
+        options.score_ratio.threshold = homography_ratio_threshold;
         options.rule = selection_rule(rule);
         if (octaves1.has_value() != octaves2.has_value())
           throw py::value_error("octaves1 and octaves2 must be given together");
@@ -369,13 +369,14 @@ PYBIND11_MODULE(affine_orb, m) {
         return out;
       },
       py::arg("points1"), py::arg("points2"), py::arg("sigma") = affine_orb::ModelSelectionOptions{}.sigma,
-      py::arg("homography_ratio_threshold") = affine_orb::ModelSelectionOptions{}.homography_ratio_threshold,
+      py::arg("homography_ratio_threshold") = affine_orb::ModelSelectionOptions{}.score_ratio.threshold,
       py::arg("max_iterations") = affine_orb::RansacOptions{}.max_iterations,
       py::arg("seed") = affine_orb::RansacOptions{}.seed, py::arg("rule") = "plane_parallax",
       py::arg("octaves1") = py::none(), py::arg("octaves2") = py::none(),
       "Homography or fundamental matrix for N x 2 point arrays (paper eqs. 17-22, affine_orb::select_model): a "
       "dict with success, model (\"homography\", \"fundamental\" or \"none\"), homography_ratio (R_H), "
-      "parallax_significance (the plane-and-parallax z-score), homography and fundamental (3 x 3 arrays, x2 ~ H "
+      "parallax_significance (the plane-and-parallax z-score; 0 under the other rules), homography and fundamental (3 "
+      "x 3 arrays, x2 ~ H "
       "x1 and x2^T F x1 = 0, or None) and the inlier flags. rule: \"plane_parallax\" (the default), "
       "\"score_ratio\" (eq. 22), \"gric\" or \"inlier_ratio\" (affine_orb::SelectionRule). octaves1, "
       "octaves2: the keypoints' pyramid octaves (cv2.KeyPoint.octave), which scale each point's sigma by "

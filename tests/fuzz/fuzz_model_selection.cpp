@@ -5,7 +5,7 @@
 // non-finite coordinates, and otherwise in a result that keeps its documented invariants: one
 // inlier flag per correspondence, counts that agree with the flags, finite unit-norm models when
 // found, a model chosen only with success, parallax statistics only under the plane-and-parallax
-// rule and consistent with its decision.
+// rule and consistent with its decision, GRIC values only under the GRIC rule.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
 #include <array>
 #include <cmath>
@@ -91,6 +91,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (!result.success) require(result.model == affine_orb::GeometricModel::kNone);
   if (result.model == affine_orb::GeometricModel::kHomography) require(result.homography_found);
   if (result.model == affine_orb::GeometricModel::kFundamental) require(result.fundamental_found);
+  if (options.rule != affine_orb::SelectionRule::kGric) {
+    require(result.homography_gric == 0.0 && result.fundamental_gric == 0.0);
+  }
   if (options.rule != affine_orb::SelectionRule::kPlaneParallax) {
     require(result.parallax_inlier_count == 0 && result.parallax_expected_count == 0.0);
   } else {
@@ -100,7 +103,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     require(std::isfinite(result.parallax_significance));
     if (result.success) {
       require((result.model == affine_orb::GeometricModel::kHomography) ==
-              (result.homography_found && result.parallax_significance <= options.parallax_significance));
+              (result.homography_found && result.parallax_significance <= options.plane_parallax.significance));
     }
   }
   return 0;

@@ -1,7 +1,8 @@
 // libFuzzer target: two-view matching with views on demand (TwoViewMatcher). The input bytes choose
 // two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
-// min_inlier_ratio, all_stages. Invalid options must end in std::invalid_argument, valid ones in a
+// min_inlier_ratio, all_stages, the precision test (max_half_disagreement), stages to the extreme
+// tilts 4 and 4√2. Invalid options must end in std::invalid_argument, valid ones in a
 // result that keeps every documented invariant: stage reports, the stopping rule, inlier flags,
 // match indices, keypoints inside their image and mask, each stage's keypoints a superset of the
 // stage before; anything else (a crash, a sanitizer report, another exception, a broken
@@ -47,19 +48,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::uint8_t flags = bytes.next();
   affine_orb::TwoViewOptions options;
   options.extractor.features = static_cast<int>(bytes.next()) * 2 - 4;  // may be <= 0: invalid
-  // Tilts: 0.9 is invalid (not above 1), 4 exceeds the default max_tilt unless flag 32 raises it;
-  // the stages may also not increase.
-  constexpr double kTilts[] = {0.9, 1.42, 2.01, 2.83, 4.01};
-  if (flags & 32) options.extractor.views.max_tilt = 4.01;
+  // Tilts: 0.9 is invalid (not above 1), 4 and 4√2 exceed the default max_tilt unless flag 32
+  // raises it; the stages may also not increase.
+  constexpr double kTilts[] = {0.9, 1.42, 2.01, 2.83, 4.01, 5.66};
+  if (flags & 32) options.extractor.views.max_tilt = 5.66;
   options.stages.clear();
   const int stages = bytes.next() % 4;
   for (int s = 0; s < stages; ++s) {
     const std::uint8_t b = bytes.next();
-    options.stages.push_back({kTilts[b % 5], (b >> 3) * 0.125 - 0.25});  // view_features may be < 0
+    options.stages.push_back({kTilts[b % 6], (b >> 3) * 0.125 - 0.25});  // view_features may be < 0
   }
   options.min_inliers = bytes.next() % 40;               // < 8 is invalid
   options.min_inlier_ratio = (bytes.next() % 12) * 0.1;  // > 1 is invalid
   options.all_stages = (flags & 1) != 0;
+  if (flags & 64) options.max_half_disagreement = (flags & 128) ? -1.0 : 3.0;  // < 0 is invalid
   if (flags & 2) options.extractor.spreading = affine_orb::Spreading::kQuadtree;
   options.model.ransac.max_iterations = 1 + bytes.next() % 64;
   options.model.ransac.min_iterations =
@@ -102,7 +104,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (r.verified) {
       require(r.inlier_count >= options.min_inliers);
       require(r.inlier_count >= options.min_inlier_ratio * static_cast<double>(r.matches.size()));
+      if (options.max_half_disagreement > 0.0 && r.model.model == affine_orb::GeometricModel::kHomography)
+        require(r.half_disagreement <= options.max_half_disagreement);
     }
+    // The precision test is measured only when on and a homography was chosen.
+    if (options.max_half_disagreement <= 0.0 || r.model.model != affine_orb::GeometricModel::kHomography)
+      require(r.half_disagreement == -1.0);
     require(r.inliers.size() == r.matches.size());
     require(std::count(r.inliers.begin(), r.inliers.end(), 1) == r.inlier_count);
     for (const affine_orb::Match& m : r.matches) {

@@ -53,7 +53,7 @@ inline const char* model_name(GeometricModel model) {
 /// every rule on its labelled real and synthetic pairs (README, "Choosing H or F").
 enum class SelectionRule {
   /// Paper eq. 22 (ORB-SLAM's initializer): H when R_H = S_H / (S_H + S_F) >
-  /// homography_ratio_threshold.
+  /// ScoreRatioOptions::threshold.
   kScoreRatio,
   /// Torr's Geometric Robust Information Criterion (P. H. S. Torr, "Geometric motion segmentation
   /// and model selection", Phil. Trans. R. Soc. A 356, 1998): GRIC = Σ ρ(e²/σ²) + λ1·d·n + λ2·k
@@ -61,12 +61,12 @@ enum class SelectionRule {
   /// H: manifold dimension d = 2, k = 8 parameters; F: d = 3, k = 7. H when GRIC(H) < GRIC(F).
   /// e² is, for H, a quarter of the symmetric transfer error (x2 − H x1 and x1 − H⁻¹ x2 each carry
   /// the noise of both points: ≈ 2σ² per correspondence, the distance to the 2-codimensional
-  /// variety); for F the squared Sampson distance. σ is gric_sigma.
+  /// variety); for F the squared Sampson distance. σ is GricOptions::sigma.
   kGric,
   /// COLMAP's two-view rule (J. L. Schönberger and J.-M. Frahm, "Structure-from-Motion Revisited",
   /// CVPR 2016; COLMAP's two-view geometry estimation): H when the homography's inliers exceed
-  /// homography_inlier_ratio_threshold times the fundamental matrix's inliers (each counted by its
-  /// own χ² test, homography_chi2 and fundamental_chi2 at σ).
+  /// InlierRatioOptions::threshold times the fundamental matrix's inliers (each counted by its own
+  /// χ² test, homography_chi2 and fundamental_chi2 at σ).
   kInlierRatio,
   /// A plane test of the F hypothesis after DEGENSAC (O. Chum, T. Werner and J. Matas, "Two-view
   /// geometry estimation unaffected by a dominant plane", CVPR 2005: a pair whose epipolar
@@ -78,7 +78,7 @@ enum class SelectionRule {
   /// number expected by chance: an outlier at transfer distance r = |x2 − H x1| from its H
   /// prediction passes the epipolar test of threshold t for a line through H x1 of random direction
   /// with probability (2/π)·asin(min(1, t/r)). H when (explained − 2 − expected) /
-  /// √max(1, expected) <= parallax_significance (the two correspondences of the sample that fixed
+  /// √max(1, expected) <= PlaneParallaxOptions::significance (the two correspondences of the sample that fixed
   /// e' agree with it by construction): the scene shows no parallax off the plane beyond chance. The
   /// completion, locally optimised, also replaces the RANSAC F when it scores higher on all
   /// correspondences (DEGENSAC's estimate of F: 8-point samples from a scene dominated by a plane
@@ -88,6 +88,60 @@ enum class SelectionRule {
   kPlaneParallax,
 };
 
+/// SelectionRule::kScoreRatio's parameter.
+struct ScoreRatioOptions {
+  /// H is chosen when R_H = S_H / (S_H + S_F) exceeds this, unitless (paper eq. 22: 0.45;
+  /// ORB-SLAM2's Initializer uses 0.40).
+  double threshold = 0.45;
+  /// Throws std::invalid_argument unless threshold is in (0, 1).
+  void check() const {
+    detail::require(std::isfinite(threshold) && threshold > 0.0 && threshold < 1.0,
+                    "ScoreRatioOptions: threshold must be in (0, 1), got " + std::to_string(threshold));
+  }
+};
+
+/// SelectionRule::kGric's parameter.
+struct GricOptions {
+  /// σ of GRIC, pixels: the noise of one keypoint coordinate, which GRIC's residuals (distances to
+  /// the model's variety in the 4-D space of correspondences) are measured against. 1 px, the
+  /// localisation of level-0 FAST keypoints (ModelSelectionOptions::sigma is twice it because the
+  /// eq. 20–21 residuals carry both points' noise).
+  double sigma = 1.0;
+  /// Throws std::invalid_argument unless sigma is positive and finite.
+  void check() const {
+    detail::require(detail::positive_finite(sigma),
+                    "GricOptions: sigma must be positive and finite, got " + std::to_string(sigma));
+  }
+};
+
+/// SelectionRule::kInlierRatio's parameter.
+struct InlierRatioOptions {
+  /// H when homography inliers > this · fundamental inliers, unitless. 0.8 is COLMAP's
+  /// max_H_inlier_ratio (TwoViewGeometryOptions), there with one pixel threshold for both models.
+  double threshold = 0.8;
+  /// Throws std::invalid_argument unless threshold is positive and finite.
+  void check() const {
+    detail::require(detail::positive_finite(threshold),
+                    "InlierRatioOptions: threshold must be positive and finite, got " + std::to_string(threshold));
+  }
+};
+
+/// SelectionRule::kPlaneParallax's parameter.
+struct PlaneParallaxOptions {
+  /// H when the parallax support exceeds its chance expectation by at most this many standard
+  /// deviations (a z-score, unitless; see SelectionRule::kPlaneParallax). 3.8 is measured by
+  /// bench/bench_model_selection: its planar and pure-rotation pairs reach 3.65, its real 3-D pairs
+  /// (KITTI 00 and 06) start at 3.9 (README, "Choosing H or F").
+  double significance = 3.8;
+  /// Throws std::invalid_argument unless significance is finite.
+  void check() const {
+    detail::require(std::isfinite(significance),
+                    "PlaneParallaxOptions: significance must be finite, got " + std::to_string(significance));
+  }
+};
+
+/// Options of select_model(): the fields every rule uses at the top level, each rule's own
+/// parameter in its nested struct (only the chosen rule's is read).
 struct ModelSelectionOptions {
   /// RANSAC iteration control, shared by both models (same seed, hence the same sample sets).
   RansacOptions ransac;
@@ -107,34 +161,23 @@ struct ModelSelectionOptions {
   /// Scoring constant T of both models: 5.991, so that scores of the two models compare (ORB-SLAM2
   /// Initializer::CheckFundamental scores F with the 2-dof value too).
   double score_constant = 5.991;
-  /// H is chosen when R_H = S_H / (S_H + S_F) exceeds this (paper eq. 22: 0.45; ORB-SLAM2's
-  /// Initializer uses 0.40).
-  double homography_ratio_threshold = 0.45;
-  /// The decision rule; homography_ratio_threshold applies to kScoreRatio only.
+  /// The decision rule; it reads its own nested options below and no other rule's.
   SelectionRule rule = SelectionRule::kPlaneParallax;
-  /// σ of GRIC, pixels: the noise of one keypoint coordinate, which GRIC's residuals (distances to
-  /// the model's variety in the 4-D space of correspondences) are measured against. 1 px, the
-  /// localisation of level-0 FAST keypoints (sigma above is twice it because the eq. 20–21
-  /// residuals carry both points' noise).
-  double gric_sigma = 1.0;
-  /// kInlierRatio: H when homography inliers > this · fundamental inliers. 0.8 is COLMAP's
-  /// max_H_inlier_ratio (TwoViewGeometryOptions), there with one pixel threshold for both models.
-  double homography_inlier_ratio_threshold = 0.8;
-  /// kPlaneParallax: H when the parallax support exceeds its chance expectation by at most this
-  /// many standard deviations (a z-score, unitless; see SelectionRule::kPlaneParallax). 3.8 is
-  /// measured by bench/bench_model_selection: its planar and pure-rotation pairs reach 3.65, its
-  /// real 3-D pairs (KITTI 00 and 06) start at 3.9 (README, "Choosing H or F").
-  double parallax_significance = 3.8;
   /// Scale factor s between pyramid levels, for the select_model() overload that takes keypoint
   /// octaves: a keypoint of octave o is located to about s^o level-0 pixels, so its errors are
   /// measured against σ·s^o (ORB-SLAM2's Frame keeps these σ² per level, mvLevelSigma2, and its
   /// pose optimisation uses them). 1.2 is PyramidOptions::scale_factor's default, ORB's.
   double level_scale_factor = 1.2;
 
-  /// Throws std::invalid_argument for invalid RANSAC options, an invalid rule, a sigma, χ²
-  /// threshold or inlier-ratio threshold that is not positive and finite, a score_constant below
-  /// either χ² threshold or not finite, a score-ratio threshold outside (0, 1), a
-  /// parallax_significance that is not finite, or a level_scale_factor outside [1, 4].
+  ScoreRatioOptions score_ratio;        ///< SelectionRule::kScoreRatio only
+  GricOptions gric;                     ///< SelectionRule::kGric only
+  InlierRatioOptions inlier_ratio;      ///< SelectionRule::kInlierRatio only
+  PlaneParallaxOptions plane_parallax;  ///< SelectionRule::kPlaneParallax only
+
+  /// Throws std::invalid_argument for invalid RANSAC options, an invalid rule, a sigma or χ²
+  /// threshold that is not positive and finite, a score_constant below either χ² threshold or not
+  /// finite, a level_scale_factor outside [1, 4], or nested rule options that fail their check()
+  /// (all four are checked, whichever rule is chosen).
   void check() const {
     ransac.check();
     homography_scoring().check();
@@ -142,21 +185,13 @@ struct ModelSelectionOptions {
     detail::require(rule == SelectionRule::kScoreRatio || rule == SelectionRule::kGric ||
                         rule == SelectionRule::kInlierRatio || rule == SelectionRule::kPlaneParallax,
                     "ModelSelectionOptions: rule is invalid");
-    detail::require(detail::positive_finite(homography_inlier_ratio_threshold),
-                    "ModelSelectionOptions: homography_inlier_ratio_threshold must be positive and finite, got " +
-                        std::to_string(homography_inlier_ratio_threshold));
-    detail::require(
-        std::isfinite(parallax_significance),
-        "ModelSelectionOptions: parallax_significance must be finite, got " + std::to_string(parallax_significance));
     detail::require(
         std::isfinite(level_scale_factor) && level_scale_factor >= 1.0 && level_scale_factor <= 4.0,
         "ModelSelectionOptions: level_scale_factor must be in [1, 4], got " + std::to_string(level_scale_factor));
-    detail::require(std::isfinite(gric_sigma) && gric_sigma > 0.0,
-                    "ModelSelectionOptions: gric_sigma must be positive and finite, got " + std::to_string(gric_sigma));
-    detail::require(std::isfinite(homography_ratio_threshold) && homography_ratio_threshold > 0.0 &&
-                        homography_ratio_threshold < 1.0,
-                    "ModelSelectionOptions: homography_ratio_threshold must be in (0, 1), got " +
-                        std::to_string(homography_ratio_threshold));
+    score_ratio.check();
+    gric.check();
+    inlier_ratio.check();
+    plane_parallax.check();
   }
 
   /// The homography's scoring parameters.
@@ -165,8 +200,10 @@ struct ModelSelectionOptions {
   TruncatedChi2Score fundamental_scoring() const { return {sigma, fundamental_chi2, score_constant}; }
 };
 
-/// Outcome of select_model(). Both models are reported whenever they were found, whichever was
-/// chosen.
+/// Outcome of select_model(). Both models (estimate, score, inliers, iterations) and R_H are
+/// reported under every rule whenever they were found, whichever was chosen; the GRIC values only
+/// under SelectionRule::kGric, the parallax fields only under SelectionRule::kPlaneParallax (0
+/// under the other rules: select_model() computes only what its rule needs).
 struct ModelSelectionResult {
   /// True when at least one model was found and the data are not degenerate (see select_model()).
   bool success = false;
@@ -194,14 +231,14 @@ struct ModelSelectionResult {
 
   /// R_H = S_H / (S_H + S_F) (paper eq. 22); 0 when both scores are 0.
   double homography_ratio = 0.0;
-  /// GRIC of each model on all correspondences (SelectionRule::kGric; lower is better), computed
-  /// whatever the rule; 0 for a model not found.
+  /// SelectionRule::kGric only (0 under the other rules and for a model not found): GRIC of each
+  /// model on all correspondences, lower is better.
   double homography_gric = 0.0;
   double fundamental_gric = 0.0;
   /// SelectionRule::kPlaneParallax only (0 under the other rules): the homography outliers that the
   /// best plane-and-parallax completion F = [e']× H explains, the number of them expected by
   /// chance, and the z-score (count − 2 − expected) / √max(1, expected) compared with
-  /// ModelSelectionOptions::parallax_significance.
+  /// PlaneParallaxOptions::significance.
   int parallax_inlier_count = 0;
   double parallax_expected_count = 0.0;
   double parallax_significance = 0.0;
@@ -254,7 +291,7 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
     // so such an H is supported by at least that score / 2T correspondences. Once an H with that
     // support would have been sampled (at the RANSAC confidence), searching on cannot change the
     // decision.
-    const double theta = options.homography_ratio_threshold;
+    const double theta = options.score_ratio.threshold;
     const double needed_support = theta / (1.0 - theta) * f.score / (2.0 * options.score_constant);
     h_options.termination_inlier_ratio =
         std::max(h_options.termination_inlier_ratio, std::min(1.0, needed_support / static_cast<double>(n)));
@@ -265,7 +302,7 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
     completion = detail::complete_by_parallax(h.model.h, points1, points2, scales, h.inliers,
                                               options.fundamental_scoring(), options.ransac);
     if (completion.found)
-      detail::keep_better_fundamental(fundamental_estimator, completion.fundamental, options.ransac, f);
+      f = detail::keep_better_fundamental(fundamental_estimator, completion.fundamental, options.ransac, std::move(f));
   }
 
   result.homography_iterations = h.iterations;
@@ -284,15 +321,15 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
     result.fundamental_inliers = std::move(f.inliers);
     result.fundamental_inlier_count = f.inlier_count;
   }
-  if (result.homography_found) {
+  if (result.homography_found && options.rule == SelectionRule::kGric) {
     result.homography_gric =
         detail::gric(detail::homography_gric_residuals(result.homography, points1, points2, inverse_scales),
-                     options.gric_sigma, 2, 8);
+                     options.gric.sigma, 2, 8);
   }
-  if (result.fundamental_found) {
+  if (result.fundamental_found && options.rule == SelectionRule::kGric) {
     result.fundamental_gric =
         detail::gric(detail::fundamental_gric_residuals(result.fundamental, points1, points2, inverse_scales),
-                     options.gric_sigma, 3, 7);
+                     options.gric.sigma, 3, 7);
   }
   if (result.homography_found && options.rule == SelectionRule::kPlaneParallax) {
     result.parallax_inlier_count = completion.inlier_count;
@@ -311,19 +348,18 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
   bool homography = false;
   switch (options.rule) {
     case SelectionRule::kScoreRatio:
-      homography = result.homography_ratio > options.homography_ratio_threshold;
+      homography = result.homography_ratio > options.score_ratio.threshold;
       break;
     case SelectionRule::kGric:
       homography =
           result.homography_found && (!result.fundamental_found || result.homography_gric < result.fundamental_gric);
       break;
     case SelectionRule::kInlierRatio:
-      homography =
-          result.homography_found &&
-          result.homography_inlier_count > options.homography_inlier_ratio_threshold * result.fundamental_inlier_count;
+      homography = result.homography_found &&
+                   result.homography_inlier_count > options.inlier_ratio.threshold * result.fundamental_inlier_count;
       break;
     case SelectionRule::kPlaneParallax:
-      homography = result.homography_found && result.parallax_significance <= options.parallax_significance;
+      homography = result.homography_found && result.parallax_significance <= options.plane_parallax.significance;
       break;
   }
   result.model = homography ? GeometricModel::kHomography : GeometricModel::kFundamental;

@@ -225,6 +225,48 @@ struct RansacResult {
   int iterations = 0;
 };
 
+/// `model` scored on every correspondence: its score, inliers and their count; success when it has
+/// at least Estimator::kSampleSize inliers (iterations 0).
+template <class Estimator>
+RansacResult<typename Estimator::Model> evaluate_model(const Estimator& estimator,
+                                                       const typename Estimator::Model& model) {
+  RansacResult<typename Estimator::Model> result;
+  result.inliers.assign(estimator.size(), 0);
+  const auto scored = detail::score_model(estimator, model, -std::numeric_limits<double>::infinity(), result.inliers);
+  result.model = model;
+  result.score = scored->first;
+  result.inlier_count = scored->second;
+  result.success = result.inlier_count >= Estimator::kSampleSize;
+  return result;
+}
+
+/// Local optimisation (LO-RANSAC, Chum, Matas & Kittler, DAGM 2003) of a scored model: `start`
+/// (model, score, inliers and inlier count on every correspondence, as evaluate_model() gives) is
+/// re-estimated from its inliers with estimator.refine() and re-scored, up to `passes` times while
+/// the score improves and the inlier set changes. Returns `start` with the last improving model,
+/// its score, inliers and count (iterations and success as given); `start` itself when the
+/// estimator has no refine() or no pass improves. ransac() applies it to every new best sample
+/// model; select_model() to the plane-and-parallax completion of F.
+template <class Estimator>
+RansacResult<typename Estimator::Model> optimise_locally(const Estimator& estimator,
+                                                         RansacResult<typename Estimator::Model> start, int passes) {
+  if constexpr (detail::HasRefine<Estimator>::value) {
+    std::vector<std::uint8_t> mask(estimator.size(), 0);
+    for (int pass = 0; pass < passes; ++pass) {
+      const auto refined = estimator.refine(start.model, start.inliers);
+      if (!refined) break;
+      const auto scored = detail::score_model(estimator, *refined, start.score, mask);
+      if (!scored) break;
+      start.model = *refined;
+      start.score = scored->first;
+      start.inlier_count = scored->second;
+      start.inliers.swap(mask);
+      if (start.inliers == mask) break;  // same inliers: the next pass would refit the same set
+    }
+  }
+  return start;
+}
+
 /// RANSAC with the estimator's score (MSAC-style when the score is the truncated χ² one):
 /// draws `draw_size` distinct correspondence indices per iteration from a std::mt19937_64 seeded
 /// with options.seed, hands the first Estimator::kSampleSize of them to estimator.generate(),
@@ -274,21 +316,6 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
   candidate.inliers.assign(n, 0);
   double best_sample_score = -std::numeric_limits<double>::infinity();
   bool found = false;
-  const auto optimise_candidate = [&] {
-    if constexpr (detail::HasRefine<Estimator>::value) {
-      for (int pass = 0; pass < options.refinement_passes; ++pass) {
-        const std::optional<Model> refined = estimator.refine(candidate.model, candidate.inliers);
-        if (!refined) break;
-        const auto scored = detail::score_model(estimator, *refined, candidate.score, mask);
-        if (!scored) break;
-        candidate.model = *refined;
-        candidate.score = scored->first;
-        candidate.inlier_count = scored->second;
-        candidate.inliers.swap(mask);
-        if (candidate.inliers == mask) break;  // same inliers: the next pass would refit the same set
-      }
-    }
-  };
 
   int iteration = 0;
   while (iteration < options.max_iterations && (iteration < options.min_iterations || iteration < needed)) {
@@ -305,7 +332,7 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
       candidate.score = scored->first;
       candidate.inlier_count = scored->second;
       candidate.inliers.swap(mask);
-      optimise_candidate();
+      candidate = optimise_locally(estimator, std::move(candidate), options.refinement_passes);
       if (found && !(candidate.score > result.score)) continue;
       found = true;
       result.model = candidate.model;

@@ -10,15 +10,20 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/geometry/homography.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
 
@@ -66,6 +71,14 @@ struct TwoViewOptions {
   /// escalation. Range [0, 1]; values from 0 to 0.2 verify the same pairs of bench/eval_two_view
   /// --sweep, 0.1 is a guard, not a tuned value.
   double min_inlier_ratio = 0.1;
+  /// Precision test of a chosen homography, pixels of image 2 (0 = off): the stage verifies only
+  /// when two homographies fitted to the two halves of its inliers (alternate inliers in match
+  /// order, linear fit of each) map image 1's four corners within this distance of each other,
+  /// mean of the four. Two independent estimates from half the data each differ by about twice the
+  /// full estimate's random error, so a value of 2·e rejects models whose corners are predicted
+  /// less precisely than about e pixels; a model supported only near one part of the image fails
+  /// it, as its extrapolation to the far corners disagrees. F models are not tested.
+  double max_half_disagreement = 0.0;
   /// Run every stage whatever stage 0 verified (the views on for every pair); the result is then
   /// that of the last stage.
   bool all_stages = false;
@@ -106,6 +119,9 @@ struct TwoViewOptions {
                     "TwoViewOptions: min_inliers must be in [8, 1000000], got " + std::to_string(min_inliers));
     detail::require(std::isfinite(min_inlier_ratio) && min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0,
                     "TwoViewOptions: min_inlier_ratio must be in [0, 1], got " + std::to_string(min_inlier_ratio));
+    detail::require(
+        std::isfinite(max_half_disagreement) && max_half_disagreement >= 0.0,
+        "TwoViewOptions: max_half_disagreement must be finite and >= 0, got " + std::to_string(max_half_disagreement));
   }
 };
 
@@ -119,6 +135,9 @@ struct TwoViewStageReport {
   int homography_inlier_count = 0;   ///< inliers of the estimated H (0 when none was found)
   int fundamental_inlier_count = 0;  ///< inliers of the estimated F (0 when none was found)
   GeometricModel model = GeometricModel::kNone;
+  /// Mean distance between image 1's corners mapped by the homographies of the two halves of the
+  /// inliers, pixels of image 2 (TwoViewOptions::max_half_disagreement; -1 when not measured).
+  double half_disagreement = -1.0;
   double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
   double match_ms = 0.0;    ///< matching, milliseconds
   double verify_ms = 0.0;   ///< RANSAC and model selection, milliseconds
@@ -141,11 +160,45 @@ struct TwoViewResult {
   /// Per match, 1 = inlier of the chosen model (model.model; all 0 when none was chosen).
   std::vector<std::uint8_t> inliers;
   int inlier_count = 0;
+  /// The last stage's TwoViewStageReport::half_disagreement, pixels (-1 when not measured).
+  double half_disagreement = -1.0;
   /// Both estimates and the choice of the last stage: x2 ~ H x1 and x2ᵀ F x1 = 0, pixels.
   ModelSelectionResult model;
   /// One report per stage run, stage 0 first.
   std::vector<TwoViewStageReport> stages;
 };
+
+/// The precision test of TwoViewOptions::max_half_disagreement: two homographies fitted (one
+/// normalised DLT step from `homography`, the estimate of all inliers, as its local optimisation
+/// does) to alternate halves of the inliers (`inliers[i]` != 0, in index order) of the
+/// correspondences points1[i] ↔ points2[i] (pixels, x2 ~ H x1), and the mean distance between image
+/// 1's four corners (an image of `size1`) mapped by the two, pixels of image 2. Infinity when a
+/// half cannot give a homography (fewer than 4 usable points) or `homography` is singular. Throws
+/// std::invalid_argument when the lists differ in length or a coordinate is not finite.
+inline double half_disagreement(const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
+                                const std::vector<std::uint8_t>& inliers, const Eigen::Matrix3d& homography,
+                                cv::Size size1) {
+  detail::require(inliers.size() == points1.size(), "half_disagreement: one inlier flag per correspondence needed");
+  const HomographyEstimator estimator(points1, points2);
+  std::vector<std::uint8_t> halves[2] = {std::vector<std::uint8_t>(inliers.size(), 0),
+                                         std::vector<std::uint8_t>(inliers.size(), 0)};
+  int seen = 0;
+  for (std::size_t i = 0; i < inliers.size(); ++i) {
+    if (inliers[i] != 0) halves[seen++ % 2][i] = 1;
+  }
+  const std::optional<HomographyModel> start = HomographyModel::from_pixels(homography);
+  if (!start) return std::numeric_limits<double>::infinity();
+  const std::optional<HomographyModel> a = estimator.refine(*start, halves[0]);
+  const std::optional<HomographyModel> b = estimator.refine(*start, halves[1]);
+  if (!a || !b) return std::numeric_limits<double>::infinity();
+  const double w = size1.width - 1.0, h = size1.height - 1.0;
+  double sum = 0.0;
+  for (const Eigen::Vector2d& corner :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0), Eigen::Vector2d(0, h), Eigen::Vector2d(w, h)}) {
+    sum += ((a->h * corner.homogeneous()).hnormalized() - (b->h * corner.homogeneous()).hnormalized()).norm();
+  }
+  return std::isfinite(sum) ? sum / 4.0 : std::numeric_limits<double>::infinity();
+}
 
 /// Matches two grey images, escalating from plain keypoints to affine views only while the pair is
 /// not verified (TwoViewOptions). Per stage k = 0, 1, ...: both images get the keypoints of the
@@ -197,7 +250,7 @@ class TwoViewMatcher {
       const Clock::time_point extracted = Clock::now();
       result.matches = match_features(result.features1, result.features2, options_.matching);
       const Clock::time_point matched = Clock::now();
-      verify(result);
+      verify(result, image1.size());
       const Clock::time_point verified = Clock::now();
 
       report.max_tilt = cursor1.extracted_tilt();
@@ -208,6 +261,7 @@ class TwoViewMatcher {
       report.homography_inlier_count = result.model.homography_inlier_count;
       report.fundamental_inlier_count = result.model.fundamental_inlier_count;
       report.model = result.model.model;
+      report.half_disagreement = result.half_disagreement;
       report.extract_ms = milliseconds(start, extracted);
       report.match_ms = milliseconds(extracted, matched);
       report.verify_ms = milliseconds(matched, verified);
@@ -232,20 +286,28 @@ class TwoViewMatcher {
     all.views.insert(all.views.end(), more.views.begin(), more.views.end());
   }
 
-  /// select_model() on the matched positions; the chosen model's inlier flags and count.
-  void verify(TwoViewResult<kBits>& result) {
+  /// select_model() on the matched positions; the chosen model's inlier flags and count; for a
+  /// chosen homography under the precision test, the disagreement of its two half estimates.
+  void verify(TwoViewResult<kBits>& result, cv::Size size1) {
     matched_points(result.features1.keypoints, result.features2.keypoints, result.matches, points_);
     result.model = ModelSelectionResult{};
     result.inliers.assign(result.matches.size(), 0);
     result.inlier_count = 0;
+    result.half_disagreement = -1.0;
     if (points_.points1.size() < 8) return;
     result.model = select_model(points_.points1, points_.points2, options_.model);
     result.inliers = result.model.chosen_inliers();
     result.inlier_count = result.model.chosen_inlier_count();
+    if (result.model.model == GeometricModel::kHomography && options_.max_half_disagreement > 0.0) {
+      result.half_disagreement =
+          half_disagreement(points_.points1, points_.points2, result.inliers, result.model.homography, size1);
+    }
   }
 
   bool is_verified(const TwoViewResult<kBits>& result) const {
-    return result.inlier_count >= options_.min_inliers &&
+    const bool precise = options_.max_half_disagreement <= 0.0 || result.model.model != GeometricModel::kHomography ||
+                         result.half_disagreement <= options_.max_half_disagreement;
+    return precise && result.inlier_count >= options_.min_inliers &&
            result.inlier_count >= options_.min_inlier_ratio * static_cast<double>(result.matches.size());
   }
 

@@ -201,36 +201,20 @@ inline ParallaxCompletion complete_by_parallax(const Eigen::Matrix3d& h, const s
   return out;
 }
 
-/// `f` (the RANSAC result of `estimator`) replaced by `candidate` when `candidate`, locally
-/// optimised as ransac() optimises (RansacOptions::refinement_passes), scores higher on all
+/// `f` (the RANSAC result of `estimator`), or `candidate` locally optimised as ransac() optimises
+/// (optimise_locally(), RansacOptions::refinement_passes) when that scores higher on all
 /// correspondences: DEGENSAC's remedy for an F sampled from a dominant plane, whose 8-point
-/// samples rarely hold enough points off the plane.
-inline void keep_better_fundamental(const FundamentalEstimator& estimator, const Eigen::Matrix3d& candidate,
-                                    const RansacOptions& options, RansacResult<Eigen::Matrix3d>& f) {
-  std::vector<std::uint8_t> mask(estimator.size(), 0), best_mask;
-  Eigen::Matrix3d model = candidate;
-  const auto scored = score_model(estimator, model, -std::numeric_limits<double>::infinity(), mask);
-  double score = scored->first;
-  int count = scored->second;
-  best_mask = mask;
-  for (int pass = 0; pass < options.refinement_passes; ++pass) {
-    const std::optional<Eigen::Matrix3d> refined = estimator.refine(model, best_mask);
-    if (!refined) break;
-    const auto rescored = score_model(estimator, *refined, score, mask);
-    if (!rescored) break;
-    model = *refined;
-    score = rescored->first;
-    count = rescored->second;
-    const bool same = mask == best_mask;
-    best_mask.swap(mask);
-    if (same) break;
-  }
-  if (f.success && !(score > f.score)) return;
-  f.success = count >= FundamentalEstimator::kSampleSize;
-  f.model = model;
-  f.score = score;
-  f.inlier_count = count;
-  f.inliers = std::move(best_mask);
+/// samples rarely hold enough points off the plane. The iteration count stays f's.
+inline RansacResult<Eigen::Matrix3d> keep_better_fundamental(const FundamentalEstimator& estimator,
+                                                             const Eigen::Matrix3d& candidate,
+                                                             const RansacOptions& options,
+                                                             RansacResult<Eigen::Matrix3d> f) {
+  RansacResult<Eigen::Matrix3d> optimised =
+      optimise_locally(estimator, evaluate_model(estimator, candidate), options.refinement_passes);
+  if (f.success && !(optimised.score > f.score)) return f;
+  optimised.success = optimised.inlier_count >= FundamentalEstimator::kSampleSize;
+  optimised.iterations = f.iterations;
+  return optimised;
 }
 
 /// The homography outliers expected to pass the epipolar test of a plane-and-parallax completion

@@ -137,8 +137,8 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
             o.stage = r.stage;
             o.verified = r.verified;
             for (const affine_orb::TwoViewStageReport& s : r.stages) {
-              o.stages += " " + std::to_string(s.matches) + "/" + std::to_string(s.homography_inliers) + "/" +
-                          std::to_string(s.fundamental_inliers) +
+              o.stages += " " + std::to_string(s.matches) + "/" + std::to_string(s.homography_inlier_count) + "/" +
+                          std::to_string(s.fundamental_inlier_count) +
                           (s.model == affine_orb::GeometricModel::kHomography    ? "H"
                            : s.model == affine_orb::GeometricModel::kFundamental ? "F"
                                                                                  : "-");

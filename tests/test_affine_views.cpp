@@ -802,9 +802,13 @@ TEST_CASE("views on demand: misuse is refused with std::invalid_argument") {
   CHECK_THROWS_AS(extractor.extend(stage.cursor, std::nan(""), 100), std::invalid_argument);
   CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, -1), std::invalid_argument);
   affine_orb::Extractor<affine_orb::Rbrief> other;
+  other.extract_image(image);  // the same image count as `extractor`: the cursor still is not its own
   CHECK_THROWS_AS(other.extend(stage.cursor, 2.0, 100), std::invalid_argument);  // another Extractor's cursor
-  extractor.extract(image);                                                      // ends the staged image
-  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, 100), std::invalid_argument);
+  affine_orb::ViewCursor moved = std::move(stage.cursor);
+  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, 100), std::invalid_argument);  // moved from
+  CHECK(extractor.extend(moved, 2.0, 100).size() == 100);
+  extractor.extract(image);  // ends the staged image
+  CHECK_THROWS_AS(extractor.extend(moved, 2.0 * kSqrt2, 100), std::invalid_argument);
   affine_orb::ExtractorOptions split;
   split.view_budget = affine_orb::ViewBudget::kAreaSplit;
   affine_orb::Extractor<affine_orb::Rbrief> area(split);

@@ -153,6 +153,7 @@ class Extractor {
     out.cursor.mask_ = mask;
     out.cursor.extracted_views_ = 1;
     out.cursor.extracted_tilt_ = 1.0;
+    out.cursor.owner_ = this;
     out.cursor.image_serial_ = image_serial_;
     return out;
   }
@@ -171,7 +172,7 @@ class Extractor {
   /// extract_image() (or a later extract() or extract_image() call), for up_to_tilt not finite,
   /// or features outside [0, 1000000].
   Features<kBits> extend(ViewCursor& cursor, double up_to_tilt, int features) {
-    detail::require(cursor.extracted_views_ > 0 && cursor.image_serial_ == image_serial_,
+    detail::require(cursor.owner_ == this && cursor.image_serial_ == image_serial_,
                     "Extractor::extend: the cursor is not from this Extractor's last extract_image()");
     detail::require(std::isfinite(up_to_tilt), "Extractor::extend: up_to_tilt must be finite");
     detail::require(features >= 0 && features <= 1000000, "Extractor::extend: features must be in [0, 1000000]");

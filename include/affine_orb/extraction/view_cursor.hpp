@@ -4,6 +4,7 @@
 /// (Extractor::extract_image(), Extractor::extend()).
 
 #include <cstdint>
+#include <utility>
 
 #include <opencv2/core.hpp>
 
@@ -18,14 +19,23 @@ class Extractor;
 /// Extractor::extract_image() and advanced by each Extractor::extend(). It holds the image and the
 /// mask (cv::Mat headers sharing their pixels, which must not change while the cursor is used) and
 /// how many of the Extractor's views are extracted. The keypoints of earlier stages stay in the
-/// Extractor's workspace, so a cursor is valid until that Extractor extracts another image;
-/// extend() throws std::invalid_argument for a cursor that is no longer valid.
+/// Extractor's workspace, so a cursor is valid with that Extractor only, until it extracts another
+/// image (or is moved); extend() throws std::invalid_argument for any other cursor.
 class ViewCursor {
  public:
   ViewCursor() = default;
-  /// Move-only: one cursor per staged image, so that no stage is extracted twice.
-  ViewCursor(ViewCursor&&) = default;
-  ViewCursor& operator=(ViewCursor&&) = default;
+  /// Move-only, and a moved-from cursor is refused like a default one: one cursor per staged
+  /// image, so that no stage is extracted twice.
+  ViewCursor(ViewCursor&& other) { *this = std::move(other); }
+  ViewCursor& operator=(ViewCursor&& other) {
+    image_ = std::move(other.image_);
+    mask_ = std::move(other.mask_);
+    extracted_views_ = other.extracted_views_;
+    extracted_tilt_ = other.extracted_tilt_;
+    owner_ = std::exchange(other.owner_, nullptr);
+    image_serial_ = other.image_serial_;
+    return *this;
+  }
   ViewCursor(const ViewCursor&) = delete;
   ViewCursor& operator=(const ViewCursor&) = delete;
 
@@ -43,7 +53,8 @@ class ViewCursor {
   cv::Mat mask_;
   int extracted_views_ = 0;
   double extracted_tilt_ = 0.0;
-  std::uint64_t image_serial_ = 0;  ///< which extraction of its Extractor the cursor belongs to
+  const void* owner_ = nullptr;     ///< the Extractor that made the cursor
+  std::uint64_t image_serial_ = 0;  ///< which image of that Extractor the cursor belongs to
 };
 
 /// What Extractor::extract_image() returns: the keypoints of stage 0 and the cursor that extend()

@@ -182,10 +182,10 @@ void hash_two_view(const std::string& data, const std::string& samples) {
       print(all_stages ? "two-view, all stages" : "two-view, default", pair.name, result.matches.size(), hash);
 
       // Every selection rule on the same matches, with and without octaves.
-      const affine_orb::MatchedPoints pairs =
+      const affine_orb::MatchedPoints points =
           affine_orb::matched_points(result.features1.keypoints, result.features2.keypoints, result.matches);
-      const std::vector<cv::Point2f>& p1 = pairs.points1;
-      const std::vector<cv::Point2f>& p2 = pairs.points2;
+      const std::vector<cv::Point2f>& p1 = points.points1;
+      const std::vector<cv::Point2f>& p2 = points.points2;
       std::vector<int> o1, o2;
       for (const affine_orb::Match& m : result.matches) {
         o1.push_back(result.features1.keypoints[static_cast<std::size_t>(m.query)].octave);

@@ -26,16 +26,18 @@ bash tests/install_deps.sh
 
 root=${AFFINE_ORB_BUILD_ROOT:-build}
 jobs=$(nproc)
+# Each stage's header gives the seconds since the start, so a CI log shows where the time goes.
+stage() { echo "== $* (at ${SECONDS} s)"; }
 
-echo "== Release build and tests"
+stage "Release build and tests"
 cmake -S . -B "$root/release" -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build "$root/release" -j "$jobs"
 ctest --test-dir "$root/release" --output-on-failure -j "$jobs"
 
-echo "== Debian packages"
+stage "Debian packages"
 bash tests/package_check.sh
 
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
+stage "AddressSanitizer + UndefinedBehaviorSanitizer"
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
 cmake -S . -B "$root/asan" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_PYTHON=OFF \
@@ -44,7 +46,7 @@ cmake --build "$root/asan" -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir "$root/asan" --output-on-failure -j "$jobs" -E "install_consumer|test_long_run"
 
-echo "== ThreadSanitizer (threaded tests)"
+stage "ThreadSanitizer (threaded tests)"
 CC=clang CXX=clang++ cmake -S . -B "$root/tsan" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
   -DAFFINE_ORB_BUILD_PYTHON=OFF -DCMAKE_CXX_FLAGS="-fsanitize=thread" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread"
@@ -52,7 +54,7 @@ cmake --build "$root/tsan" -j "$jobs" --target test_concurrency test_affine_view
 TSAN_OPTIONS="suppressions=$PWD/tests/tsan.supp halt_on_error=1" \
   ctest --test-dir "$root/tsan" --output-on-failure -R "test_concurrency|test_affine_views"
 
-echo "== libFuzzer"
+stage "libFuzzer"
 CC=clang CXX=clang++ cmake -S . -B "$root/fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
   -DAFFINE_ORB_BUILD_PYTHON=OFF -DAFFINE_ORB_BUILD_FUZZERS=ON
@@ -84,7 +86,7 @@ for fuzzer in $fuzzers; do
 done
 
 if grep -qw avx2 /proc/cpuinfo; then
-  echo "== -march=native (AVX2 paths)"
+  stage "-march=native (AVX2 paths)"
   simd_tests="test_fast|test_pyramid|test_distribution|test_rbrief|test_extractor|test_affine_views|test_matcher|test_brisk"
   cmake -S . -B "$root/native" -G Ninja -DCMAKE_BUILD_TYPE=Release -DAFFINE_ORB_NATIVE=ON \
     -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
@@ -92,9 +94,9 @@ if grep -qw avx2 /proc/cpuinfo; then
   cmake --build "$root/native" -j "$jobs" --target ${simd_tests//|/ }
   ctest --test-dir "$root/native" --output-on-failure -j "$jobs" -R "$simd_tests"
 else
-  echo "== -march=native skipped: this CPU has no AVX2"
+  stage "-march=native skipped: this CPU has no AVX2"
 fi
 
-echo "== aarch64 under qemu-user (SIMD tests)"
+stage "aarch64 under qemu-user (SIMD tests)"
 bash tests/cross_aarch64.sh
-echo "all stages passed"
+echo "all stages passed in ${SECONDS} s"

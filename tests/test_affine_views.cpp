@@ -915,11 +915,13 @@ TEST_CASE("the view renderer is within a grey level of the exact definition and 
 TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' bytes") {
   const cv::Mat image = affine_orb::test::oxford_image("boat", 1)(cv::Rect(40, 30, 300, 200));  // a ROI
   // Tilts √2, 2, 2√2, 4√2: 8, 12, 16 and 30 resampling taps (strides 8, 16, 16, 32).
-  for (const auto& [tilt, phi] : {std::pair<double, double>(2.0 * std::sqrt(2.0), 0.0),
-                                  {2.0 * std::sqrt(2.0), 17.0},
-                                  {std::sqrt(2.0), 50.9},
-                                  {2.0, 101.8},
-                                  {4.0 * std::sqrt(2.0), 178.2}}) {
+  for (const auto& view_pose : {std::pair<double, double>(2.0 * std::sqrt(2.0), 0.0),
+                                {2.0 * std::sqrt(2.0), 17.0},
+                                {std::sqrt(2.0), 50.9},
+                                {2.0, 101.8},
+                                {4.0 * std::sqrt(2.0), 178.2}}) {
+    const double tilt = view_pose.first;  // not a structured binding: CAPTURE's lambda captures it
+    const double phi = view_pose.second;
     const affine_orb::AffineView view = affine_orb::make_view(tilt, phi, image.size());
     const affine_orb::detail::CanvasSampler sampler(view.to_original_canvas(), image.size());
     const affine_orb::detail::ViewResampler resampler(view.canvas_size.width, view.size.width,
@@ -967,11 +969,13 @@ TEST_CASE("every canvas sampler and resampler path gives the scalar references' 
   const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(17, 9, 283, 211));  // a ROI
   std::mt19937 rng(21);
   int checked = 0;
-  for (const auto& [tilt, phi] : {std::pair<double, double>(std::sqrt(2.0), 33.3),
-                                  {2.0, 0.0},
-                                  {2.0, 72.0},
-                                  {2.0 * std::sqrt(2.0), 127.3},
-                                  {4.0 * std::sqrt(2.0), 251.0}}) {
+  for (const auto& view_pose : {std::pair<double, double>(std::sqrt(2.0), 33.3),
+                                {2.0, 0.0},
+                                {2.0, 72.0},
+                                {2.0 * std::sqrt(2.0), 127.3},
+                                {4.0 * std::sqrt(2.0), 251.0}}) {
+    const double tilt = view_pose.first;  // not a structured binding: CAPTURE's lambda captures it
+    const double phi = view_pose.second;
     const affine_orb::AffineView view = affine_orb::make_view(tilt, phi, image.size());
     const affine_orb::detail::CanvasSampler sampler(view.to_original_canvas(), image.size());
     const affine_orb::detail::ViewResampler resampler(view.canvas_size.width, view.size.width,

@@ -301,7 +301,9 @@ TEST_CASE("every compiled suppression row path equals the scalar reference, ties
              {std::pair<int, int>(1, 100), {5, 38}, {17, 33}, {3, 20}, {2, 49}, {60, 92}, {60, 75}, {40, 41}}) {
           std::vector<affine_orb::Corner> expected;
           affine_orb::detail::non_max_row_scalar(scores, y, x0, x1, threshold, expected);
-          for (const auto& [name, row] : paths) {
+          for (const auto& path : paths) {
+            const auto& name = path.first;  // not a structured binding: CAPTURE's lambda captures it
+            const auto& row = path.second;
             CAPTURE(name);
             std::vector<affine_orb::Corner> got;
             row(scores, y, x0, x1, threshold, got);

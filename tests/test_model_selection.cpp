@@ -335,7 +335,9 @@ TEST_CASE("general 3-D scene with translation: F chosen, true correspondences on
   // σ = kSigma.
   const std::array<std::pair<ModelSelectionOptions, double>, 2> configurations = {
       std::make_pair(ModelSelectionOptions{}, 10.0), std::make_pair(options_for_noise(), 3.0)};
-  for (const auto& [o, max_angle_degrees] : configurations) {
+  for (const auto& configuration : configurations) {
+    const ModelSelectionOptions& o = configuration.first;  // not a structured binding: CAPTURE's lambda captures it
+    const double max_angle_degrees = configuration.second;
     CAPTURE(o.sigma);
     const Pair pair = make_pair(r, t, depth, 800, 0.3, 11);
     const ModelSelectionResult result = affine_orb::select_model(pair.points1, pair.points2, o);

@@ -73,7 +73,9 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
   // Random source rows (extremes included) and column tables of several ratios; column ranges of
   // every remainder modulo 8.
   std::mt19937 rng(34);
-  for (const auto& [from, to] : {std::pair<int, int>(640, 533), {533, 444}, {37, 31}, {100, 100}, {90, 200}}) {
+  for (const auto& widths : {std::pair<int, int>(640, 533), {533, 444}, {37, 31}, {100, 100}, {90, 200}}) {
+    const int from = widths.first;  // not a structured binding: CAPTURE's lambda captures it
+    const int to = widths.second;
     CAPTURE(from);
     CAPTURE(to);
     affine_orb::detail::ResizeWork work;

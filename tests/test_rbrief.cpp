@@ -301,8 +301,10 @@ TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar ref
   namespace d = affine_orb::detail;
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> byte(0, 255);
-  for (const auto& [size, sigma] :
+  for (const auto& kernel_shape :
        {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}, {31, 8.0}}) {
+    const int size = kernel_shape.first;  // not a structured binding: the lambdas below capture it
+    const double sigma = kernel_shape.second;
     CAPTURE(size);
     const std::vector<std::uint16_t> kernel = d::gaussian_kernel_q8(size, sigma);
     REQUIRE(static_cast<int>(kernel.size()) == size);
@@ -370,7 +372,9 @@ TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar ref
 TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole photos") {
   const cv::Mat graf = affine_orb::test::oxford_image("graf", 1);
   const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(0, 0, 333, 222));
-  for (const auto& [size, sigma] : {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}}) {
+  for (const auto& kernel_shape : {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}}) {
+    const int size = kernel_shape.first;  // not a structured binding: CAPTURE's lambda captures it
+    const double sigma = kernel_shape.second;
     CAPTURE(size);
     CAPTURE(sigma);
     const std::vector<std::uint16_t> kernel = affine_orb::detail::gaussian_kernel_q8(size, sigma);

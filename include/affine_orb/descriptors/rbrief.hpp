@@ -27,6 +27,7 @@
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/descriptors/descriptor.hpp"
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
+#include "affine_orb/descriptors/detail/moment_lanes.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
 #include "affine_orb/detection/orientation.hpp"
 
@@ -300,62 +301,24 @@ class Rbrief {
     const std::size_t chunks = disc_chunks_.x.size();
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
     const std::uint8_t* center = image.ptr<std::uint8_t>(cy) + cx;
-#if defined(__SSE2__)
-    const __m128i zero = _mm_setzero_si128();
-    __m128i m10 = zero;
-    __m128i m01 = zero;
-    auto load8 = [&](const std::uint8_t* p) {
-      return _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
-    };
-    auto weights = [](const std::array<std::int16_t, 8>& w) {
-      return _mm_loadu_si128(reinterpret_cast<const __m128i*>(w.data()));
-    };
+    using L = detail::MomentLanes;
+    L::Sums m10 = L::zero();
+    L::Sums m01 = L::zero();
     for (std::size_t j = 0; j < chunks; ++j) {
-      m10 = _mm_add_epi32(m10, _mm_madd_epi16(load8(center + disc_chunks_.x[j]), weights(disc_chunks_.u[j])));
+      m10 = L::multiply_add(m10, L::load8(center + disc_chunks_.x[j]), L::load(disc_chunks_.u[j]));
     }
     for (int v = 1; v <= r; ++v) {
       const std::uint8_t* below = center + v * step;
       const std::uint8_t* above = center - v * step;
       for (std::size_t j = 0; j < chunks; ++j) {
         const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
-        const __m128i b = load8(below + disc_chunks_.x[j]);
-        const __m128i a = load8(above + disc_chunks_.x[j]);
-        m10 = _mm_add_epi32(m10, _mm_madd_epi16(_mm_add_epi16(a, b), weights(disc_chunks_.u[k])));
-        m01 = _mm_add_epi32(m01, _mm_madd_epi16(_mm_sub_epi16(b, a), weights(disc_chunks_.v[k])));
+        const L::Words b = L::load8(below + disc_chunks_.x[j]);
+        const L::Words a = L::load8(above + disc_chunks_.x[j]);
+        m10 = L::multiply_add(m10, L::add(a, b), L::load(disc_chunks_.u[k]));
+        m01 = L::multiply_add(m01, L::subtract(b, a), L::load(disc_chunks_.v[k]));
       }
     }
-    alignas(16) std::int32_t x[4];
-    alignas(16) std::int32_t y[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(x), m10);
-    _mm_store_si128(reinterpret_cast<__m128i*>(y), m01);
-    const std::int64_t sx = static_cast<std::int64_t>(x[0]) + x[1] + x[2] + x[3];
-    const std::int64_t sy = static_cast<std::int64_t>(y[0]) + y[1] + y[2] + y[3];
-#else
-    int32x4_t m10 = vdupq_n_s32(0);
-    int32x4_t m01 = vdupq_n_s32(0);
-    auto load8 = [](const std::uint8_t* p) { return vreinterpretq_s16_u16(vmovl_u8(vld1_u8(p))); };
-    auto weights = [](const std::array<std::int16_t, 8>& w) { return vld1q_s16(w.data()); };
-    auto accumulate = [](int32x4_t sum, int16x8_t a, int16x8_t w) {
-      return vmlal_high_s16(vmlal_s16(sum, vget_low_s16(a), vget_low_s16(w)), a, w);
-    };
-    for (std::size_t j = 0; j < chunks; ++j) {
-      m10 = accumulate(m10, load8(center + disc_chunks_.x[j]), weights(disc_chunks_.u[j]));
-    }
-    for (int v = 1; v <= r; ++v) {
-      const std::uint8_t* below = center + v * step;
-      const std::uint8_t* above = center - v * step;
-      for (std::size_t j = 0; j < chunks; ++j) {
-        const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
-        const int16x8_t b = load8(below + disc_chunks_.x[j]);
-        const int16x8_t a = load8(above + disc_chunks_.x[j]);
-        m10 = accumulate(m10, vaddq_s16(a, b), weights(disc_chunks_.u[k]));
-        m01 = accumulate(m01, vsubq_s16(b, a), weights(disc_chunks_.v[k]));
-      }
-    }
-    const std::int64_t sx = vaddlvq_s32(m10);
-    const std::int64_t sy = vaddlvq_s32(m01);
-#endif
-    return orb_angle(sy, sx);
+    return orb_angle(L::total(m01), L::total(m10));
   }
 #endif
 

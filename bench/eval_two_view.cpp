@@ -142,7 +142,8 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
                           (s.model == affine_orb::GeometricModel::kHomography    ? "H"
                            : s.model == affine_orb::GeometricModel::kFundamental ? "F"
                                                                                  : "-");
-              if (s.half_disagreement >= 0.0) o.stages += "/" + std::to_string(s.half_disagreement).substr(0, 5) + "px";
+              if (s.guided_rounds > 0) o.stages += "/g" + std::to_string(s.guided_rounds);
+              if (s.half_disagreement) o.stages += "/" + std::to_string(*s.half_disagreement).substr(0, 5) + "px";
             }
             return o;
           },
@@ -298,6 +299,12 @@ int main(int argc, char** argv) {
     o.max_half_disagreement = pixels;
     return o;
   };
+  // Guided matching and local optimisation of a verified homography (TwoViewOptions::guided), two
+  // rounds.
+  const auto guided = [](affine_orb::TwoViewOptions o) {
+    o.guided.iterations = 2;
+    return o;
+  };
   // The default stages and two more to extreme tilts (4 and 4√2, as MODS and ASIFT's maxTilt 5),
   // run only while the pair is not verified.
   affine_orb::TwoViewOptions extreme = defaults;
@@ -317,6 +324,8 @@ int main(int argc, char** argv) {
       two_view("ours views on demand, half disagreement 5 px", precise(defaults, 5.0)),
       two_view("ours views on demand, half disagreement 10 px", precise(defaults, 10.0)),
       two_view("ours views on demand, stages to 5.66, half disagreement 10 px", precise(extreme, 10.0)),
+      two_view("ours views on demand, guided", guided(defaults)),
+      two_view("ours views on demand, guided, half disagreement 5 px", precise(guided(defaults), 5.0)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),
       peer("cv::SIFT", cv::SIFT::create(), model),

@@ -289,6 +289,7 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
   options.extractor.features = 1000;
   options.stages.clear();
   options.model.sigma = 4.0;
+  options.guided.iterations = 0;
   const auto plain = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
   options.guided.iterations = 2;
   const auto guided = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
@@ -325,6 +326,7 @@ TEST_CASE("a verified stage-0 homography with imprecise corners escalates under 
   const cv::Mat image2 = affine_orb::test::oxford_image("graf", 4);
   const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 4);
   affine_orb::TwoViewOptions options;
+  options.guided.iterations = 0;  // the precision test alone
   const auto loose = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image2);
   REQUIRE(loose.verified);
   REQUIRE(loose.stage == 0);

@@ -556,8 +556,8 @@ TEST_CASE("guided matching equals a naive reference over every keypoint of image
     a.views.push_back(0);
     predicted.push_back(i % 17 == 0 ? cv::Point2f(std::numeric_limits<float>::quiet_NaN(), 0.0f)
                                     : p + cv::Point2f(20.0f, -10.0f));
-    const cv::Point2f at = p + cv::Point2f(20.0f + static_cast<float>(rng() % 7) - 3.0f,
-                                           -10.0f + static_cast<float>(rng() % 7) - 3.0f);
+    const cv::Point2f at =
+        p + cv::Point2f(20.0f + static_cast<float>(rng() % 7) - 3.0f, -10.0f + static_cast<float>(rng() % 7) - 3.0f);
     for (int copy = 0; copy < 1 + i % 2; ++copy) {
       b.descriptors.push_back(flipped(d, 10 + 30 * copy + static_cast<int>(rng() % 60)));
       b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.0f), 31.0f);

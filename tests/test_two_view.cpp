@@ -318,10 +318,10 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
 
 TEST_CASE("a verified stage-0 homography with imprecise corners escalates under the precision test") {
   // graf 1 -> 4 (40° of viewpoint change): stage 0 finds a homography with min_inliers inliers
-  // making up min_inlier_ratio of the matches whose corners miss the ground truth by more than the judge's 5 px, and the default
-  // matcher stops there. With the precision test at 5 px its two half estimates disagree by more
-  // than that, stage 0 does not verify, and the escalation to the views finds a homography closer
-  // to the ground truth.
+  // making up min_inlier_ratio of the matches whose corners miss the ground truth by more than
+  // the judge's 5 px, and the default matcher stops there. With the precision test at 5 px its two
+  // half estimates disagree by more than that, stage 0 does not verify, and the escalation to the
+  // views finds a homography closer to the ground truth.
   const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
   const cv::Mat image2 = affine_orb::test::oxford_image("graf", 4);
   const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 4);
@@ -340,7 +340,7 @@ TEST_CASE("a verified stage-0 homography with imprecise corners escalates under 
   REQUIRE(tested.stages.size() >= 2);  // stage 0 did not end the escalation
   REQUIRE(tested.stages[0].half_disagreement.has_value());
   CHECK(*tested.stages[0].half_disagreement > 5.0);
-  CHECK(tested.stages[0].inliers == loose.inlier_count);  // the same model, failed on precision alone
+  CHECK(tested.stages[0].inliers == loose.inlier_count);       // the same model, failed on precision alone
   CHECK_FALSE(loose.stages[0].half_disagreement.has_value());  // not measured with the test off
   const double tested_error = corner_error(tested.model.homography, truth, image1.size());
   CAPTURE(tested_error);

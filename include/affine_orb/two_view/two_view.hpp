@@ -83,9 +83,9 @@ struct GuidedRefinementOptions {
     detail::require(std::isfinite(refined_gate_radius) && refined_gate_radius > 0.0 && refined_gate_radius <= 1000.0,
                     "GuidedRefinementOptions: refined_gate_radius must be in (0, 1000], got " +
                         std::to_string(refined_gate_radius));
-    detail::require(refinement_passes >= 1 && refinement_passes <= 100,
-                    "GuidedRefinementOptions: refinement_passes must be in [1, 100], got " +
-                        std::to_string(refinement_passes));
+    detail::require(
+        refinement_passes >= 1 && refinement_passes <= 100,
+        "GuidedRefinementOptions: refinement_passes must be in [1, 100], got " + std::to_string(refinement_passes));
   }
 };
 
@@ -268,7 +268,8 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 /// with min_inliers inliers making up min_inlier_ratio of the matches is refined by guided matching
 /// when TwoViewOptions::guided is on; the escalation stops when the chosen model has min_inliers
 /// inliers and min_inlier_ratio of the matches and, under max_half_disagreement, a homography
-/// passes the precision test, or when the stages run out. Stage k's keypoints and descriptors are a superset of stage k − 1's.
+/// passes the precision test, or when the stages run out. Stage k's keypoints and descriptors are
+/// a superset of stage k − 1's.
 ///
 /// Holds one Extractor per image with its workspace: reuse one matcher for many pairs. Not for use
 /// by two threads at once.
@@ -424,7 +425,7 @@ class TwoViewMatcher {
   TwoViewOptions options_;
   Extractor<Descriptor> extractor1_;
   Extractor<Descriptor> extractor2_;
-  MatchedPoints points_;  ///< matched positions, reused across stages
+  MatchedPoints points_;   ///< matched positions, reused across stages
   int guided_rounds_ = 0;  ///< guided rounds of the current stage
 };
 

@@ -13,7 +13,8 @@
 //
 // Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
 // keypoints, one-shot views), the two-view matcher with views on demand (TwoViewMatcher's
-// defaults; with stages to tilt 4√2; with the precision test max_half_disagreement at 5 and 10 px),
+// defaults; with stages to tilt 4√2; with the precision test max_half_disagreement at 5 and 10 px;
+// without the guided refinement, alone and with the precision test at 5 px),
 // cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
 // 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
 // unless --asift-sequences says otherwise: its float matching takes minutes a pair). Every method
@@ -142,7 +143,8 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
                           (s.model == affine_orb::GeometricModel::kHomography    ? "H"
                            : s.model == affine_orb::GeometricModel::kFundamental ? "F"
                                                                                  : "-");
-              if (s.half_disagreement >= 0.0) o.stages += "/" + std::to_string(s.half_disagreement).substr(0, 5) + "px";
+              if (s.guided_rounds > 0) o.stages += "/g" + std::to_string(s.guided_rounds);
+              if (s.half_disagreement) o.stages += "/" + std::to_string(*s.half_disagreement).substr(0, 5) + "px";
             }
             return o;
           },
@@ -298,6 +300,11 @@ int main(int argc, char** argv) {
     o.max_half_disagreement = pixels;
     return o;
   };
+  // Without the guided refinement of a verified homography (TwoViewOptions::guided).
+  const auto unguided = [](affine_orb::TwoViewOptions o) {
+    o.guided.iterations = 0;
+    return o;
+  };
   // The default stages and two more to extreme tilts (4 and 4√2, as MODS and ASIFT's maxTilt 5),
   // run only while the pair is not verified.
   affine_orb::TwoViewOptions extreme = defaults;
@@ -317,6 +324,8 @@ int main(int argc, char** argv) {
       two_view("ours views on demand, half disagreement 5 px", precise(defaults, 5.0)),
       two_view("ours views on demand, half disagreement 10 px", precise(defaults, 10.0)),
       two_view("ours views on demand, stages to 5.66, half disagreement 10 px", precise(extreme, 10.0)),
+      two_view("ours views on demand, no guided matching", unguided(defaults)),
+      two_view("ours views on demand, no guided matching, half disagreement 5 px", precise(unguided(defaults), 5.0)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),
       peer("cv::SIFT", cv::SIFT::create(), model),

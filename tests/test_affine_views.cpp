@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <random>
@@ -531,6 +532,94 @@ TEST_CASE("the location-aware ratio test equals a naive reference") {
   bad.matcher.ratio = 0.0f;
   CHECK_THROWS_AS(affine_orb::match_features(a, b, bad), std::invalid_argument);
   CHECK(affine_orb::match_features(affine_orb::Features<256>{}, b).empty());
+}
+
+TEST_CASE("guided matching equals a naive reference over every keypoint of image 2") {
+  // Image-2 partners near each prediction (shifted by up to 3 px, some with near-duplicates one
+  // pixel apart), random distractors all over; some predictions are not finite.
+  std::mt19937_64 rng(31);
+  affine_orb::Features<256> a;
+  affine_orb::Features<256> b;
+  std::vector<cv::Point2f> predicted;
+  const auto flipped = [&](affine_orb::BinaryDescriptor<256> d, int bits) {
+    for (int flip = 0; flip < bits; ++flip) {
+      const unsigned bit = static_cast<unsigned>(rng() % 256);
+      d[bit / 64] ^= 1ull << (bit % 64);
+    }
+    return d;
+  };
+  for (int i = 0; i < 120; ++i) {
+    const affine_orb::BinaryDescriptor<256> d{rng(), rng(), rng(), rng()};
+    const cv::Point2f p(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300));
+    a.descriptors.push_back(d);
+    a.keypoints.emplace_back(p, 31.0f);
+    a.views.push_back(0);
+    predicted.push_back(i % 17 == 0 ? cv::Point2f(std::numeric_limits<float>::quiet_NaN(), 0.0f)
+                                    : p + cv::Point2f(20.0f, -10.0f));
+    const cv::Point2f at =
+        p + cv::Point2f(20.0f + static_cast<float>(rng() % 7) - 3.0f, -10.0f + static_cast<float>(rng() % 7) - 3.0f);
+    for (int copy = 0; copy < 1 + i % 2; ++copy) {
+      b.descriptors.push_back(flipped(d, 10 + 30 * copy + static_cast<int>(rng() % 60)));
+      b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.0f), 31.0f);
+      b.views.push_back(copy);
+    }
+    b.descriptors.push_back({rng(), rng(), rng(), rng()});
+    b.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 340), static_cast<float>(rng() % 340)), 31.0f);
+    b.views.push_back(0);
+  }
+  for (const double gate : {4.0, 10.0, 40.0}) {
+    for (const double exclusion : {0.0, 4.0}) {
+      for (const int max_distance : {40, 100}) {
+        CAPTURE(gate);
+        CAPTURE(exclusion);
+        CAPTURE(max_distance);
+        affine_orb::GuidedMatchOptions options;
+        options.gate_radius = gate;
+        options.ratio_exclusion_radius = exclusion;
+        options.max_distance = max_distance;
+        options.duplicate_radius = 0.0;
+        const auto got = affine_orb::match_guided(a, b, predicted, options);
+        std::vector<affine_orb::Match> expected;
+        const auto squared = [](cv::Point2f p, cv::Point2f q) {
+          return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
+        };
+        for (std::size_t i = 0; i < a.size(); ++i) {
+          if (!std::isfinite(predicted[i].x)) continue;
+          int best = 1 << 30;
+          std::size_t j1 = 0;
+          for (std::size_t j = 0; j < b.size(); ++j) {
+            if (squared(predicted[i], b.keypoints[j].pt) > gate * gate) continue;
+            const int d = affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]);
+            if (d < best) {
+              best = d;
+              j1 = j;
+            }
+          }
+          if (best > max_distance) continue;
+          int second = 1 << 30;
+          for (std::size_t j = 0; j < b.size(); ++j) {
+            if (squared(predicted[i], b.keypoints[j].pt) > gate * gate) continue;
+            if (squared(b.keypoints[j].pt, b.keypoints[j1].pt) <= exclusion * exclusion) continue;
+            second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
+          }
+          if (second != 1 << 30 && !(best < 0.8 * second)) continue;
+          expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
+        }
+        REQUIRE(got.size() == expected.size());
+        for (std::size_t k = 0; k < got.size(); ++k) {
+          CHECK(got[k].query == expected[k].query);
+          CHECK(got[k].train == expected[k].train);
+          CHECK(got[k].distance == expected[k].distance);
+        }
+        if (gate == 10.0 && max_distance == 100) CHECK(got.size() > 60);  // the planted partners are found
+      }
+    }
+  }
+  affine_orb::GuidedMatchOptions bad;
+  bad.gate_radius = 0.0;
+  CHECK_THROWS_AS(affine_orb::match_guided(a, b, predicted, bad), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::match_guided(a, b, std::vector<cv::Point2f>(3)), std::invalid_argument);
+  CHECK(affine_orb::match_guided(a, affine_orb::Features<256>{}, predicted).empty());
 }
 
 TEST_CASE("graf 1->3: affine features give more distinct correct matches than plain ones") {

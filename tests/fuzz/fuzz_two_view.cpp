@@ -1,7 +1,8 @@
 // libFuzzer target: two-view matching with views on demand (TwoViewMatcher). The input bytes choose
 // two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
-// min_inlier_ratio, all_stages, the precision test (max_half_disagreement), stages to the extreme
+// min_inlier_ratio, all_stages, the precision test (max_half_disagreement), guided refinement
+// (rounds, gate radius, ratio), stages to the extreme
 // tilts 4 and 4√2. Invalid options must end in std::invalid_argument, valid ones in a
 // result that keeps every documented invariant: stage reports, the stopping rule, inlier flags,
 // match indices, keypoints inside their image and mask, each stage's keypoints a superset of the
@@ -63,6 +64,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.all_stages = (flags & 1) != 0;
   if (flags & 64) options.max_half_disagreement = (flags & 128) ? -1.0 : 3.0;  // < 0 is invalid
   if (flags & 2) options.extractor.spreading = affine_orb::Spreading::kQuadtree;
+  // Guided refinement: rounds 0 to 3, gate radius 0 (invalid) to 12 px, the ratio 0.5 to 1.25.
+  const std::uint8_t guided = bytes.next();
+  options.guided.iterations = guided % 4;
+  options.guided.matching.gate_radius = 2.0 * ((guided >> 2) % 7);
+  options.guided.matching.ratio = 0.5f + 0.25f * static_cast<float>(guided >> 5);
   options.model.ransac.max_iterations = 1 + bytes.next() % 64;
   options.model.ransac.min_iterations =
       std::min(options.model.ransac.min_iterations, options.model.ransac.max_iterations);
@@ -105,12 +111,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       require(r.inlier_count >= options.min_inliers);
       require(r.inlier_count >= options.min_inlier_ratio * static_cast<double>(r.matches.size()));
       if (options.max_half_disagreement > 0.0 && r.model.model == affine_orb::GeometricModel::kHomography)
-        require(r.half_disagreement <= options.max_half_disagreement);
+        require(r.half_disagreement && *r.half_disagreement <= options.max_half_disagreement);
     }
     // The precision test is measured only when on and a homography was chosen.
     if (options.max_half_disagreement <= 0.0 || r.model.model != affine_orb::GeometricModel::kHomography)
-      require(r.half_disagreement == -1.0);
+      require(!r.half_disagreement);
     require(r.inliers.size() == r.matches.size());
+    // Guided rounds run only when on and on a homography; their matches carry flags of the
+    // refined homography, which the result's H fields describe.
+    for (const affine_orb::TwoViewStageReport& s : r.stages) require(s.guided_rounds <= options.guided.iterations);
+    if (r.stages.back().guided_rounds > 0) {
+      require(r.model.model == affine_orb::GeometricModel::kHomography);
+      require(r.model.homography_inlier_count == r.inlier_count);
+      require(r.model.homography_inliers == r.inliers);
+      require(r.model.fundamental_inliers.empty());
+    }
     require(std::count(r.inliers.begin(), r.inliers.end(), 1) == r.inlier_count);
     for (const affine_orb::Match& m : r.matches) {
       require(m.query >= 0 && static_cast<std::size_t>(m.query) < r.features1.size());

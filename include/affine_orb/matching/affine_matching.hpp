@@ -51,6 +51,49 @@ struct AffineMatchOptions {
   }
 };
 
+/// How match_guided() matches keypoints of image 1 near their predicted positions in image 2.
+struct GuidedMatchOptions {
+  /// Radius, pixels of image 2, around a keypoint's predicted position within which keypoints of
+  /// image 2 are its candidates. It has to cover the prediction's error: a homography that puts
+  /// image 1's corners 5–15 px off ground truth (the imprecise stage-0 models of
+  /// bench/eval_two_view) is off by less inside the image, so 10 px catches most of the true
+  /// partners there. In (0, 1000].
+  double gate_radius = 10.0;
+  /// Lowe's ratio test among the gated candidates (MatcherOptions::ratio's definition; the
+  /// runner-up excludes the best's duplicates as in AffineMatchOptions::ratio_exclusion_radius).
+  /// With few competitors in the gate the test is weak, so 0.8 as Lowe's global value; finite and
+  /// > 0.
+  float ratio = 0.8f;
+  /// Gated candidates within this distance of the best one's keypoint (pixels of image 2) do not
+  /// count as its runner-up: affine views describe one scene point several times (4 px as
+  /// AffineMatchOptions::ratio_exclusion_radius). In [0, 1000].
+  double ratio_exclusion_radius = 4.0;
+  /// Largest accepted Hamming distance, bits: a lone candidate passes the ratio test, so the
+  /// distance bounds it. 100 as ORB-SLAM's search by projection (ORBmatcher::TH_HIGH; Mur-Artal &
+  /// Tardós, ORB-SLAM2, IEEE T-RO 33(5), 2017). >= 0.
+  int max_distance = 100;
+  /// Duplicate removal radius, pixels (remove_duplicate_matches(); AffineMatchOptions'). In
+  /// [0, 1000].
+  double duplicate_radius = 2.0;
+
+  /// Throws std::invalid_argument for a value outside its range.
+  void check() const {
+    detail::require(std::isfinite(gate_radius) && gate_radius > 0.0 && gate_radius <= 1000.0,
+                    "GuidedMatchOptions::gate_radius must be in (0, 1000], got " + std::to_string(gate_radius));
+    detail::require(detail::positive_finite(ratio),
+                    "GuidedMatchOptions::ratio must be finite and > 0, got " + std::to_string(ratio));
+    detail::require(
+        std::isfinite(ratio_exclusion_radius) && ratio_exclusion_radius >= 0.0 && ratio_exclusion_radius <= 1000.0,
+        "GuidedMatchOptions::ratio_exclusion_radius must be in [0, 1000], got " +
+            std::to_string(ratio_exclusion_radius));
+    detail::require(max_distance >= 0,
+                    "GuidedMatchOptions::max_distance must be >= 0, got " + std::to_string(max_distance));
+    detail::require(
+        std::isfinite(duplicate_radius) && duplicate_radius >= 0.0 && duplicate_radius <= 1000.0,
+        "GuidedMatchOptions::duplicate_radius must be in [0, 1000], got " + std::to_string(duplicate_radius));
+  }
+};
+
 /// Drops duplicate correspondences: visiting matches by increasing distance (ties: smaller query,
 /// then smaller train index), a match is dropped when an already kept one has its image-1 point
 /// and its image-2 point both closer than `radius` pixels (strictly) to this match's points.
@@ -155,13 +198,29 @@ std::vector<Match> match_features(const Features<Bits>& a, const Features<Bits>&
       }
     }
   }
-  std::vector<cv::Point2f> points_a;
-  std::vector<cv::Point2f> points_b;
-  points_a.reserve(a.size());
-  points_b.reserve(b.size());
-  for (const cv::KeyPoint& k : a.keypoints) points_a.push_back(k.pt);
-  for (const cv::KeyPoint& k : b.keypoints) points_b.push_back(k.pt);
-  return remove_duplicate_matches(std::move(all), points_a, points_b, options.duplicate_radius);
+  return remove_duplicate_matches(std::move(all), detail::positions(a.keypoints), detail::positions(b.keypoints),
+                                  options.duplicate_radius);
+}
+
+/// Guided matching: every keypoint i of `a` whose predicted position `predicted[i]` (pixels of
+/// image 2, e.g. x2 ~ H x1 under a verified homography) is finite is matched against the keypoints
+/// of `b` within options.gate_radius of that position only: the nearest descriptor among them,
+/// accepted by the ratio test among them (runner-up outside ratio_exclusion_radius of the best)
+/// and max_distance; then remove_duplicate_matches(). Match::query indexes `a`, Match::train `b`;
+/// sorted by query index. Throws std::invalid_argument for invalid options, keypoints and
+/// descriptors differing in number, or a `predicted` list that is not one per keypoint of `a`.
+template <int Bits>
+std::vector<Match> match_guided(const Features<Bits>& a, const Features<Bits>& b,
+                                const std::vector<cv::Point2f>& predicted, const GuidedMatchOptions& options = {}) {
+  options.check();
+  detail::require(a.descriptors.size() == a.keypoints.size() && b.descriptors.size() == b.keypoints.size(),
+                  "match_guided: keypoints and descriptors differ in number");
+  detail::require(predicted.size() == a.size(), "match_guided: one predicted position per keypoint of a needed");
+  if (a.empty() || b.empty()) return {};
+  std::vector<Match> all = detail::match_gated(a, b, predicted, options.gate_radius, options.ratio,
+                                               options.ratio_exclusion_radius, options.max_distance);
+  return remove_duplicate_matches(std::move(all), detail::positions(a.keypoints), detail::positions(b.keypoints),
+                                  options.duplicate_radius);
 }
 
 }  // namespace affine_orb

@@ -240,6 +240,8 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
     stage["homography_inlier_count"] = s.homography_inlier_count;
     stage["fundamental_inlier_count"] = s.fundamental_inlier_count;
     stage["model"] = affine_orb::model_name(s.model);
+    stage["half_disagreement"] = s.half_disagreement ? py::object(py::float_(*s.half_disagreement)) : py::none();
+    stage["guided_rounds"] = s.guided_rounds;
     stage["extract_ms"] = s.extract_ms;
     stage["match_ms"] = s.match_ms;
     stage["verify_ms"] = s.verify_ms;
@@ -389,7 +391,7 @@ PYBIND11_MODULE(affine_orb, m) {
       "match_images",
       [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
          const std::vector<std::pair<double, double>>& stages, int min_inliers, double min_inlier_ratio,
-         bool all_stages, const std::string& descriptor, const std::string& spreading, int threads,
+         int guided_rounds, double max_half_disagreement, bool all_stages, const std::string& descriptor, const std::string& spreading, int threads,
          const py::handle& mask1, const py::handle& mask2) {
         affine_orb::TwoViewOptions options;
         options.extractor.features = features;
@@ -401,6 +403,8 @@ PYBIND11_MODULE(affine_orb, m) {
         for (const auto& [tilt, view_features] : stages) options.stages.push_back({tilt, view_features});
         options.min_inliers = min_inliers;
         options.min_inlier_ratio = min_inlier_ratio;
+        options.guided.iterations = guided_rounds;
+        options.max_half_disagreement = max_half_disagreement;
         options.all_stages = all_stages;
         options.check();
         py::array_t<std::uint8_t> s1, s2, s3, s4;
@@ -415,16 +419,22 @@ PYBIND11_MODULE(affine_orb, m) {
       py::arg("image1"), py::arg("image2"), py::arg("features") = two_view.extractor.features,
       py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = default_stages,
       py::arg("min_inliers") = two_view.min_inliers, py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
-      py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
+      py::arg("guided_rounds") = two_view.guided.iterations,
+      py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
       py::arg("threads") = two_view.extractor.threads, py::arg("mask1") = py::none(), py::arg("mask2") = py::none(),
       "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
       "`features` keypoints; while the pair is not verified (min_inliers inliers of the chosen model, at least "
       "min_inlier_ratio of the matches), each stage (max_tilt, view_features) adds the views of tilts up to "
-      "max_tilt with view_features x features keypoints per image, and matching and H/F selection run again. "
+      "max_tilt with view_features x features keypoints per image, and matching and H/F selection run again. A "
+      "verified homography is refined first by guided_rounds rounds of matching within a gate around its "
+      "predictions and re-estimation (0 = off); with max_half_disagreement > 0 (pixels), the stage verifies only "
+      "when homographies fitted to the two halves of its inliers map image 1's corners within that distance of "
+      "each other. "
       "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
       "into keypoints2), inliers (bool per match, of the chosen model), model (\"homography\", \"fundamental\" "
       "or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, or None) and stages (one "
-      "dict per stage run: max_tilt, keypoints, matches, inliers, model, milliseconds). Invalid options raise "
+      "dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement (pixels, or None when "
+      "not measured), guided_rounds, milliseconds). Invalid options raise "
       "ValueError, wrong types TypeError.");
 }

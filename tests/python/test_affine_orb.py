@@ -100,6 +100,29 @@ def test_match_images_equals_the_cpp_matcher(pair, min_inliers):
     assert r["homography"].shape == (3, 3)
 
 
+def test_match_images_refinement_and_precision_test_are_reported():
+    """guided_rounds and max_half_disagreement reach the C++ options: graf 1->2 is verified at stage
+    0 by a homography refined by the default rounds (none with guided_rounds=0), and the precision
+    test, when on, measures the half disagreement, well under a pixel on this easy pair, whose
+    ground-truth homography the refined model matches at image 1's corners."""
+    image1 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img1.png"), cv2.IMREAD_GRAYSCALE)
+    image2 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img2.png"), cv2.IMREAD_GRAYSCALE)
+    truth = np.loadtxt(os.path.join(DATA, "oxford", "graf", "H1to2p"))
+    plain = affine_orb.match_images(image1, image2, guided_rounds=0)
+    assert plain["verified"] and plain["stages"][0]["guided_rounds"] == 0
+    assert plain["stages"][0]["half_disagreement"] is None
+    r = affine_orb.match_images(image1, image2, max_half_disagreement=5.0)
+    assert r["verified"] and r["stage"] == 0 and r["model"] == "homography"
+    assert r["stages"][0]["guided_rounds"] > 0
+    assert 0.0 <= r["stages"][0]["half_disagreement"] < 5.0
+    h, w = image1.shape
+    corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], float).T
+    def project(m):
+        p = m @ corners
+        return p[:2] / p[2]
+    assert np.abs(project(r["homography"]) - project(truth)).max() < 2.0
+
+
 def test_match_images_refuses_bad_input():
     image = np.zeros((64, 64), np.uint8)
     with pytest.raises(ValueError):
@@ -112,6 +135,10 @@ def test_match_images_refuses_bad_input():
         affine_orb.match_images(image.astype(np.float32), image)
     with pytest.raises(ValueError):
         affine_orb.match_images(image, image, mask1=np.zeros((3, 3), np.uint8))
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image, image, guided_rounds=-1)
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image, image, max_half_disagreement=-1.0)
     r = affine_orb.match_images(image, image)  # a flat image: no keypoints, documented empty result
     assert not r["verified"] and r["matches"] == [] and r["model"] == "none"
 

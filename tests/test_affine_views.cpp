@@ -8,6 +8,7 @@
 #include <numeric>
 #include <random>
 #include <set>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -963,7 +964,7 @@ TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' byt
 }
 
 TEST_CASE("every canvas sampler and resampler path gives the scalar references' bytes on any column range") {
-  MESSAGE((affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
   // The paths of this build and CPU (AVX2 eight at a time, SSE2 four at a time, clamped or not) against the
   // scalar references, on column ranges of every remainder modulo 8 and on images taller and
   // wider than the canvas.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -70,7 +71,7 @@ TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a g
 }
 
 TEST_CASE("every resize row and column blend path gives the scalar references' values") {
-  MESSAGE((affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
   // Random source rows (extremes included) and column tables of several ratios; column ranges of
   // every remainder modulo 8.
   std::mt19937 rng(34);

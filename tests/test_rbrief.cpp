@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -298,7 +299,7 @@ TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on e
 }
 
 TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar reference and the formula") {
-  MESSAGE((affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
   namespace d = affine_orb::detail;
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> byte(0, 255);

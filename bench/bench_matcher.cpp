@@ -23,6 +23,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "affine_orb/core/detail/simd.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/matching/matcher.hpp"
 
@@ -93,8 +94,10 @@ int main(int argc, char** argv) {
                                  ? std::string("AVX-512 VPOPCNTDQ search")
                                  : "bit-sliced search, " +
                                        std::to_string(8 * sizeof(affine_orb::detail::LaneVector)) + "-bit lanes";
-  std::printf("knn2: %s; hardware popcount in hamming_distance: %s; medians of %d interleaved runs\n\n",
-              search.c_str(), AFFINE_ORB_HARDWARE_POPCOUNT ? "yes" : "no", runs);
+  std::printf(
+      "knn2: %s; hardware popcount in hamming_distance: %s; extraction kernels: %s; medians of %d interleaved "
+      "runs\n\n",
+      search.c_str(), AFFINE_ORB_HARDWARE_POPCOUNT ? "yes" : "no", affine_orb::detail::simd_path(), runs);
   std::printf(
       "| k = 2 Hamming matching | affine_orb::knn2, 1 thread, ms | cv::BFMatcher knnMatch, 1 thread, ms | the same, %d "
       "threads, ms | ours / peer, 1 thread | ours / peer, %d threads | nearest / second distances equal |\n"

@@ -380,6 +380,7 @@ int main(int argc, char** argv) {
   cv::setNumThreads(1);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::AddCustomContext("affine_orb SIMD path", affine_orb::detail::simd_path());
   inputs();
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -2,6 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <random>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -281,13 +282,14 @@ TEST_CASE("suppression on row spans keeps the rectangle's maxima that lie on the
 }
 
 TEST_CASE("every compiled suppression row path equals the scalar reference, ties included") {
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
   using Row = void (*)(const cv::Mat&, int, int, int, int, std::vector<affine_orb::Corner>&);
   std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::non_max_row}};
 #if AFFINE_ORB_SIMD128
   paths.emplace_back("128-bit (SSE2 or NEON)", &affine_orb::detail::non_max_row_128);
 #endif
-#if defined(__AVX2__)
-  paths.emplace_back("avx2", &affine_orb::detail::non_max_row_avx2);
+#if AFFINE_ORB_AVX2
+  if (affine_orb::detail::cpu_has_avx2()) paths.emplace_back("avx2", &affine_orb::detail::non_max_row_avx2);
 #endif
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     // Score maps with few distinct values (many ties) and with mostly zeros.
@@ -320,6 +322,7 @@ TEST_CASE("every compiled suppression row path equals the scalar reference, ties
 }
 
 TEST_CASE("every compiled SIMD row path of FAST equals the scalar reference") {
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
   const cv::Mat noise = random_image(150, 12, 33, 256);
   const cv::Mat coarse = random_image(150, 12, 34, 3);
   for (const cv::Mat* image : {&noise, &coarse}) {
@@ -337,9 +340,11 @@ TEST_CASE("every compiled SIMD row path of FAST equals the scalar reference") {
           paths.emplace_back(static_cast<std::size_t>(image->cols), 99);
           affine_orb::detail::score_row_128(row, offset, x0, x1, lo, hi, threshold, paths.back().data());
 #endif
-#if defined(__AVX2__)
-          paths.emplace_back(static_cast<std::size_t>(image->cols), 99);
-          affine_orb::detail::score_row_avx2(row, offset, x0, x1, lo, hi, threshold, paths.back().data());
+#if AFFINE_ORB_AVX2
+          if (affine_orb::detail::cpu_has_avx2()) {
+            paths.emplace_back(static_cast<std::size_t>(image->cols), 99);
+            affine_orb::detail::score_row_avx2(row, offset, x0, x1, lo, hi, threshold, paths.back().data());
+          }
 #endif
           for (const auto& got : paths) {
             CAPTURE(x0);

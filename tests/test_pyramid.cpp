@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -70,6 +71,7 @@ TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a g
 }
 
 TEST_CASE("every resize row and column blend path gives the scalar references' values") {
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
   // Random source rows (extremes included) and column tables of several ratios; column ranges of
   // every remainder modulo 8.
   std::mt19937 rng(34);
@@ -103,10 +105,12 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
       affine_orb::detail::blend_rows_neon(top.data(), bottom.data(), b, c0, c1, rows_b.data());
       mismatches += rows_a != rows_b;
 #endif
-#if defined(__AVX2__)
-      std::fill(rows_b.begin(), rows_b.end(), 0);
-      affine_orb::detail::blend_rows_avx2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
-      mismatches += rows_a != rows_b;
+#if AFFINE_ORB_AVX2
+      if (affine_orb::detail::cpu_has_avx2()) {
+        std::fill(rows_b.begin(), rows_b.end(), 0);
+        affine_orb::detail::blend_rows_avx2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+        mismatches += rows_a != rows_b;
+      }
 #endif
       // The column blend reads the whole blended row (plus the repeated last column).
       affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, 0, from, rows_a.data());
@@ -125,10 +129,12 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
       affine_orb::detail::blend_columns_neon(work, rows_a.data(), x0, x1, out_b.data());
       mismatches += out_a != out_b;
 #endif
-#if defined(__AVX2__)
-      std::fill(out_b.begin(), out_b.end(), 0);
-      affine_orb::detail::blend_columns_avx2(work, rows_a.data(), x0, x1, out_b.data());
-      mismatches += out_a != out_b;
+#if AFFINE_ORB_AVX2
+      if (affine_orb::detail::cpu_has_avx2()) {
+        std::fill(out_b.begin(), out_b.end(), 0);
+        affine_orb::detail::blend_columns_avx2(work, rows_a.data(), x0, x1, out_b.data());
+        mismatches += out_a != out_b;
+      }
 #endif
     }
     CHECK(mismatches == 0);

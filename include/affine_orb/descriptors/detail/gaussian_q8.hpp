@@ -18,10 +18,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#if defined(__AVX2__)
-#include <immintrin.h>
-#endif
-
 #include "affine_orb/core/detail/simd.hpp"
 
 namespace affine_orb::detail {
@@ -263,7 +259,8 @@ inline void gaussian_q8_h_neon(const std::int16_t* v, int width, const std::uint
 }
 #endif
 
-#if defined(__AVX2__)
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
 /// gaussian_q8_v_sse2() sixteen columns at a time, identical values.
 template <int kTaps>
 inline void gaussian_q8_v_avx2(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k,
@@ -322,15 +319,20 @@ inline void gaussian_q8_h_avx2(const std::int16_t* v, int width, const std::uint
     if (x + 16 >= width) break;
   }
 }
+AFFINE_ORB_TARGET_AVX2_END
 #endif
 
-/// The y pass of the widest vector path the target has (AVX2, SSE2, NEON, else the scalar reference).
+/// The y pass of the widest vector path the CPU has (AVX2, SSE2, NEON, else the scalar reference).
 template <int kTaps>
 inline void gaussian_q8_v(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k, int n,
                           std::int16_t* v) {
-#if defined(__AVX2__)
-  gaussian_q8_v_avx2<kTaps>(rows, x0, width, k, n, v);
-#elif defined(__SSE2__)
+#if defined(__SSE2__)
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    gaussian_q8_v_avx2<kTaps>(rows, x0, width, k, n, v);
+    return;
+  }
+#endif
   gaussian_q8_v_sse2<kTaps>(rows, x0, width, k, n, v);
 #elif AFFINE_ORB_NEON
   gaussian_q8_v_neon<kTaps>(rows, x0, width, k, n, v);
@@ -339,12 +341,16 @@ inline void gaussian_q8_v(const std::uint8_t* const* rows, int x0, int width, co
 #endif
 }
 
-/// The x pass of the widest vector path the target has (AVX2, SSE2, NEON, else the scalar reference).
+/// The x pass of the widest vector path the CPU has (AVX2, SSE2, NEON, else the scalar reference).
 template <int kTaps>
 inline void gaussian_q8_h(const std::int16_t* v, int width, const std::uint16_t* k, int n, std::uint8_t* out) {
-#if defined(__AVX2__)
-  gaussian_q8_h_avx2<kTaps>(v, width, k, n, out);
-#elif defined(__SSE2__)
+#if defined(__SSE2__)
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    gaussian_q8_h_avx2<kTaps>(v, width, k, n, out);
+    return;
+  }
+#endif
   gaussian_q8_h_sse2<kTaps>(v, width, k, n, out);
 #elif AFFINE_ORB_NEON
   gaussian_q8_h_neon<kTaps>(v, width, k, n, out);

@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// Internals (namespace detail, not part of the API): the FAST circle, the arc-strength score (scalar reference, SSE2
-/// and AVX2 lanes) and the row-wise non-maximum suppression behind detection/fast.hpp.
+/// or NEON and AVX2 lanes) and the row-wise non-maximum suppression behind detection/fast.hpp. The AVX2 rows run where
+/// the CPU has AVX2, chosen per row (core/detail/simd.hpp).
 
 #include <algorithm>
 #include <array>
@@ -10,10 +11,6 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-
-#if defined(__AVX2__)
-#include <immintrin.h>
-#endif
 
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/detail/row_spans.hpp"
@@ -102,6 +99,40 @@ inline void score_row_scalar(const std::uint8_t* row, const std::array<std::ptrd
   }
 }
 
+/// The 16 circle offsets in bytes for a row step of `step` bytes.
+inline std::array<std::ptrdiff_t, 16> circle_offsets(std::ptrdiff_t step) {
+  std::array<std::ptrdiff_t, 16> offset{};
+  for (int i = 0; i < 16; ++i) offset[i] = kFastCircle[i][1] * step + kFastCircle[i][0];
+  return offset;
+}
+
+/// The local maxima of row y, columns [x0, x1), of a score map, appended to `corners`; see
+/// non_max_suppression(). The caller keeps the columns and rows one pixel inside the map. The
+/// scalar reference.
+inline void non_max_row_scalar(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                               std::vector<Corner>& corners) {
+  const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
+  const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
+  const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
+  for (int x = x0; x < x1; ++x) {
+    // Score maps are mostly zero: skip 8 empty pixels at a time.
+    if (x + 8 <= x1) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, row + x, sizeof(word));
+      if (word == 0) {
+        x += 7;
+        continue;
+      }
+    }
+    const int s = row[x];
+    if (s < threshold) continue;
+    if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s >= row[x + 1] &&
+        s >= below[x - 1] && s >= below[x] && s >= below[x + 1]) {
+      corners.push_back({x, y, s});
+    }
+  }
+}
+
 #if AFFINE_ORB_SIMD128
 #if defined(__SSE2__)
 /// 8-bit lane operations of SSE2 (16 lanes), for the FAST code written once for every width.
@@ -145,7 +176,60 @@ struct Lanes128 {
 };
 #endif
 
-#if defined(__AVX2__)
+/// Appends the corners of the set bits of `mask` (bit i: column x + i of row y).
+inline void append_corners(unsigned mask, int x, int y, const std::uint8_t* row, std::vector<Corner>& corners) {
+  while (mask != 0) {
+    const int i = __builtin_ctz(mask);
+    corners.push_back({x + i, y, row[x + i]});
+    mask &= mask - 1;
+  }
+}
+
+// The kernels written once over S lanes (arc strength, score chunk, suppression chunk and run), for the
+// 128-bit lanes here and for AVX2's inside the target region below, where they compile for AVX2.
+namespace lanes128 {
+#include "affine_orb/detection/detail/fast_lanes.inc"
+}  // namespace lanes128
+
+/// Scoring of pixels [x0, x1) of one row 16 at a time (SSE2 or NEON: Lanes128), equal to
+/// score_row_scalar() bit for bit. [lo, hi) ⊇ [x0, x1) are the columns whose circle lies inside the
+/// image: a run shorter than 16 is scored as the 16 pixels from clamp(x0, lo, hi − 16) and only its
+/// own lanes are stored (the scalar path remains for rows narrower than 16 such columns).
+inline void score_row_128(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1, int lo,
+                          int hi, int threshold, std::uint8_t* out) {
+  using S = Lanes128;
+  if (x1 <= x0) return;
+  const S::V t = S::set1(threshold);
+  if (x1 - x0 < S::kLanes) {
+    if (hi - lo < S::kLanes) {
+      score_row_scalar(row, offset, x0, x1, threshold, out);
+      return;
+    }
+    const int c = std::clamp(x0, lo, hi - S::kLanes);
+    alignas(16) std::uint8_t scores[S::kLanes];
+    S::store(scores, lanes128::score_chunk_simd<S>(row + c, offset, t));
+    std::memcpy(out + x0, scores + (x0 - c), static_cast<std::size_t>(x1 - x0));
+    return;
+  }
+  // The last chunk overlaps the previous one so that it ends exactly at x1: scoring a pixel twice
+  // writes the same value, and nothing outside [x0, x1) is touched.
+  for (int x = x0;; x = std::min(x + S::kLanes, x1 - S::kLanes)) {
+    S::store(out + x, lanes128::score_chunk_simd<S>(row + x, offset, t));
+    if (x + S::kLanes >= x1) break;
+  }
+}
+
+/// non_max_row_scalar() 16 pixels at a time (runs shorter than 16: the scalar reference).
+inline void non_max_row_128(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
+  if (x1 - x0 < Lanes128::kLanes) {
+    non_max_row_scalar(scores, y, x0, x1, threshold, corners);
+  } else {
+    lanes128::non_max_run_simd<Lanes128>(scores, y, x0, x1, threshold, corners);
+  }
+}
+
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
 /// 8-bit lane operations of AVX2 (32 lanes).
 struct Lanes256 {
   using V = __m256i;
@@ -165,110 +249,11 @@ struct Lanes256 {
   /// Bit i set where lane i has its top bit set.
   static unsigned mask(V v) { return static_cast<unsigned>(_mm256_movemask_epi8(v)); }
 };
-#endif
 
-/// arc_strength() of the L pixels at p[0, L) at once (L = S::kLanes), for the bright (c − v) or
-/// dark (v − c) polarity, in saturated 8-bit arithmetic. The 16 windows of 9 contiguous
-/// differences are split at the window length (van Herk / Gil-Werman): with e_i = d_(i mod 16),
-/// the window starting at k <= 8 is min(suffix of e_0..e_8 from k, prefix of e_9..e_17 up to
-/// k + 8), and the one starting at 9 <= k <= 15 is min(suffix of e_9..e_17 from k, prefix of
-/// e_18..e_23 up to k + 8). At most 12 vectors are live, so nothing spills on 16 registers.
-template <class S, bool kBright>
-inline typename S::V arc_strength_simd(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset,
-                                       typename S::V v) {
-  using V = typename S::V;
-  auto e = [&](int i) {
-    const V c = S::load(p + offset[static_cast<std::size_t>(i & 15)]);
-    return kBright ? S::subs(c, v) : S::subs(v, c);
-  };
-  V suffix[9];
-  // Windows 0..8: suffixes of block e_0..e_8, running prefix of block e_9..e_17.
-  suffix[8] = e(8);
-  AFFINE_ORB_UNROLL
-  for (int k = 7; k >= 0; --k) suffix[k] = S::min(e(k), suffix[k + 1]);
-  V strength = suffix[0];
-  V prefix = e(9);
-  strength = S::max(strength, S::min(suffix[1], prefix));
-  AFFINE_ORB_UNROLL
-  for (int k = 2; k <= 8; ++k) {
-    prefix = S::min(prefix, e(k + 8));
-    strength = S::max(strength, S::min(suffix[k], prefix));
-  }
-  // Windows 9..15: suffixes of block e_9..e_17 (suffix[j] holds e_(9+j)..e_17), prefix of e_18...
-  suffix[8] = e(17);
-  AFFINE_ORB_UNROLL
-  for (int j = 7; j >= 0; --j) suffix[j] = S::min(e(9 + j), suffix[j + 1]);
-  strength = S::max(strength, suffix[0]);
-  prefix = e(18);
-  strength = S::max(strength, S::min(suffix[1], prefix));
-  AFFINE_ORB_UNROLL
-  for (int j = 2; j <= 6; ++j) {
-    prefix = S::min(prefix, e(j + 17));
-    strength = S::max(strength, S::min(suffix[j], prefix));
-  }
-  return strength;
-}
+namespace lanes256 {
+#include "affine_orb/detection/detail/fast_lanes.inc"
+}  // namespace lanes256
 
-/// The FAST scores of the L pixels at p[0, L) (see score_row_scalar()), all 0 when none passes the
-/// test of pixels 0, 4, 8 and 12.
-template <class S>
-inline typename S::V score_chunk_simd(const std::uint8_t* p, const std::array<std::ptrdiff_t, 16>& offset,
-                                      typename S::V t) {
-  using V = typename S::V;
-  const V zero = S::zero();
-  const V v = S::load(p);
-  const V hi = S::adds(v, t);
-  const V lo = S::subs(v, t);
-  auto brighter = [&](V a) { return S::subs(a, hi); };  // non-zero where a > hi
-  auto darker = [&](V a) { return S::subs(lo, a); };    // non-zero where a < lo
-  const V c0 = S::load(p + offset[0]), c4 = S::load(p + offset[4]), c8 = S::load(p + offset[8]),
-          c12 = S::load(p + offset[12]);
-  auto both = [&](V a, V b) {  // non-zero lanes: a and b both non-zero
-    return S::andnot(S::or_(S::eq(a, zero), S::eq(b, zero)), S::set1(-1));
-  };
-  const V bright = both(S::or_(brighter(c0), brighter(c8)), S::or_(brighter(c4), brighter(c12)));
-  const V dark = both(S::or_(darker(c0), darker(c8)), S::or_(darker(c4), darker(c12)));
-  // A polarity that fails the test in every lane has strength <= t there, which the result
-  // discards (a lane's other polarity decides, or the lane is 0): its arcs are not computed.
-  const bool any_bright = !S::none(bright);
-  const bool any_dark = !S::none(dark);
-  if (!any_bright && !any_dark) return zero;
-  V strength = zero;
-  if (any_bright) strength = arc_strength_simd<S, true>(p, offset, v);
-  if (any_dark) strength = S::max(strength, arc_strength_simd<S, false>(p, offset, v));
-  const V not_corner = S::eq(S::subs(strength, t), zero);  // strength <= t
-  return S::andnot(not_corner, S::subs(strength, S::set1(1)));
-}
-
-/// Scoring of pixels [x0, x1) of one row 16 at a time (SSE2 or NEON: Lanes128), equal to
-/// score_row_scalar() bit for bit. [lo, hi) ⊇ [x0, x1) are the columns whose circle lies inside the
-/// image: a run shorter than 16 is scored as the 16 pixels from clamp(x0, lo, hi − 16) and only its
-/// own lanes are stored (the scalar path remains for rows narrower than 16 such columns).
-inline void score_row_128(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1, int lo,
-                          int hi, int threshold, std::uint8_t* out) {
-  using S = Lanes128;
-  if (x1 <= x0) return;
-  const S::V t = S::set1(threshold);
-  if (x1 - x0 < S::kLanes) {
-    if (hi - lo < S::kLanes) {
-      score_row_scalar(row, offset, x0, x1, threshold, out);
-      return;
-    }
-    const int c = std::clamp(x0, lo, hi - S::kLanes);
-    alignas(16) std::uint8_t scores[S::kLanes];
-    S::store(scores, score_chunk_simd<S>(row + c, offset, t));
-    std::memcpy(out + x0, scores + (x0 - c), static_cast<std::size_t>(x1 - x0));
-    return;
-  }
-  // The last chunk overlaps the previous one so that it ends exactly at x1: scoring a pixel twice
-  // writes the same value, and nothing outside [x0, x1) is touched.
-  for (int x = x0;; x = std::min(x + S::kLanes, x1 - S::kLanes)) {
-    S::store(out + x, score_chunk_simd<S>(row + x, offset, t));
-    if (x + S::kLanes >= x1) break;
-  }
-}
-
-#if defined(__AVX2__)
 /// score_row_128() 32 pixels at a time where the run is that long (the last 32 overlapping the
 /// previous ones), identical bytes; shorter runs go to score_row_128().
 inline void score_row_avx2(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
@@ -279,28 +264,50 @@ inline void score_row_avx2(const std::uint8_t* row, const std::array<std::ptrdif
   }
   const __m256i t = _mm256_set1_epi8(static_cast<char>(threshold));
   for (int x = x0;; x = std::min(x + 32, x1 - 32)) {
-    Lanes256::store(out + x, score_chunk_simd<Lanes256>(row + x, offset, t));
+    Lanes256::store(out + x, lanes256::score_chunk_simd<Lanes256>(row + x, offset, t));
     if (x + 32 >= x1) break;
   }
 }
+
+/// non_max_row_scalar() 32 pixels at a time (runs shorter than 32: non_max_row_128()).
+inline void non_max_row_avx2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
+                             std::vector<Corner>& corners) {
+  if (x1 - x0 < Lanes256::kLanes) {
+    non_max_row_128(scores, y, x0, x1, threshold, corners);
+  } else {
+    lanes256::non_max_run_simd<Lanes256>(scores, y, x0, x1, threshold, corners);
+  }
+}
+AFFINE_ORB_TARGET_AVX2_END
 #endif
 
-/// score_row_avx2() where the target has AVX2, score_row_128() where it has SSE2 or NEON.
+/// score_row_avx2() where the CPU has AVX2, score_row_128() where the target has SSE2 or NEON.
 inline void score_row_simd(const std::uint8_t* row, const std::array<std::ptrdiff_t, 16>& offset, int x0, int x1,
                            int lo, int hi, int threshold, std::uint8_t* out) {
-#if defined(__AVX2__)
-  score_row_avx2(row, offset, x0, x1, lo, hi, threshold, out);
-#else
-  score_row_128(row, offset, x0, x1, lo, hi, threshold, out);
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    score_row_avx2(row, offset, x0, x1, lo, hi, threshold, out);
+    return;
+  }
 #endif
+  score_row_128(row, offset, x0, x1, lo, hi, threshold, out);
 }
 #endif
 
-/// The 16 circle offsets in bytes for a row step of `step` bytes.
-inline std::array<std::ptrdiff_t, 16> circle_offsets(std::ptrdiff_t step) {
-  std::array<std::ptrdiff_t, 16> offset{};
-  for (int i = 0; i < 16; ++i) offset[i] = kFastCircle[i][1] * step + kFastCircle[i][0];
-  return offset;
+/// non_max_row_avx2() where the CPU has AVX2, non_max_row_128() where the target has SSE2 or NEON,
+/// else the scalar reference.
+inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    non_max_row_avx2(scores, y, x0, x1, threshold, corners);
+    return;
+  }
+#endif
+#if AFFINE_ORB_SIMD128
+  non_max_row_128(scores, y, x0, x1, threshold, corners);
+#else
+  non_max_row_scalar(scores, y, x0, x1, threshold, corners);
+#endif
 }
 
 /// fast_score_spans() without the argument checks, for callers that made them once.
@@ -332,118 +339,6 @@ inline void score_spans(const cv::Mat& image, const RowSpans& region, int thresh
     score_row_scalar(image.ptr<std::uint8_t>(y), offset, s0, s1, threshold, out);
 #endif
   }
-}
-
-/// The local maxima of row y, columns [x0, x1), of a score map, appended to `corners`; see
-/// non_max_suppression(). The caller keeps the columns and rows one pixel inside the map. The
-/// scalar reference.
-inline void non_max_row_scalar(const cv::Mat& scores, int y, int x0, int x1, int threshold,
-                               std::vector<Corner>& corners) {
-  const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
-  const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
-  const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
-  for (int x = x0; x < x1; ++x) {
-    // Score maps are mostly zero: skip 8 empty pixels at a time.
-    if (x + 8 <= x1) {
-      std::uint64_t word = 0;
-      std::memcpy(&word, row + x, sizeof(word));
-      if (word == 0) {
-        x += 7;
-        continue;
-      }
-    }
-    const int s = row[x];
-    if (s < threshold) continue;
-    if (s > above[x - 1] && s > above[x] && s > above[x + 1] && s > row[x - 1] && s >= row[x + 1] &&
-        s >= below[x - 1] && s >= below[x] && s >= below[x + 1]) {
-      corners.push_back({x, y, s});
-    }
-  }
-}
-
-#if AFFINE_ORB_SIMD128
-/// Bit i of the result is set when pixel row[i] (i < S::kLanes) is a local maximum at `t` per
-/// non_max_row_scalar(), `above` and `below` pointing at the same columns of the rows around: in
-/// saturated arithmetic a > b iff (a − b) != 0 and a >= b iff (b − a) == 0, so a pixel is a
-/// maximum iff the minimum of its four strict differences is non-zero and the maximum of its four
-/// others (and of threshold − s) is zero.
-template <class S>
-inline unsigned non_max_chunk(const std::uint8_t* above, const std::uint8_t* row, const std::uint8_t* below,
-                              typename S::V t) {
-  using V = typename S::V;
-  const V zero = S::zero();
-  const V s = S::load(row);
-  V strict = S::min(S::subs(s, S::load(above - 1)), S::subs(s, S::load(above)));
-  strict = S::min(strict, S::subs(s, S::load(above + 1)));
-  strict = S::min(strict, S::subs(s, S::load(row - 1)));
-  V loose = S::max(S::subs(S::load(row + 1), s), S::subs(S::load(below - 1), s));
-  loose = S::max(loose, S::subs(S::load(below), s));
-  loose = S::max(loose, S::subs(S::load(below + 1), s));
-  loose = S::max(loose, S::subs(t, s));
-  return S::mask(S::andnot(S::eq(strict, zero), S::eq(loose, zero)));
-}
-
-/// Appends the corners of the set bits of `mask` (bit i: column x + i of row y).
-inline void append_corners(unsigned mask, int x, int y, const std::uint8_t* row, std::vector<Corner>& corners) {
-  while (mask != 0) {
-    const int i = __builtin_ctz(mask);
-    corners.push_back({x + i, y, row[x + i]});
-    mask &= mask - 1;
-  }
-}
-
-/// non_max_row_scalar() S::kLanes pixels at a time, the same corners in the same order, for runs
-/// of at least S::kLanes pixels. Every chunk is tested without a branch on its content (skipping
-/// empty chunks mispredicted too often on score maps at low thresholds); the last chunk overlaps
-/// the previous one, its already visited lanes masked off.
-template <class S>
-inline void non_max_run_simd(const cv::Mat& scores, int y, int x0, int x1, int threshold,
-                             std::vector<Corner>& corners) {
-  const std::uint8_t* above = scores.ptr<std::uint8_t>(y - 1);
-  const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
-  const std::uint8_t* below = scores.ptr<std::uint8_t>(y + 1);
-  const typename S::V t = S::set1(threshold);
-  constexpr int kLanes = S::kLanes;
-  for (int x = x0, done = x0;; done = x + kLanes, x = std::min(x + kLanes, x1 - kLanes)) {
-    // Lanes below `done` were visited by the previous chunk.
-    const unsigned fresh = ~0u << (done - x);
-    append_corners(non_max_chunk<S>(above + x, row + x, below + x, t) & fresh, x, y, row, corners);
-    if (x + kLanes >= x1) break;
-  }
-}
-
-/// non_max_row_scalar() 16 pixels at a time (runs shorter than 16: the scalar reference).
-inline void non_max_row_128(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
-  if (x1 - x0 < Lanes128::kLanes) {
-    non_max_row_scalar(scores, y, x0, x1, threshold, corners);
-  } else {
-    non_max_run_simd<Lanes128>(scores, y, x0, x1, threshold, corners);
-  }
-}
-
-#if defined(__AVX2__)
-/// non_max_row_scalar() 32 pixels at a time (runs shorter than 32: non_max_row_128()).
-inline void non_max_row_avx2(const cv::Mat& scores, int y, int x0, int x1, int threshold,
-                             std::vector<Corner>& corners) {
-  if (x1 - x0 < Lanes256::kLanes) {
-    non_max_row_128(scores, y, x0, x1, threshold, corners);
-  } else {
-    non_max_run_simd<Lanes256>(scores, y, x0, x1, threshold, corners);
-  }
-}
-#endif
-#endif
-
-/// non_max_row_avx2() where the target has AVX2, non_max_row_128() where it has SSE2 or NEON, else the
-/// scalar reference.
-inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int threshold, std::vector<Corner>& corners) {
-#if defined(__AVX2__)
-  non_max_row_avx2(scores, y, x0, x1, threshold, corners);
-#elif AFFINE_ORB_SIMD128
-  non_max_row_128(scores, y, x0, x1, threshold, corners);
-#else
-  non_max_row_scalar(scores, y, x0, x1, threshold, corners);
-#endif
 }
 
 /// non_max_suppression() on row spans without the argument check.

@@ -9,8 +9,8 @@
 /// fractions rounded to 1/128, a = round(128·f), b = round(128·g), and the neighbour index i + 1
 /// clamped to the image,
 ///   out = ((128 − a)·R(i) + a·R(i + 1) + 2^13) >> 14,  R(k) = (128 − b)·I(k, j) + b·I(k, j + 1).
-/// The scalar reference, the SSE2 path (where the target has SSE2) and the AVX2 path (where it has
-/// AVX2) give the same bytes.
+/// The scalar reference, the SSE2 path (where the target has SSE2) and the AVX2 path (where the CPU
+/// has AVX2, chosen per row: core/detail/simd.hpp) give the same bytes.
 
 #include <algorithm>
 #include <cmath>
@@ -19,10 +19,6 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-
-#if defined(__AVX2__)
-#include <immintrin.h>
-#endif
 
 #include "affine_orb/core/detail/row_spans.hpp"
 #include "affine_orb/core/detail/simd.hpp"
@@ -146,7 +142,8 @@ inline void blend_columns_sse2(const ResizeWork& w, const std::int16_t* row, int
   }
   blend_columns_scalar(w, row, x, x1, out);
 }
-#if defined(__AVX2__)
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
 /// blend_rows_scalar(), 32 columns at a time, identical values; the rest through blend_rows_sse2().
 inline void blend_rows_avx2(const std::uint8_t* top, const std::uint8_t* bottom, int b, int c0, int c1,
                             std::int16_t* row) {
@@ -185,6 +182,7 @@ inline void blend_columns_avx2(const ResizeWork& w, const std::int16_t* row, int
   }
   blend_columns_sse2(w, row, x, x1, out);
 }
+AFFINE_ORB_TARGET_AVX2_END
 #endif
 #endif
 
@@ -236,6 +234,7 @@ inline void resize_bilinear(const cv::Mat& src, cv::Mat& dst, cv::Size size, con
   w.prepare(src.size(), size);
   dst.create(size, CV_8UC1);
   std::int16_t* row = w.row.data();
+  [[maybe_unused]] const bool avx2 = cpu_has_avx2();
   for (int y = 0; y < size.height; ++y) {
     int x0 = 0;
     int x1 = size.width;
@@ -253,14 +252,19 @@ inline void resize_bilinear(const cv::Mat& src, cv::Mat& dst, cv::Size size, con
     const int c1 = std::min(w.x.index[static_cast<std::size_t>(x1 - 1)] + 2, src.cols);
     const int b = w.y.fraction[static_cast<std::size_t>(y)];
     std::uint8_t* out = dst.ptr<std::uint8_t>(y);
-#if defined(__AVX2__)
-    blend_rows_avx2(top, bottom, b, c0, c1, row);
-    row[src.cols] = row[src.cols - 1];
-    blend_columns_avx2(w, row, x0, x1, out);
-#elif defined(__SSE2__)
-    blend_rows_sse2(top, bottom, b, c0, c1, row);
-    row[src.cols] = row[src.cols - 1];
-    blend_columns_sse2(w, row, x0, x1, out);
+#if defined(__SSE2__)
+#if AFFINE_ORB_AVX2
+    if (avx2) {
+      blend_rows_avx2(top, bottom, b, c0, c1, row);
+      row[src.cols] = row[src.cols - 1];
+      blend_columns_avx2(w, row, x0, x1, out);
+    } else
+#endif
+    {
+      blend_rows_sse2(top, bottom, b, c0, c1, row);
+      row[src.cols] = row[src.cols - 1];
+      blend_columns_sse2(w, row, x0, x1, out);
+    }
 #elif AFFINE_ORB_NEON
     blend_rows_neon(top, bottom, b, c0, c1, row);
     row[src.cols] = row[src.cols - 1];

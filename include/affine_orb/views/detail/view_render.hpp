@@ -17,7 +17,7 @@
 /// to the view width (pixel centres: x_c = (x + 0.5)·W_c/W_v − 0.5).
 ///
 /// Each stage has a scalar reference, an SSE2 path (where the target has SSE2) and an AVX2 path
-/// (where it has AVX2) that give the same bytes.
+/// (where the CPU has AVX2, chosen per row: core/detail/simd.hpp) that give the same bytes.
 
 #include <algorithm>
 #include <cmath>
@@ -29,11 +29,7 @@
 
 #include <opencv2/core.hpp>
 
-#if defined(__AVX2__)
-#include <immintrin.h>
-#elif defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include "affine_orb/core/detail/simd.hpp"
 
 namespace affine_orb::detail {
 
@@ -246,7 +242,8 @@ inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s,
   run(std::true_type{}, inner1, c1);
 }
 
-#if defined(__AVX2__)
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
 /// sample_canvas_row_avx2() on columns [c0, c1), eight at a time, each 128-bit half as in
 /// sample_canvas_columns_sse2(); returns where it stopped. (Reading the pairs with
 /// _mm256_i32gather_epi32 instead of 16-bit loads and inserts measured slower on an AMD EPYC.)
@@ -342,15 +339,20 @@ inline void sample_canvas_row_avx2(const cv::Mat& image, const CanvasSampler& s,
   run(std::false_type{}, inner0, inner1);
   run(std::true_type{}, inner1, c1);
 }
+AFFINE_ORB_TARGET_AVX2_END
 #endif
 #endif
 
-/// sample_canvas_row_avx2() where the target has AVX2, else sample_canvas_row_sse2() where it has
-/// SSE2, else the scalar reference.
+/// sample_canvas_row_avx2() where the CPU has AVX2, else sample_canvas_row_sse2() where the target
+/// has SSE2, else the scalar reference.
 inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1, std::uint8_t* out) {
-#if defined(__AVX2__)
-  sample_canvas_row_avx2(image, s, y, c0, c1, out);
-#elif defined(__SSE2__)
+#if defined(__SSE2__)
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    sample_canvas_row_avx2(image, s, y, c0, c1, out);
+    return;
+  }
+#endif
   sample_canvas_row_sse2(image, s, y, c0, c1, out);
 #else
   sample_canvas_row_scalar(image, s, y, c0, c1, out);
@@ -520,7 +522,8 @@ inline void resample_row_sse2(const ViewResampler& r, const std::uint8_t* row, i
   with_rounds(r.stride,
               [&](auto rounds) { resample_row_sse2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out); });
 }
-#if defined(__AVX2__)
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
 /// Rounds eight columns' dot products (lane i of `sum` holds column i's) to bytes, Q kWeightBits
 /// fixed point, and stores them at out[0..7].
 inline void store_eight_columns_avx2(__m256i sum, std::uint8_t* out) {
@@ -599,16 +602,21 @@ inline void resample_row_avx2(const ViewResampler& r, const std::uint8_t* row, i
   with_rounds(r.stride,
               [&](auto rounds) { resample_row_avx2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out); });
 }
+AFFINE_ORB_TARGET_AVX2_END
 #endif
 #endif
 
-/// resample_row_avx2() where the target has AVX2, else resample_row_sse2() where it has SSE2, else
-/// the scalar reference.
+/// resample_row_avx2() where the CPU has AVX2, else resample_row_sse2() where the target has SSE2,
+/// else the scalar reference.
 inline void resample_row(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                          std::uint8_t* out) {
-#if defined(__AVX2__)
-  resample_row_avx2(r, row, row_first, x0, x1, out);
-#elif defined(__SSE2__)
+#if defined(__SSE2__)
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    resample_row_avx2(r, row, row_first, x0, x1, out);
+    return;
+  }
+#endif
   resample_row_sse2(r, row, row_first, x0, x1, out);
 #else
   resample_row_scalar(r, row, row_first, x0, x1, out);

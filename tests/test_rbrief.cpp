@@ -356,12 +356,12 @@ TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar ref
       };
       if (size == 7) check(d::gaussian_q8_v_scalar<7>, d::gaussian_q8_h_scalar<7>);
 #if defined(__SSE2__)
-      check(d::gaussian_q8_v_sse2<0>, d::gaussian_q8_h_sse2<0>);
-      if (size == 7) check(d::gaussian_q8_v_sse2<7>, d::gaussian_q8_h_sse2<7>);
+      check(d::gaussian_q8_v_128<0>, d::gaussian_q8_h_sse2<0>);
+      if (size == 7) check(d::gaussian_q8_v_128<7>, d::gaussian_q8_h_sse2<7>);
 #endif
 #if AFFINE_ORB_NEON
-      check(d::gaussian_q8_v_neon<0>, d::gaussian_q8_h_neon<0>);
-      if (size == 7) check(d::gaussian_q8_v_neon<7>, d::gaussian_q8_h_neon<7>);
+      check(d::gaussian_q8_v_128<0>, d::gaussian_q8_h_neon<0>);
+      if (size == 7) check(d::gaussian_q8_v_128<7>, d::gaussian_q8_h_neon<7>);
 #endif
 #if AFFINE_ORB_AVX2
       if (affine_orb::detail::cpu_has_avx2()) {

@@ -142,36 +142,61 @@ inline void gaussian_q8_h_scalar(const std::int16_t* v, int width, const std::ui
   }
 }
 
-#if defined(__SSE2__)
-/// gaussian_q8_v_scalar() eight columns at a time (the last eight overlapping), identical values.
-/// The kernel is symmetric, so rows j and n − 1 − j are added before multiplying; 16-bit products
-/// and sums wrap, and the total is below 2^16, so it is exact.
+#if AFFINE_ORB_SIMD128
+/// The lane operations of gaussian_q8_v_128(): eight 16-bit lanes of SSE2 or NEON, whose products
+/// and sums wrap modulo 2^16 alike.
+struct Q8Lanes {
+#if AFFINE_ORB_NEON
+  using V = uint16x8_t;
+  /// The eight bytes at p, zero-extended.
+  static V load8(const std::uint8_t* p) { return vmovl_u8(vld1_u8(p)); }
+  static V broadcast(std::uint16_t k) { return vdupq_n_u16(k); }
+  static V add(V a, V b) { return vaddq_u16(a, b); }
+  static V multiply(V a, V b) { return vmulq_u16(a, b); }
+  /// Stores sum − 2^15 (the top bit flipped) as eight int16.
+  static void store_offset(std::int16_t* v, V sum) {
+    vst1q_s16(v, vreinterpretq_s16_u16(veorq_u16(sum, vdupq_n_u16(0x8000))));
+  }
+#else
+  using V = __m128i;
+  static V load8(const std::uint8_t* p) {
+    return _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), _mm_setzero_si128());
+  }
+  static V broadcast(std::uint16_t k) { return _mm_set1_epi16(static_cast<short>(k)); }
+  static V add(V a, V b) { return _mm_add_epi16(a, b); }
+  static V multiply(V a, V b) { return _mm_mullo_epi16(a, b); }
+  static void store_offset(std::int16_t* v, V sum) {
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(v), _mm_xor_si128(sum, _mm_set1_epi16(static_cast<short>(0x8000))));
+  }
+#endif
+};
+
+/// gaussian_q8_v_scalar() eight columns at a time (the last eight overlapping), identical values,
+/// on SSE2 or NEON (Q8Lanes). The kernel is symmetric, so rows j and n − 1 − j are added before
+/// multiplying; 16-bit products and sums wrap, and the total is below 2^16, so it is exact.
 template <int kTaps>
-inline void gaussian_q8_v_sse2(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k,
-                               int n_runtime, std::int16_t* v) {
+inline void gaussian_q8_v_128(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k,
+                              int n_runtime, std::int16_t* v) {
+  using L = Q8Lanes;
   const int n = kTaps > 0 ? kTaps : n_runtime;
   if (width < 8) {
     gaussian_q8_v_scalar<kTaps>(rows, x0, width, k, n, v);
     return;
   }
   const int half = n / 2;
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i offset = _mm_set1_epi16(static_cast<short>(0x8000));
-  __m128i weight[16];
-  for (int j = 0; j <= half; ++j) weight[j] = _mm_set1_epi16(static_cast<short>(k[j]));
+  L::V weight[16];
+  for (int j = 0; j <= half; ++j) weight[j] = L::broadcast(k[j]);
   for (int x = 0;; x = std::min(x + 8, width - 8)) {
-    auto at = [&](int j) {
-      return _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows[j] + x0 + x)), zero);
-    };
-    __m128i sum = _mm_mullo_epi16(at(half), weight[half]);
-    for (int j = 0; j < half; ++j) {
-      sum = _mm_add_epi16(sum, _mm_mullo_epi16(_mm_add_epi16(at(j), at(n - 1 - j)), weight[j]));
-    }
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(v + x), _mm_xor_si128(sum, offset));
+    auto at = [&](int j) { return L::load8(rows[j] + x0 + x); };
+    L::V sum = L::multiply(at(half), weight[half]);
+    for (int j = 0; j < half; ++j) sum = L::add(sum, L::multiply(L::add(at(j), at(n - 1 - j)), weight[j]));
+    L::store_offset(v + x, sum);
     if (x + 8 >= width) break;
   }
 }
+#endif
 
+#if defined(__SSE2__)
 /// gaussian_q8_h_scalar() eight columns at a time (the last eight overlapping), identical bytes,
 /// with 32-bit multiply-adds of column pairs: for the even columns 2m, Σ_p k_2p·v(2m + 2p) +
 /// k_2p+1·v(2m + 2p + 1) from the vectors loaded at 2p; for the odd ones from those loaded at 2p + 1
@@ -209,29 +234,6 @@ inline void gaussian_q8_h_sse2(const std::int16_t* v, int width, const std::uint
 #endif
 
 #if AFFINE_ORB_NEON
-/// gaussian_q8_v_scalar() eight columns at a time on NEON (the last eight overlapping), identical
-/// values: the same symmetric 16-bit sums as gaussian_q8_v_sse2(), wrapping the same way.
-template <int kTaps>
-inline void gaussian_q8_v_neon(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k,
-                               int n_runtime, std::int16_t* v) {
-  const int n = kTaps > 0 ? kTaps : n_runtime;
-  if (width < 8) {
-    gaussian_q8_v_scalar<kTaps>(rows, x0, width, k, n, v);
-    return;
-  }
-  const int half = n / 2;
-  const uint16x8_t offset = vdupq_n_u16(0x8000);
-  uint16x8_t weight[16];
-  for (int j = 0; j <= half; ++j) weight[j] = vdupq_n_u16(k[j]);
-  for (int x = 0;; x = std::min(x + 8, width - 8)) {
-    auto at = [&](int j) { return vmovl_u8(vld1_u8(rows[j] + x0 + x)); };
-    uint16x8_t sum = vmulq_u16(at(half), weight[half]);
-    for (int j = 0; j < half; ++j) sum = vmlaq_u16(sum, vaddq_u16(at(j), at(n - 1 - j)), weight[j]);
-    vst1q_s16(v + x, vreinterpretq_s16_u16(veorq_u16(sum, offset)));
-    if (x + 8 >= width) break;
-  }
-}
-
 /// gaussian_q8_h_scalar() eight columns at a time on NEON (the last eight overlapping), identical
 /// bytes: each column's 32-bit sum by widening multiply-accumulates, shifted and narrowed (the sums
 /// lie in [0, 2^24), so out(x) is in [0, 255]). Reads v up to v[width + n − 2].
@@ -261,13 +263,13 @@ inline void gaussian_q8_h_neon(const std::int16_t* v, int width, const std::uint
 
 #if AFFINE_ORB_AVX2
 AFFINE_ORB_TARGET_AVX2_BEGIN
-/// gaussian_q8_v_sse2() sixteen columns at a time, identical values.
+/// gaussian_q8_v_128() sixteen columns at a time, identical values.
 template <int kTaps>
 inline void gaussian_q8_v_avx2(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k,
                                int n_runtime, std::int16_t* v) {
   const int n = kTaps > 0 ? kTaps : n_runtime;
   if (width < 16) {
-    gaussian_q8_v_sse2<kTaps>(rows, x0, width, k, n, v);
+    gaussian_q8_v_128<kTaps>(rows, x0, width, k, n, v);
     return;
   }
   const int half = n / 2;
@@ -326,16 +328,14 @@ AFFINE_ORB_TARGET_AVX2_END
 template <int kTaps>
 inline void gaussian_q8_v(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k, int n,
                           std::int16_t* v) {
-#if defined(__SSE2__)
 #if AFFINE_ORB_AVX2
   if (cpu_has_avx2()) {
     gaussian_q8_v_avx2<kTaps>(rows, x0, width, k, n, v);
     return;
   }
 #endif
-  gaussian_q8_v_sse2<kTaps>(rows, x0, width, k, n, v);
-#elif AFFINE_ORB_NEON
-  gaussian_q8_v_neon<kTaps>(rows, x0, width, k, n, v);
+#if AFFINE_ORB_SIMD128
+  gaussian_q8_v_128<kTaps>(rows, x0, width, k, n, v);
 #else
   gaussian_q8_v_scalar<kTaps>(rows, x0, width, k, n, v);
 #endif

@@ -92,8 +92,9 @@ int main(int argc, char** argv) {
   const std::string data_dir = argc > 2 ? argv[2] : AFFINE_ORB_DATA_DIR;
   const std::string search = AFFINE_ORB_KNN2_VPOPCNTDQ
                                  ? std::string("AVX-512 VPOPCNTDQ search")
-                                 : "bit-sliced search, " +
-                                       std::to_string(8 * sizeof(affine_orb::detail::LaneVector)) + "-bit lanes";
+                                 : std::string("bit-sliced search, ") +
+                                       (AFFINE_ORB_KNN2_LANES256 && affine_orb::detail::cpu_has_avx2() ? "256" : "128") +
+                                       "-bit lanes";
   std::printf(
       "knn2: %s; hardware popcount in hamming_distance: %s; extraction kernels: %s; medians of %d interleaved "
       "runs\n\n",

@@ -187,19 +187,48 @@ void check_hamming_distance() {
     for (std::size_t w = 0; w < complement.size(); ++w) complement[w] = ~a[i][w];
     CHECK(affine_orb::hamming_distance(a[i], complement) == Bits);
   }
+  // The row kernels: every compiled path against the bit-by-bit count, a row of mixed densities.
+  BinaryDescriptor<Bits> query = a[0];
+  Descriptors<Bits> row = a;
+  row.insert(row.end(), b.begin(), b.end());
+  std::vector<int> expected(row.size());
+  for (std::size_t j = 0; j < row.size(); ++j) expected[j] = naive_distance<Bits>(query, row[j]);
+  std::vector<int> out(row.size(), -1);
+  affine_orb::detail::hamming_row(query, row.data(), row.size(), out.data());
+  CHECK(out == expected);
+  std::fill(out.begin(), out.end(), -1);
+  affine_orb::detail::hamming_row_generic(query, row.data(), row.size(), out.data());
+  CHECK(out == expected);
+#if AFFINE_ORB_AVX2_RUNTIME
+  if (affine_orb::detail::cpu_has_avx2()) {
+    std::fill(out.begin(), out.end(), -1);
+    affine_orb::detail::hamming_row_popcnt(query, row.data(), row.size(), out.data());
+    CHECK(out == expected);
+  }
+#endif
 }
 
 template <int Bits>
 void check_knn2() {
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
   for (const auto& set : test_sets<Bits>()) {
     const Descriptors<Bits>& query = set.first;
     const Descriptors<Bits>& train = set.second;
     CAPTURE(query.size());
     CAPTURE(train.size());
     check_knn_equals_naive<Bits>(affine_orb::knn2(query, train), query, train);
-    check_knn_equals_naive<Bits>(affine_orb::detail::knn2_bitsliced<std::uint64_t>(query, train), query, train);
-    check_knn_equals_naive<Bits>(affine_orb::detail::knn2_bitsliced<affine_orb::detail::LaneVector>(query, train),
+    check_knn_equals_naive<Bits>(affine_orb::detail::bitsliced128::knn2_bitsliced<std::uint64_t>(query, train),
                                  query, train);
+    check_knn_equals_naive<Bits>(
+        affine_orb::detail::bitsliced128::knn2_bitsliced<affine_orb::detail::LaneVector128>(query, train), query,
+        train);
+#if AFFINE_ORB_KNN2_LANES256
+    if (affine_orb::detail::cpu_has_avx2()) {
+      check_knn_equals_naive<Bits>(
+          affine_orb::detail::bitsliced256::knn2_bitsliced<affine_orb::detail::LaneVector256>(query, train), query,
+          train);
+    }
+#endif
   }
 }
 

@@ -131,7 +131,10 @@ std::vector<KnnMatch> knn2(const std::vector<std::array<std::uint64_t, Words>>& 
 #if AFFINE_ORB_KNN2_VPOPCNTDQ
   return detail::knn2_vpopcntdq(query, train);
 #else
-  return detail::knn2_bitsliced<detail::LaneVector>(query, train);
+#if AFFINE_ORB_KNN2_LANES256
+  if (detail::cpu_has_avx2()) return detail::bitsliced256::knn2_bitsliced<detail::LaneVector256>(query, train);
+#endif
+  return detail::bitsliced128::knn2_bitsliced<detail::LaneVector128>(query, train);
 #endif
 }
 

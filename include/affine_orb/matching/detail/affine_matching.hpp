@@ -43,16 +43,18 @@ std::vector<Match> match_excluding_duplicates(const Features<Bits>& a, const Fea
     return (p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) <= r2;
   };
   std::vector<Match> matches;
+  std::vector<int> distances;
   for (const KnnMatch& k : forward) {
     if (k.count == 0 || k.best.distance > m.max_distance) continue;
     KnnMatch test = k;
     if (k.count == 2 && near(k.best.train, k.second.train)) {
       test.count = 1;
       test.second = Neighbour{};
-      const auto& q = a.descriptors[static_cast<std::size_t>(k.query)];
+      distances.resize(b.size());
+      hamming_row(a.descriptors[static_cast<std::size_t>(k.query)], b.descriptors.data(), b.size(), distances.data());
       for (std::size_t j = 0; j < b.size(); ++j) {
         if (near(k.best.train, static_cast<int>(j))) continue;
-        const int d = hamming_distance(q, b.descriptors[j]);
+        const int d = distances[j];
         if (d < test.second.distance) {
           test.second = {static_cast<int>(j), d};
           test.count = 2;

@@ -12,9 +12,10 @@
 /// and block. A bit-serial comparison of the counter with the current second-best distance tells
 /// which lanes (usually none) can enter the two best; only those are looked at one by one.
 ///
-/// Where the target has AVX-512 VPOPCNTDQ (AFFINE_ORB_KNN2_VPOPCNTDQ, chosen at compile time) a
-/// plain XOR + VPOPCNTQ search over eight queries per register replaces it. Both give the same
-/// results; the default x86-64 build (SSE2 only) uses the bit-sliced search.
+/// The search runs on 256-bit lanes (AVX2, chosen at run time as the extraction kernels are, see
+/// core/detail/simd.hpp) where the CPU has AVX2, on 128-bit lanes elsewhere. Where the target has
+/// AVX-512 VPOPCNTDQ (AFFINE_ORB_KNN2_VPOPCNTDQ, chosen at compile time) a plain XOR + VPOPCNTQ
+/// search over eight queries per register replaces it. All give the same results.
 
 #include <algorithm>
 #include <array>
@@ -22,6 +23,8 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <new>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -39,6 +42,7 @@
 #endif
 
 #include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/core/detail/simd.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/matching/detail/popcount.hpp"
 
@@ -62,63 +66,46 @@ struct KnnMatch {
   Neighbour second;
 };
 
-/// The bit-lane vector of the k = 2 search, chosen at compile time: a GCC/Clang vector of 64-bit
-/// words as wide as the target's integer SIMD registers (32 bytes with AVX2, 16 bytes otherwise:
-/// SSE2 on every x86-64, NEON on AArch64, and pairs of plain words on targets without SIMD), a plain
-/// 64-bit word with other compilers. Every lane type gives the same results (tests check both).
+/// The bit-lane vectors of the k = 2 search: GCC/Clang vectors of 64-bit words as wide as an
+/// integer SIMD register, 16 bytes (SSE2 on every x86-64, NEON on AArch64, pairs of plain words on
+/// targets without SIMD) and, where the AVX2 kernels are compiled (AFFINE_ORB_KNN2_LANES256), 32
+/// bytes; other compilers use a plain 64-bit word. Every lane type gives the same results (the tests
+/// compare each with a naive search).
 #if defined(__GNUC__)
-#if defined(__AVX2__)
-typedef std::uint64_t LaneVector __attribute__((vector_size(32), may_alias));
+typedef std::uint64_t LaneVector128 __attribute__((vector_size(16), may_alias));
 #else
-typedef std::uint64_t LaneVector __attribute__((vector_size(16), may_alias));
+using LaneVector128 = std::uint64_t;
 #endif
+
+#if AFFINE_ORB_AVX2 && defined(__GNUC__)
+/// 1 when knn2() may use 256-bit lanes: where the AVX2 kernels are compiled, on a CPU that has
+/// AVX2 (cpu_has_avx2(), asked per call).
+#define AFFINE_ORB_KNN2_LANES256 1
+typedef std::uint64_t LaneVector256 __attribute__((vector_size(32), may_alias));
 #else
-using LaneVector = std::uint64_t;
+#define AFFINE_ORB_KNN2_LANES256 0
 #endif
 
 /// 64-bit words in a lane vector V (std::uint64_t or a GCC/Clang vector of them).
 template <class V>
 inline constexpr int kLaneWords = static_cast<int>(sizeof(V) / sizeof(std::uint64_t));
 
-/// Word i of V; lane l of V is bit l % 64 of word l / 64.
+/// Releases what lane_array() allocates.
 template <class V>
-std::uint64_t lane_word(const V& v, int i) noexcept {
-  std::uint64_t w = 0;
-  std::memcpy(&w, reinterpret_cast<const unsigned char*>(&v) + sizeof(w) * static_cast<std::size_t>(i), sizeof(w));
-  return w;
-}
+struct LaneArrayDelete {
+  void operator()(V* p) const noexcept { ::operator delete(p, std::align_val_t{sizeof(V)}); }
+};
+
+/// `n` lane vectors V, uninitialised, aligned to sizeof(V). A std::vector<V> would not do for the
+/// 256-bit lanes: GCC drops a vector typedef's attributes in a template argument and allocates the
+/// vector at the 16-byte alignment of the target outside an AVX2 region, while the AVX2 code loads
+/// it with aligned 32-byte moves.
+template <class V>
+using LaneArray = std::unique_ptr<V[], LaneArrayDelete<V>>;
 
 template <class V>
-void set_lane_word(V& v, int i, std::uint64_t w) noexcept {
-  std::memcpy(reinterpret_cast<unsigned char*>(&v) + sizeof(w) * static_cast<std::size_t>(i), &w, sizeof(w));
-}
-
-/// Every word of the vector set to `w`.
-template <class V>
-V lane_broadcast(std::uint64_t w) noexcept {
-  V v{};
-  for (int i = 0; i < kLaneWords<V>; ++i) set_lane_word(v, i, w);
-  return v;
-}
-
-template <class V>
-bool lane_any(const V& v) noexcept {
-  std::uint64_t any = 0;
-  for (int i = 0; i < kLaneWords<V>; ++i) any |= lane_word(v, i);
-  return any != 0;
-}
-
-/// Index of the lowest set lane of a non-zero vector.
-template <class V>
-int first_lane(const V& v) noexcept {
-  int i = 0;
-  while (lane_word(v, i) == 0) ++i;
-  return 64 * i + lowest_set_bit(lane_word(v, i));
-}
-
-template <class V>
-void clear_lane(V& v, int lane) noexcept {
-  set_lane_word(v, lane / 64, lane_word(v, lane / 64) & ~(std::uint64_t{1} << (lane % 64)));
+LaneArray<V> lane_array(std::size_t n) {
+  return LaneArray<V>(static_cast<V*>(::operator new(n * sizeof(V), std::align_val_t{sizeof(V)})));
 }
 
 /// Transposes a 64x64 bit matrix in place: afterwards bit c of m[r] is what bit r of m[c] was.
@@ -137,30 +124,6 @@ inline void transpose_bits64(std::array<std::uint64_t, 64>& m) noexcept {
   }
 }
 
-/// The descriptors as bit planes, kLaneWords<V>·64 descriptors per block: plane b of block k,
-/// planes[k·Bits + b], holds in lane l bit b of descriptor k·lanes + l. Lanes past the last
-/// descriptor are zero.
-template <int Bits, class V>
-std::vector<V> bit_planes(const std::vector<BinaryDescriptor<Bits>>& descriptors) {
-  constexpr std::size_t kLanes = 64 * kLaneWords<V>;
-  const std::size_t n = descriptors.size();
-  const std::size_t blocks = (n + kLanes - 1) / kLanes;
-  std::vector<V> planes(blocks * Bits, lane_broadcast<V>(0));
-  std::array<std::uint64_t, 64> square{};
-  for (std::size_t block = 0; block < blocks; ++block) {
-    for (int word = 0; word < kLaneWords<V>; ++word) {
-      const std::size_t first = block * kLanes + 64 * static_cast<std::size_t>(word);
-      if (first >= n) break;
-      for (int w = 0; w < Bits / 64; ++w) {
-        for (std::size_t r = 0; r < 64; ++r) square[r] = first + r < n ? descriptors[first + r][w] : 0;
-        transpose_bits64(square);
-        for (int b = 0; b < 64; ++b) set_lane_word(planes[block * Bits + 64 * w + b], word, square[b]);
-      }
-    }
-  }
-  return planes;
-}
-
 /// Number of binary digits of x >= 0.
 constexpr int bit_width(int x) noexcept { return x == 0 ? 0 : 1 + bit_width(x / 2); }
 
@@ -168,74 +131,6 @@ constexpr int bit_width(int x) noexcept { return x == 0 ? 0 : 1 + bit_width(x / 
 /// then enough for the number of 64-bit words (the counter reaches Bits + 1 < 2^planes).
 template <int Bits>
 inline constexpr int kCountPlanes = 6 + bit_width(Bits / 64);
-
-/// Full adder per lane: adds planes a and b into `sum` (weight 1) and returns the carry plane
-/// (weight 2).
-template <class V>
-V carry_save_add(V& sum, V a, V b) noexcept {
-  const V u = sum ^ a;
-  const V carry = (sum & a) | (u & b);
-  sum = u ^ b;
-  return carry;
-}
-
-/// Adds the 2^K planes t[i] ^ q[i] lane-wise to the binary counter acc[0..K-1] (acc[k] holds bit k
-/// of each lane's count) and returns the carry of weight 2^K: a carry-save adder tree, one full
-/// adder per plane (the Harley-Seal scheme of W. Muła, N. Kurz, D. Lemire, "Faster population
-/// counts using AVX2 instructions", The Computer Journal 61(1), 2018, applied per lane).
-template <int K, class V>
-V add_planes(const V* t, const V* q, V* acc) noexcept {
-  if constexpr (K == 1) {
-    return carry_save_add(acc[0], t[0] ^ q[0], t[1] ^ q[1]);
-  } else {
-    const V low = add_planes<K - 1>(t, q, acc);
-    const V high = add_planes<K - 1>(t + (1 << (K - 1)), q + (1 << (K - 1)), acc);
-    return carry_save_add(acc[K - 1], low, high);
-  }
-}
-
-/// Lane-wise Hamming distances of one query (its bits as all-ones/all-zero planes `query_planes`)
-/// to one block of train planes, as a binary counter, least significant plane first.
-template <int Bits, class V>
-std::array<V, kCountPlanes<Bits>> block_distances(const V* train_planes, const V* query_planes) noexcept {
-  std::array<V, kCountPlanes<Bits>> count{};
-  for (int w = 0; w < Bits / 64; ++w) {
-    V carry = add_planes<6>(train_planes + 64 * w, query_planes + 64 * w, count.data());
-    for (int k = 6; k < kCountPlanes<Bits>; ++k) {
-      const V sum = count[k] ^ carry;
-      carry = count[k] & carry;
-      count[k] = sum;
-    }
-  }
-  return count;
-}
-
-/// Lanes whose counter is < threshold (0 <= threshold < 2^P): a bit-serial comparison from the
-/// least significant plane up.
-template <class V, std::size_t P>
-V lanes_below(const std::array<V, P>& count, int threshold) noexcept {
-  V at_least = lane_broadcast<V>(~std::uint64_t{0});  // counter >= threshold on the bits seen so far
-  for (std::size_t k = 0; k < P; ++k) {
-    at_least = ((threshold >> k) & 1) != 0 ? (count[k] & at_least) : (count[k] | at_least);
-  }
-  return ~at_least;
-}
-
-/// The smallest counter among the lanes of the non-empty `set`, found bit-serially from the most
-/// significant plane down; `set` is narrowed to the lanes that hold it.
-template <class V, std::size_t P>
-int narrow_to_minimum(const std::array<V, P>& count, V& set) noexcept {
-  int minimum = 0;
-  for (std::size_t k = P; k-- > 0;) {
-    const V zero_here = set & ~count[k];
-    if (lane_any(zero_here)) {
-      set = zero_here;
-    } else {
-      minimum |= 1 << k;
-    }
-  }
-  return minimum;
-}
 
 /// (distance, train index) packed so that comparing keys compares distance first, then index.
 inline std::uint64_t neighbour_key(int distance, std::size_t train) noexcept {
@@ -275,56 +170,18 @@ inline void set_neighbours(KnnMatch& m, std::uint64_t best, std::uint64_t second
   if (second != kNoKey) m.second = {static_cast<int>(second & 0xffffffffU), static_cast<int>(second >> 32)};
 }
 
-/// knn2() with an explicit lane vector type V (std::uint64_t or a GCC/Clang vector of them).
-template <class V, std::size_t Words>
-std::vector<KnnMatch> knn2_bitsliced(const std::vector<std::array<std::uint64_t, Words>>& query,
-                                     const std::vector<std::array<std::uint64_t, Words>>& train) {
-  static_assert(Words > 0, "a descriptor has at least one 64-bit word");
-  constexpr int Bits = static_cast<int>(64 * Words);
-  constexpr std::size_t kLanes = 64 * kLaneWords<V>;
-  const std::size_t n = train.size();
-  std::vector<KnnMatch> result = knn2_frame(query.size(), n);
-  if (query.empty() || n == 0) return result;
+// The bit-sliced search over each lane type: 128-bit lanes here, 256-bit lanes compiled for AVX2.
+namespace bitsliced128 {
+#include "affine_orb/matching/detail/knn2_lanes.inc"
+}  // namespace bitsliced128
 
-  const std::vector<V> planes = bit_planes<Bits, V>(train);
-  const std::size_t blocks = planes.size() / Bits;
-  V last_block_lanes = lane_broadcast<V>(0);  // the lanes of the last block that hold a descriptor
-  for (std::size_t lane = 0; lane < n - (blocks - 1) * kLanes; ++lane) {
-    const int word = static_cast<int>(lane / 64);
-    set_lane_word(last_block_lanes, word, lane_word(last_block_lanes, word) | (std::uint64_t{1} << (lane % 64)));
-  }
-
-  std::vector<V> query_planes(Bits);
-  for (std::size_t i = 0; i < query.size(); ++i) {
-    for (int b = 0; b < Bits; ++b) {
-      query_planes[b] = lane_broadcast<V>(0 - ((query[i][b / 64] >> (b % 64)) & 1));
-    }
-    std::uint64_t best = kNoKey;
-    std::uint64_t second = kNoKey;
-    for (std::size_t block = 0; block < blocks; ++block) {
-      const auto count = block_distances<Bits, V>(planes.data() + block * Bits, query_planes.data());
-      const int threshold = second == kNoKey ? Bits + 1 : static_cast<int>(second >> 32);
-      V candidates = lanes_below(count, threshold);
-      if (block + 1 == blocks) candidates = candidates & last_block_lanes;
-      // Only the block's two smallest (distance, index) can enter the two best.
-      for (int found = 0; found < 2 && lane_any(candidates); ++found) {
-        V nearest = candidates;
-        const int distance = narrow_to_minimum(count, nearest);
-        const int lane = first_lane(nearest);
-        keep_two_smallest(neighbour_key(distance, block * kLanes + lane), best, second);
-        clear_lane(nearest, lane);
-        if (lane_any(nearest)) {  // a tie: the next lane at the same distance is the block's second
-          keep_two_smallest(neighbour_key(distance, block * kLanes + first_lane(nearest)), best, second);
-          break;
-        }
-        clear_lane(candidates, lane);
-      }
-    }
-    set_neighbours(result[i], best, second);
-  }
-  return result;
-}
-
+#if AFFINE_ORB_KNN2_LANES256
+AFFINE_ORB_TARGET_AVX2_BEGIN
+namespace bitsliced256 {
+#include "affine_orb/matching/detail/knn2_lanes.inc"
+}  // namespace bitsliced256
+AFFINE_ORB_TARGET_AVX2_END
+#endif
 #if AFFINE_ORB_KNN2_VPOPCNTDQ
 /// knn2() with AVX-512 VPOPCNTDQ: eight queries per 512-bit register, one per 64-bit lane, and two
 /// such groups at a time. Each train descriptor is broadcast word by word, XOR-ed with the queries

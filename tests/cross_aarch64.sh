@@ -10,7 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=${AFFINE_ORB_BUILD_ROOT:-build}
 jobs=$(nproc)
-tests="test_fast test_pyramid test_rbrief test_extractor test_matcher test_brisk"
+tests="test_fast test_pyramid test_rbrief test_extractor test_matcher test_brisk test_affine_views"
 
 as_root=()
 if [[ $(id -u) -ne 0 ]]; then as_root=(sudo); fi

@@ -1054,7 +1054,7 @@ TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' byt
 
 TEST_CASE("every canvas sampler and resampler path gives the scalar references' bytes on any column range") {
   MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
-  // The paths of this build and CPU (AVX2 eight at a time, SSE2 four at a time, clamped or not) against the
+  // The paths of this build and CPU (AVX2 eight at a time, SSE2 or NEON four at a time, clamped or not) against the
   // scalar references, on column ranges of every remainder modulo 8 and on images taller and
   // wider than the canvas.
   const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(17, 9, 283, 211));  // a ROI
@@ -1088,6 +1088,11 @@ TEST_CASE("every canvas sampler and resampler path gives the scalar references' 
       affine_orb::detail::sample_canvas_row_sse2(image, sampler, y, c0, c1, b.data());
       mismatches += a != b;
 #endif
+#if AFFINE_ORB_NEON
+      std::fill(b.begin(), b.end(), 0);
+      affine_orb::detail::sample_canvas_row_neon(image, sampler, y, c0, c1, b.data());
+      mismatches += a != b;
+#endif
 #if AFFINE_ORB_AVX2
       if (affine_orb::detail::cpu_has_avx2()) {
         std::fill(b.begin(), b.end(), 0);
@@ -1106,6 +1111,11 @@ TEST_CASE("every canvas sampler and resampler path gives the scalar references' 
 #if defined(__SSE2__)
       std::fill(out_b.begin(), out_b.end(), 0);
       affine_orb::detail::resample_row_sse2(resampler, row.data(), first, x0, x1, out_b.data());
+      mismatches += out_a != out_b;
+#endif
+#if AFFINE_ORB_NEON
+      std::fill(out_b.begin(), out_b.end(), 0);
+      affine_orb::detail::resample_row_neon(resampler, row.data(), first, x0, x1, out_b.data());
       mismatches += out_a != out_b;
 #endif
 #if AFFINE_ORB_AVX2

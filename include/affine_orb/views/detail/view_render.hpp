@@ -343,8 +343,61 @@ AFFINE_ORB_TARGET_AVX2_END
 #endif
 #endif
 
+#if AFFINE_ORB_NEON
+/// sample_canvas_row_scalar() four pixels at a time on NEON, identical bytes: the file comment's
+/// integers in 32-bit lanes (weights and sums below 2^23), the positions clamped as there.
+inline void sample_canvas_row_neon(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
+                                   std::uint8_t* out) {
+  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
+  const std::uint8_t* base = image.ptr<std::uint8_t>(0);
+  const std::int32_t x_row = s.x_row(y);
+  const std::int32_t y_row = s.y_row(y);
+  const int end = c0 + std::max(0, c1 - c0) / 4 * 4;
+  const int32x4_t lane = {0, 1, 2, 3};
+  int32x4_t xs = vmlaq_n_s32(vdupq_n_s32(x_row + c0 * s.x_step), lane, s.x_step);
+  int32x4_t ys = vmlaq_n_s32(vdupq_n_s32(y_row + c0 * s.y_step), lane, s.y_step);
+  const int32x4_t zero = vdupq_n_s32(0);
+  const int32x4_t x_max = vdupq_n_s32(s.x_max);
+  const int32x4_t y_max = vdupq_n_s32(s.y_max);
+  const uint32x4_t low16 = vdupq_n_u32(0xFFFF);
+  const uint32x4_t half = vdupq_n_u32(1u << (15 - kFractionBits));
+  const uint32x4_t one = vdupq_n_u32(1u << kFractionBits);
+  auto fraction = [&](int32x4_t v) {
+    return vshrq_n_u32(vaddq_u32(vandq_u32(vreinterpretq_u32_s32(v), low16), half), 16 - kFractionBits);
+  };
+  for (int c = c0; c < end; c += 4) {
+    const int32x4_t x = vminq_s32(vmaxq_s32(xs, zero), x_max);
+    const int32x4_t yv = vminq_s32(vmaxq_s32(ys, zero), y_max);
+    xs = vaddq_s32(xs, vdupq_n_s32(4 * s.x_step));
+    ys = vaddq_s32(ys, vdupq_n_s32(4 * s.y_step));
+    const uint32x4_t fx = fraction(x);
+    const uint32x4_t fy = fraction(yv);
+    const uint32x4_t gx = vsubq_u32(one, fx);
+    const uint32x4_t gy = vsubq_u32(one, fy);
+    std::int32_t offset[4];
+    vst1q_s32(offset, vmlaq_n_s32(vshrq_n_s32(x, 16), vshrq_n_s32(yv, 16), static_cast<std::int32_t>(step)));
+    std::uint32_t p00[4], p01[4], p10[4], p11[4];
+    for (int i = 0; i < 4; ++i) {
+      const std::uint8_t* p = base + offset[i];
+      p00[i] = p[0];
+      p01[i] = p[1];
+      p10[i] = p[step];
+      p11[i] = p[step + 1];
+    }
+    uint32x4_t sum = vmulq_u32(vld1q_u32(p00), vmulq_u32(gx, gy));
+    sum = vmlaq_u32(sum, vld1q_u32(p01), vmulq_u32(fx, gy));
+    sum = vmlaq_u32(sum, vld1q_u32(p10), vmulq_u32(gx, fy));
+    sum = vmlaq_u32(sum, vld1q_u32(p11), vmulq_u32(fx, fy));
+    const uint16x4_t v = vmovn_u32(vshrq_n_u32(vaddq_u32(sum, vdupq_n_u32(1u << 13)), 14));
+    const std::uint32_t bytes = vget_lane_u32(vreinterpret_u32_u8(vmovn_u16(vcombine_u16(v, v))), 0);
+    std::memcpy(out + (c - c0), &bytes, sizeof(bytes));
+  }
+  sample_canvas_row_scalar(image, s, y, std::max(c0, end), c1, out + (std::max(c0, end) - c0));
+}
+#endif
+
 /// sample_canvas_row_avx2() where the CPU has AVX2, else sample_canvas_row_sse2() where the target
-/// has SSE2, else the scalar reference.
+/// has SSE2, sample_canvas_row_neon() on AArch64, else the scalar reference.
 inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1, std::uint8_t* out) {
 #if defined(__SSE2__)
 #if AFFINE_ORB_AVX2
@@ -354,6 +407,8 @@ inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int 
   }
 #endif
   sample_canvas_row_sse2(image, s, y, c0, c1, out);
+#elif AFFINE_ORB_NEON
+  sample_canvas_row_neon(image, s, y, c0, c1, out);
 #else
   sample_canvas_row_scalar(image, s, y, c0, c1, out);
 #endif
@@ -606,8 +661,28 @@ AFFINE_ORB_TARGET_AVX2_END
 #endif
 #endif
 
+#if AFFINE_ORB_NEON
+/// resample_row_scalar() on NEON, identical bytes: each column's dot product over the whole
+/// `stride` (the padding weights are zero) by widening multiply-accumulates, eight taps a step.
+inline void resample_row_neon(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
+                              std::uint8_t* out) {
+  const std::size_t stride = static_cast<std::size_t>(r.stride);
+  for (int x = x0; x < x1; ++x) {
+    const std::uint8_t* p = row + (r.first[static_cast<std::size_t>(x)] - row_first);
+    const std::int16_t* w = r.weights.data() + static_cast<std::size_t>(x) * stride;
+    int32x4_t sum = vdupq_n_s32(0);
+    for (std::size_t j = 0; j < stride; j += 8) {
+      const int16x8_t v = vreinterpretq_s16_u16(vmovl_u8(vld1_u8(p + j)));
+      const int16x8_t k = vld1q_s16(w + j);
+      sum = vmlal_high_s16(vmlal_s16(sum, vget_low_s16(v), vget_low_s16(k)), v, k);
+    }
+    out[x] = static_cast<std::uint8_t>((vaddvq_s32(sum) + (1 << (kWeightBits - 1))) >> kWeightBits);
+  }
+}
+#endif
+
 /// resample_row_avx2() where the CPU has AVX2, else resample_row_sse2() where the target has SSE2,
-/// else the scalar reference.
+/// resample_row_neon() on AArch64, else the scalar reference.
 inline void resample_row(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                          std::uint8_t* out) {
 #if defined(__SSE2__)
@@ -618,6 +693,8 @@ inline void resample_row(const ViewResampler& r, const std::uint8_t* row, int ro
   }
 #endif
   resample_row_sse2(r, row, row_first, x0, x1, out);
+#elif AFFINE_ORB_NEON
+  resample_row_neon(r, row, row_first, x0, x1, out);
 #else
   resample_row_scalar(r, row, row_first, x0, x1, out);
 #endif

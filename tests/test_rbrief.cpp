@@ -13,6 +13,7 @@
 #include <algorithm>
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
+#include "affine_orb/descriptors/detail/rotated_offsets.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/detection/orientation.hpp"
 #include "affine_orb/extraction/extractor.hpp"
@@ -179,6 +180,52 @@ TEST_CASE("rBRIEF describe() matches the definition at arbitrary angles") {
   CHECK(mismatches == 0);
   // Corner reads stay inside: the farthest rotated test point plus rounding is the border.
   CHECK(rbrief.border() == 18);
+}
+
+TEST_CASE("rBRIEF rotated test offsets: the SSE2 and AVX2 paths give the scalar reference's integers") {
+  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  namespace d = affine_orb::detail;
+  std::vector<float> x, y;
+  for (const auto& pair : d::kOrbTestPairs) {
+    x.insert(x.end(), {static_cast<float>(pair.xa), static_cast<float>(pair.xb)});
+    y.insert(y.end(), {static_cast<float>(pair.ya), static_cast<float>(pair.yb)});
+  }
+  // Angles on a fine grid, the quarter and eighth turns (products at exact halves: rounding ties)
+  // and random ones, each at three row steps.
+  std::vector<float> angles;
+  for (int i = -1800; i <= 1800; ++i) angles.push_back(static_cast<float>(i * CV_PI / 1800.0));
+  for (int i = -8; i <= 8; ++i) angles.push_back(static_cast<float>(i * CV_PI / 4.0));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> any(-4.0f, 4.0f);
+  for (int i = 0; i < 500; ++i) angles.push_back(any(rng));
+  int mismatches = 0;
+  int ties = 0;
+  std::vector<std::int32_t> expected(x.size()), out(x.size());
+  for (const float angle : angles) {
+    const float a = std::cos(angle);
+    const float b = std::sin(angle);
+    for (const std::int32_t step : {41, 704, 4096}) {
+      d::rotated_offsets_scalar(x.data(), y.data(), x.size(), a, b, step, expected.data());
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const float u = x[i] * a - y[i] * b;
+        ties += u - std::floor(u) == 0.5f;
+      }
+      auto check = [&](auto path) {
+        std::fill(out.begin(), out.end(), -1);
+        path(x.data(), y.data(), x.size(), a, b, step, out.data());
+        mismatches += out != expected;
+      };
+      check(d::rotated_offsets);
+#if defined(__SSE2__)
+      check(d::rotated_offsets_sse2);
+#endif
+#if AFFINE_ORB_AVX2
+      if (d::cpu_has_avx2()) check(d::rotated_offsets_avx2);
+#endif
+    }
+  }
+  CHECK(ties > 0);
+  CHECK(mismatches == 0);
 }
 
 TEST_CASE("rBRIEF options are checked") {

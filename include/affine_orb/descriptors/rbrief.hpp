@@ -29,6 +29,7 @@
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "affine_orb/descriptors/detail/moment_lanes.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
+#include "affine_orb/descriptors/detail/rotated_offsets.hpp"
 #include "affine_orb/detection/orientation.hpp"
 
 namespace affine_orb {
@@ -166,7 +167,9 @@ class Rbrief {
     const std::uint8_t* center = data.smoothed.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x);
     // Byte offsets of the rotated test points: offset = round(x sin + y cos)·step + round(x cos − y sin).
     alignas(16) std::array<std::int32_t, 2 * kBits> offset;
-    rotated_offsets(a, b, static_cast<std::int32_t>(step), offset.data());
+    const PatternPoints& points = pattern_points();
+    detail::rotated_offsets(points.x.data(), points.y.data(), offset.size(), a, b, static_cast<std::int32_t>(step),
+                            offset.data());
     BinaryDescriptor<kBits> descriptor{};
 #if AFFINE_ORB_SIMD128
     // The two samples of every test gathered into byte arrays, then compared 16 tests at a time.
@@ -226,34 +229,6 @@ class Rbrief {
       return p;
     }();
     return points;
-  }
-
-  /// Rounded rotated positions of all 512 test points as byte offsets, rounding half to even
-  /// (cvRound's rule, which cvtps2dq applies under the default rounding mode).
-  static void rotated_offsets(float a, float b, std::int32_t step, std::int32_t* out) {
-    const PatternPoints& p = pattern_points();
-#if defined(__SSE2__)
-    const __m128 va = _mm_set1_ps(a);
-    const __m128 vb = _mm_set1_ps(b);
-    const __m128i vstep = _mm_set1_epi32(step);
-    for (std::size_t i = 0; i < 2 * kBits; i += 4) {
-      const __m128 x = _mm_load_ps(p.x.data() + i);
-      const __m128 y = _mm_load_ps(p.y.data() + i);
-      const __m128i rx = _mm_cvtps_epi32(_mm_sub_ps(_mm_mul_ps(x, va), _mm_mul_ps(y, vb)));
-      const __m128i ry = _mm_cvtps_epi32(_mm_add_ps(_mm_mul_ps(x, vb), _mm_mul_ps(y, va)));
-      // ry·step with SSE2 only: the low 32 bits of the unsigned 32x32 products are the signed
-      // products modulo 2^32, exact since |ry·step| < 2^31.
-      const __m128i lo = _mm_mul_epu32(ry, vstep);
-      const __m128i hi = _mm_mul_epu32(_mm_srli_si128(ry, 4), _mm_srli_si128(vstep, 4));
-      const __m128i product = _mm_unpacklo_epi32(_mm_shuffle_epi32(lo, _MM_SHUFFLE(0, 0, 2, 0)),
-                                                 _mm_shuffle_epi32(hi, _MM_SHUFFLE(0, 0, 2, 0)));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), _mm_add_epi32(product, rx));
-    }
-#else
-    for (std::size_t i = 0; i < 2 * kBits; ++i) {
-      out[i] = cvRound(p.x[i] * b + p.y[i] * a) * step + cvRound(p.x[i] * a - p.y[i] * b);
-    }
-#endif
   }
 
 #if AFFINE_ORB_SIMD128

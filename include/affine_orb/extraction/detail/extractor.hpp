@@ -223,8 +223,8 @@ inline std::optional<cv::Point2f> refine_to_corner(const Pyramid& original, cv::
 /// ExtractorOptions::subpixel: the offset, in level pixels, of the vertex of the parabola through
 /// the FAST arc strengths (pixel_strength(), the score + 1 without the threshold) of the pixel at
 /// `p` of `level` and its two neighbours, along x and along y separately, each clamped to
-/// [−0.5, 0.5]; 0 along an axis where the three are equal or a neighbour's circle leaves the
-/// level.
+/// [−0.5, 0.5]; 0 along an axis where the parabola has no maximum (for a detected corner, where
+/// the three are equal) or a neighbour's circle leaves the level.
 inline cv::Point2f subpixel_offset(const cv::Mat& level, cv::Point p) {
   const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(level.step[0]);
   const std::array<std::ptrdiff_t, 16> offset = circle_offsets(step);

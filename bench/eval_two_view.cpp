@@ -1,5 +1,6 @@
 // eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b,...]
 //               [--methods SUBSTRING] [--asift-sequences a,b,...|all] [--peer-cache FILE] [--sweep]
+//               [--placement]
 //
 // Two-view matching judged where users feel it: on every Oxford pair 1->2 ... 1->6, opencv-doc's
 // graf 1->3 (subset "oxford") and every pair of ../shared/data/pairs/ (hpatches, homogr, evd), per
@@ -11,9 +12,9 @@
 // method's own select_model(), single thread, peers in the same run, pair after pair. The error of
 // the method's own homography is reported beside the judge's.
 //
-// Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
+// Methods: ours plain 2000 (rBRIEF, strongest corners; also with ExtractorOptions::subpixel), the affine default (1000 image + 1000 view
 // keypoints, one-shot views), the two-view matcher with views on demand (TwoViewMatcher's
-// defaults; with stages to tilt 4√2; with the precision test max_half_disagreement at 5 and 10 px;
+// defaults; with sub-pixel keypoints; with stages to tilt 4√2; with the precision test max_half_disagreement at 5 and 10 px;
 // without the guided refinement, alone and with the precision test at 5 px),
 // cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
 // 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
@@ -22,13 +23,17 @@
 // own homographies come from the same estimator. --peer-cache FILE reads the OpenCV peers' rows
 // from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
 // --sweep adds matcher variants (stages, min_inliers, min_inlier_ratio), the measurement behind
-// TwoViewOptions' defaults.
+// TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
+// demand, with and without sub-pixel positions, per octave of the keypoint in image 1 and in image
+// 2, the residuals |H·x1 − x2| (ground truth H, pixels of image 2, level-0 coordinates) of the
+// matches correct within 3 px over all pairs run: count, median and 90th percentile.
 //
 // Writes DIR/eval_two_view.md (per subset and method, pairs solved and seconds, and the union of
 // all methods; the summary over all pairs; then every pair) and DIR/eval_two_view.csv, and prints
 // the Markdown.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -62,6 +67,7 @@ struct Outcome {
   int stage = -1;         ///< matcher only: the stage it stopped at
   bool verified = false;  ///< matcher only
   std::string stages;     ///< matcher only: per stage run, matches / inliers and the model chosen
+  std::vector<std::pair<int, int>> octaves;  ///< ours only: per match, the octaves of its two keypoints
 };
 
 struct Method {
@@ -107,8 +113,10 @@ Method ours(const std::string& name, const affine_orb::ExtractorOptions& options
             const auto f1 = extractor->extract(a);
             const auto f2 = extractor->extract(b);
             for (const affine_orb::Match& m : affine_orb::match_features(f1, f2)) {
-              o.matches.emplace_back(f1.keypoints[static_cast<std::size_t>(m.query)].pt,
-                                     f2.keypoints[static_cast<std::size_t>(m.train)].pt);
+              const cv::KeyPoint& k1 = f1.keypoints[static_cast<std::size_t>(m.query)];
+              const cv::KeyPoint& k2 = f2.keypoints[static_cast<std::size_t>(m.train)];
+              o.matches.emplace_back(k1.pt, k2.pt);
+              o.octaves.emplace_back(k1.octave, k2.octave);
             }
             verify(o, model);
             o.ms = since(start);
@@ -128,8 +136,10 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
             const auto r = matcher->match(a, b);
             o.ms = since(start);
             for (const affine_orb::Match& m : r.matches) {
-              o.matches.emplace_back(r.features1.keypoints[static_cast<std::size_t>(m.query)].pt,
-                                     r.features2.keypoints[static_cast<std::size_t>(m.train)].pt);
+              const cv::KeyPoint& k1 = r.features1.keypoints[static_cast<std::size_t>(m.query)];
+              const cv::KeyPoint& k2 = r.features2.keypoints[static_cast<std::size_t>(m.train)];
+              o.matches.emplace_back(k1.pt, k2.pt);
+              o.octaves.emplace_back(k1.octave, k2.octave);
             }
             o.homography_found = r.model.homography_found;
             if (r.model.homography_found) o.homography = to_matx(r.model.homography);
@@ -250,6 +260,43 @@ std::map<std::string, Row> read_cache(const std::string& path) {
   return rows;
 }
 
+/// --placement: per octave of the image-1 keypoint and of the image-2 keypoint, the residuals
+/// |H·x1 − x2| (pixels of image 2) of the matches of `method` within 3 px of the ground truth.
+void placement_table(const std::string& method, const std::vector<Row>& rows,
+                     const std::vector<affine_orb::bench::ViewpointPair>& pairs, std::ostringstream& md) {
+  if (std::none_of(rows.begin(), rows.end(), [&](const Row& r) { return r.method == method; })) return;
+  std::map<int, std::vector<double>> by1, by2;
+  for (const Row& r : rows) {
+    if (r.method != method) continue;
+    const auto pair = std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.name() == r.pair; });
+    for (std::size_t i = 0; i < r.outcome.matches.size(); ++i) {
+      const auto& [x1, x2] = r.outcome.matches[i];
+      const cv::Point2d y = affine_orb::bench::map_point(pair->h, x1);
+      const double residual = std::hypot(y.x - x2.x, y.y - x2.y);
+      if (residual >= 3.0) continue;
+      by1[r.outcome.octaves[i].first].push_back(residual);
+      by2[r.outcome.octaves[i].second].push_back(residual);
+    }
+  }
+  const auto stats = [](std::vector<double> v) {
+    if (v.empty()) return std::string(" 0 | | |");
+    std::sort(v.begin(), v.end());
+    const auto at = [&](double q) { return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)]; };
+    char cell[96];
+    std::snprintf(cell, sizeof(cell), " %zu | %.2f | %.2f |", v.size(), at(0.5), at(0.9));
+    return std::string(cell);
+  };
+  std::vector<double> all;
+  for (const auto& [octave, v] : by1) all.insert(all.end(), v.begin(), v.end());
+  int last = 0;
+  for (const auto& [octave, v] : by1) last = std::max(last, octave);
+  for (const auto& [octave, v] : by2) last = std::max(last, octave);
+  for (int octave = 0; octave <= last; ++octave) {
+    md << "| " << method << " | " << octave << " |" << stats(by1[octave]) << stats(by2[octave]) << "\n";
+  }
+  md << "| " << method << " | all |" << stats(all) << stats(all) << "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -260,11 +307,14 @@ int main(int argc, char** argv) {
   std::string asift_only = ",graf,opencv-doc graf,";
   std::string cache_path;
   bool sweep = false;
+  bool placement = false;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     const bool has_value = i + 1 < argc;
     if (flag == "--sweep") {
       sweep = true;
+    } else if (flag == "--placement") {
+      placement = true;
     } else if (flag == "--out" && has_value) {
       out_dir = argv[++i];
     } else if (flag == "--sequences" && has_value) {
@@ -281,7 +331,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b] "
-                   "[--methods SUBSTRING] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep]\n");
+                   "[--methods SUBSTRING] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement]\n");
       return 2;
     }
   }
@@ -291,6 +341,13 @@ int main(int argc, char** argv) {
 
   affine_orb::ExtractorOptions plain = affine_orb::TwoViewOptions::default_extractor();
   plain.views.max_tilt = 1.0;
+  // Sub-pixel keypoint positions (ExtractorOptions::subpixel).
+  const auto subpixel = [](affine_orb::ExtractorOptions o) {
+    o.subpixel = true;
+    return o;
+  };
+  affine_orb::TwoViewOptions subpixel_views = defaults;
+  subpixel_views.extractor.subpixel = true;
   affine_orb::ExtractorOptions affine;
   affine.spreading = affine_orb::Spreading::kStrongest;
   affine_orb::TwoViewOptions many = defaults;
@@ -318,8 +375,10 @@ int main(int argc, char** argv) {
   };
   std::vector<Method> methods = {
       ours("ours plain 2000", plain, model),
+      ours("ours plain 2000, sub-pixel", subpixel(plain), model),
       ours("ours affine default 1000 + 1000", affine, model),
       two_view("ours views on demand", defaults),
+      two_view("ours views on demand, sub-pixel", subpixel_views),
       two_view("ours views on demand, stages to 5.66", extreme),
       two_view("ours views on demand, half disagreement 5 px", precise(defaults, 5.0)),
       two_view("ours views on demand, half disagreement 10 px", precise(defaults, 10.0)),
@@ -495,6 +554,15 @@ int main(int argc, char** argv) {
                   ms_plain_easy > 0 ? (std::to_string(ms_easy / ms_plain_easy).substr(0, 4) + "x").c_str() : "",
                   m.matcher ? std::to_string(wrong).c_str() : "", stage_text.c_str());
     md << line;
+  }
+  if (placement) {
+    md << "\n| method | octave | image-1 octave: correct matches | median px | 90th percentile px | "
+          "image-2 octave: correct matches | median px | 90th percentile px |\n"
+       << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const char* method : {"ours plain 2000", "ours plain 2000, sub-pixel", "ours views on demand",
+                               "ours views on demand, sub-pixel"}) {
+      placement_table(method, rows, pairs, md);
+    }
   }
   md << "\n| pair | method | kp1 | kp2 | matches | distinct correct | corner error px (judge / own) | solved | stage | "
         "ms |\n"

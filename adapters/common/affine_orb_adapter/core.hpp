@@ -255,6 +255,7 @@ class AdapterCore {
     options.detector.initial_threshold = ini_th_fast;
     options.detector.min_threshold = min_th_fast;
     options.detector.score = ScoreType::kFast;  // ORB-SLAM ranks by the FAST score
+    options.subpixel = false;                    // ORB-SLAM's keypoints lie on level pixels
     options.view_budget = ViewBudget::kAdditive;
     options.duplicates =
         affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;

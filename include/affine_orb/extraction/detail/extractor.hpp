@@ -4,6 +4,7 @@
 /// processes views in and the steps of its walk that need no Extractor state.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -219,10 +220,38 @@ inline std::optional<cv::Point2f> refine_to_corner(const Pyramid& original, cv::
   return refined;
 }
 
+/// ExtractorOptions::subpixel: the offset, in level pixels, of the vertex of the parabola through
+/// the FAST arc strengths (pixel_strength(), the score + 1 without the threshold) of the pixel at
+/// `p` of `level` and its two neighbours, along x and along y separately, each clamped to
+/// [−0.5, 0.5]; 0 along an axis where the parabola has no maximum (for a detected corner, where
+/// the three are equal) or a neighbour's circle leaves the level.
+inline cv::Point2f subpixel_offset(const cv::Mat& level, cv::Point p) {
+  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(level.step[0]);
+  const std::array<std::ptrdiff_t, 16> offset = circle_offsets(step);
+  const std::uint8_t* centre = level.ptr<std::uint8_t>(p.y) + p.x;
+  const int strength = pixel_strength(centre, offset);
+  // The vertex of the parabola through (−1, before), (0, strength), (1, after).
+  const auto vertex = [strength](int before, int after) {
+    const int curvature = before - 2 * strength + after;
+    if (curvature >= 0) return 0.0f;
+    return std::clamp(0.5f * static_cast<float>(before - after) / static_cast<float>(curvature), -0.5f, 0.5f);
+  };
+  const int reach = kFastRadius + 1;
+  cv::Point2f shift(0.0f, 0.0f);
+  if (p.x >= reach && p.x < level.cols - reach) {
+    shift.x = vertex(pixel_strength(centre - 1, offset), pixel_strength(centre + 1, offset));
+  }
+  if (p.y >= reach && p.y < level.rows - reach) {
+    shift.y = vertex(pixel_strength(centre - step, offset), pixel_strength(centre + step, offset));
+  }
+  return shift;
+}
+
 /// Step 4 of an Extractor for the chosen candidates of level l of `view` (in work.levels[l]):
-/// orientation and descriptor in the view, keypoints mapped back with octave `octave` (and, for a
-/// tilted view, refined on the original image's pyramid `original`: RefineOptions), appended to
-/// the level's record `level`.
+/// orientation and descriptor in the view at the integer level position, keypoints mapped back
+/// with octave `octave` (from the sub-pixel position with ExtractorOptions::subpixel; for a tilted
+/// view, refined on the original image's pyramid `original`: RefineOptions), appended to the
+/// level's record `level`.
 template <class Descriptor, int Bits>
 void describe_level(const Descriptor& descriptor, const AffineView& view, const Pyramid& pyramid, int l, int octave,
                     const ExtractorOptions& options, const Pyramid& original, const cv::Mat& mask,
@@ -246,6 +275,11 @@ void describe_level(const Descriptor& descriptor, const AffineView& view, const 
     const double dy = back(1, 0) * std::cos(angle) + back(1, 1) * std::sin(angle);
     const float original_angle = identity ? angle : static_cast<float>(std::atan2(dy, dx));
     cv::Point2f position = c.original_points[k];
+    if (options.subpixel) {
+      const cv::Point2f shifted = p + subpixel_offset(pyramid.level(l), cv::Point(cvRound(p.x), cvRound(p.y)));
+      const cv::Point2d q = apply_affine(back, pyramid.to_level0(shifted, l));
+      position = cv::Point2f(static_cast<float>(q.x), static_cast<float>(q.y));
+    }
     if (!identity && options.refine.enabled) {
       if (const std::optional<cv::Point2f> refined = refine_to_corner(original, position, octave, options.refine.radius,
                                                                       options.detector.min_threshold, mask)) {

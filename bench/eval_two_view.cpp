@@ -12,8 +12,8 @@
 // method's own select_model(), single thread, peers in the same run, pair after pair. The error of
 // the method's own homography is reported beside the judge's.
 //
-// Methods: ours plain 2000 (rBRIEF, strongest corners; also with ExtractorOptions::subpixel), the affine default (1000 image + 1000 view
-// keypoints, one-shot views), the two-view matcher with views on demand (TwoViewMatcher's
+// Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
+// keypoints, one-shot views), both also with ExtractorOptions::subpixel, the two-view matcher with views on demand (TwoViewMatcher's
 // defaults; with sub-pixel keypoints; with stages to tilt 4√2; with the precision test max_half_disagreement at 5 and 10 px;
 // without the guided refinement, alone and with the precision test at 5 px),
 // cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
@@ -377,6 +377,7 @@ int main(int argc, char** argv) {
       ours("ours plain 2000", plain, model),
       ours("ours plain 2000, sub-pixel", subpixel(plain), model),
       ours("ours affine default 1000 + 1000", affine, model),
+      ours("ours affine default 1000 + 1000, sub-pixel", subpixel(affine), model),
       two_view("ours views on demand", defaults),
       two_view("ours views on demand, sub-pixel", subpixel_views),
       two_view("ours views on demand, stages to 5.66", extreme),

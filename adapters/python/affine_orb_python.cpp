@@ -177,7 +177,7 @@ Enum one_of(const std::string& text, const char* argument, const char* first_nam
 affine_orb::ExtractorOptions make_options(int features, double max_tilt, int threads, double view_features,
                                           const std::string& view_budget, const std::string& spreading,
                                           const std::string& duplicates, int levels, double scale_factor,
-                                          int initial_threshold, int min_threshold) {
+                                          int initial_threshold, int min_threshold, bool subpixel) {
   affine_orb::ExtractorOptions o;
   o.features = features;
   o.views.max_tilt = max_tilt;
@@ -193,6 +193,7 @@ affine_orb::ExtractorOptions make_options(int features, double max_tilt, int thr
   o.pyramid.scale_factor = scale_factor;
   o.detector.initial_threshold = initial_threshold;
   o.detector.min_threshold = min_threshold;
+  o.subpixel = subpixel;
   o.check();
   return o;
 }
@@ -277,10 +278,10 @@ PYBIND11_MODULE(affine_orb, m) {
                           "Extracts keypoints and binary descriptors from grey images (affine_orb::Extractor).")
       .def(py::init([](int features, double max_tilt, const std::string& descriptor, int threads, double view_features,
                        const std::string& view_budget, const std::string& spreading, const std::string& duplicates,
-                       int levels, double scale_factor, int initial_threshold, int min_threshold) {
+                       int levels, double scale_factor, int initial_threshold, int min_threshold, bool subpixel) {
              return std::make_unique<PyExtractor>(
                  make_options(features, max_tilt, threads, view_features, view_budget, spreading, duplicates, levels,
-                              scale_factor, initial_threshold, min_threshold),
+                              scale_factor, initial_threshold, min_threshold, subpixel),
                  descriptor);
            }),
            py::arg("features") = defaults.features, py::arg("max_tilt") = defaults.views.max_tilt,
@@ -289,9 +290,10 @@ PYBIND11_MODULE(affine_orb, m) {
            py::arg("spreading") = "quadtree", py::arg("duplicates") = "merge",
            py::arg("levels") = defaults.pyramid.levels, py::arg("scale_factor") = defaults.pyramid.scale_factor,
            py::arg("initial_threshold") = defaults.detector.initial_threshold,
-           py::arg("min_threshold") = defaults.detector.min_threshold,
+           py::arg("min_threshold") = defaults.detector.min_threshold, py::arg("subpixel") = defaults.subpixel,
            "Options as in affine_orb::ExtractorOptions (features = keypoints from the image; with max_tilt > 1 "
-           "the 18 default views add view_features x features more). descriptor: \"rbrief\" (32 bytes) or "
+           "the 18 default views add view_features x features more; subpixel: positions at the vertex of the "
+           "FAST score parabolas instead of whole level pixels as ORB's). descriptor: \"rbrief\" (32 bytes) or "
            "\"brisk\" (64 bytes). Invalid values raise ValueError.")
       .def("detect_and_compute", &PyExtractor::detect_and_compute, py::arg("image"), py::arg("mask") = py::none(),
            "(keypoints, descriptors) of a 2-D uint8 image: a list of cv2.KeyPoint (original pixels) and an "

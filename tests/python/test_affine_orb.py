@@ -174,6 +174,20 @@ def test_views_and_defaults():
     assert np.array_equal(descriptors[views == 0], plain_descriptors)
 
 
+def test_subpixel_positions_move_only_the_points():
+    """The default puts level-0 keypoints on whole pixels (as ORB); subpixel=True moves them by at
+    most half a pixel and keeps every descriptor."""
+    image = oxford("boat", 1)
+    whole, d_whole = affine_orb.Extractor(max_tilt=1.0).detect_and_compute(image)
+    shifted, d_shifted = affine_orb.Extractor(max_tilt=1.0, subpixel=True).detect_and_compute(image)
+    level0 = [(a, b) for a, b in zip(whole, shifted) if a.octave == 0]
+    assert len(whole) == len(shifted) and len(level0) > 100
+    assert all(a.pt[0] == round(a.pt[0]) and a.pt[1] == round(a.pt[1]) for a, _ in level0)
+    assert all(abs(a.pt[0] - b.pt[0]) <= 0.5 and abs(a.pt[1] - b.pt[1]) <= 0.5 for a, b in level0)
+    assert sum(a.pt != b.pt for a, b in level0) > len(level0) // 2
+    assert np.array_equal(d_whole, d_shifted)
+
+
 def test_any_strides_and_roi():
     image = oxford("bark", 1)
     extractor = affine_orb.Extractor(features=500, max_tilt=1.0)

@@ -107,11 +107,15 @@ struct ExtractorOptions {
   /// RefineOptions snap still replaces a tilted view's position. Only the positions change: the
   /// candidates, the selection, the merging of views, the angles and the descriptors use the
   /// integer level positions (the descriptor samples whole level pixels), so the output is that of
-  /// the option off but for KeyPoint::pt. Off by default, by measurement (bench/eval_two_view
-  /// --placement, 68 pairs): the median residual of correct matches falls from 1.11 to 0.84 px and
-  /// plain matching of 2000 keypoints solves 36 pairs instead of 32, but the two-view matcher with
-  /// views on demand solves 38 instead of 39 (one Homogr pair fewer); the SLAM uses are not
-  /// measured. The ORB-SLAM adapters keep it off.
+  /// the option off but for KeyPoint::pt. The mask applies to the integer position, so a keypoint
+  /// may lie up to half a level pixel beyond the mask's edge; descriptors computed again from the
+  /// returned keypoints (cv::Feature2D::compute of opencv_feature2d.hpp) sample the rounded
+  /// sub-pixel positions and may differ from the extraction's. Measured by bench/eval_two_view
+  /// --placement on 68 pairs with ground truth: the median residual of correct matches falls from
+  /// 1.11 to 0.84 px, plain matching of 2000 keypoints solves 36 pairs instead of 32 and the
+  /// one-shot 18 views 39 instead of 36, but the two-view matcher with views on demand solves 38
+  /// instead of 39; the SLAM uses are not measured. Off by default for those two reasons (the
+  /// matcher, and the mask and compute() above); the ORB-SLAM adapters keep it off.
   bool subpixel = false;
   /// With several views: a view's pixels exist only while it is processed (one view's buffers per
   /// thread), so each (view, level) whose final share depends on the other views (every

@@ -13,9 +13,9 @@
 #   6. the libFuzzer targets, each for a bounded time from its checked-in seed corpus (clang, ASan +
 #      UBSan), with their executions per second;
 #   7. on a CPU with AVX2, test_matcher again with -march=native (AFFINE_ORB_NATIVE), so that the
-#      k = 2 search's 256-bit lanes and the hardware popcount, which the default build does not
-#      compile, are checked against the naive search too (the other AVX2 kernels are chosen at run
-#      time, and the default build's tests check them on such a CPU);
+#      paths chosen at compile time there (empty AVX2 regions, POPCNT in hamming_distance) are
+#      checked against the naive search too (the default build chooses the AVX2 kernels at run
+#      time, and its tests check them on such a CPU);
 #   8. the tests of the SIMD code cross-compiled for aarch64 and run under qemu-user
 #      (tests/cross_aarch64.sh), so that the NEON paths are checked against their scalar
 #      references and the fixed data.
@@ -90,7 +90,7 @@ for fuzzer in $fuzzers; do
 done
 
 if grep -qw avx2 /proc/cpuinfo; then
-  stage "-march=native (the matcher's AVX2 lanes and POPCNT)"
+  stage "-march=native (the matcher's compile-time AVX2 and POPCNT paths)"
   cmake -S . -B "$root/native" -G Ninja -DCMAKE_BUILD_TYPE=Release -DAFFINE_ORB_NATIVE=ON \
     -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
     -DAFFINE_ORB_BUILD_PYTHON=OFF

@@ -3,11 +3,13 @@
 // ground-truth homographies, KITTI 06 frames) and Debian opencv-doc's sample photos. A missing file
 // fails the test that asked for it: the data is part of the test environment, not optional.
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -51,6 +53,19 @@ inline cv::Mat kitti_frame(int index) {
 inline cv::Point2d apply_homography(const cv::Matx33d& h, cv::Point2d p) {
   const cv::Vec3d q = h * cv::Vec3d(p.x, p.y, 1.0);
   return {q[0] / q[2], q[1] / q[2]};
+}
+
+/// Mean distance, pixels of image 2, between the four corners of an image of `size` mapped by the
+/// estimate and by the ground truth (the "solved" judge of bench/eval_two_view: <= 5 px).
+inline double corner_error(const Eigen::Matrix3d& estimate, const cv::Matx33d& truth, cv::Size size) {
+  double sum = 0.0;
+  for (const cv::Point2d c : {cv::Point2d(0, 0), cv::Point2d(size.width - 1, 0), cv::Point2d(0, size.height - 1),
+                              cv::Point2d(size.width - 1, size.height - 1)}) {
+    const Eigen::Vector3d e = estimate * Eigen::Vector3d(c.x, c.y, 1.0);
+    const cv::Point2d t = apply_homography(truth, c);
+    sum += std::hypot(e.x() / e.z() - t.x, e.y() / e.z() - t.y);
+  }
+  return sum / 4.0;
 }
 
 }  // namespace affine_orb::test

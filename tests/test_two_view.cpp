@@ -16,19 +16,6 @@
 
 namespace {
 
-/// Mean distance, pixels of image 2, between the four corners of image 1 mapped by the estimate
-/// and by the ground truth (the "solved" judge of bench/eval_two_view: <= 5 px).
-double corner_error(const Eigen::Matrix3d& estimate, const cv::Matx33d& truth, cv::Size size) {
-  double sum = 0.0;
-  for (const cv::Point2d c : {cv::Point2d(0, 0), cv::Point2d(size.width - 1, 0), cv::Point2d(0, size.height - 1),
-                              cv::Point2d(size.width - 1, size.height - 1)}) {
-    const Eigen::Vector3d e = estimate * Eigen::Vector3d(c.x, c.y, 1.0);
-    const cv::Point2d t = affine_orb::test::apply_homography(truth, c);
-    sum += std::hypot(e.x() / e.z() - t.x, e.y() / e.z() - t.y);
-  }
-  return sum / 4.0;
-}
-
 /// Inliers that the ground truth maps within 3 px of their match.
 int correct_inliers(const affine_orb::TwoViewResult<256>& r, const cv::Matx33d& truth) {
   int correct = 0;
@@ -90,7 +77,7 @@ TEST_CASE("an easy pair is verified by plain keypoints and stops at stage 0") {
   CHECK(std::count(r.features1.views.begin(), r.features1.views.end(), 0) == static_cast<long>(r.features1.size()));
   CHECK(r.features1.size() == 2000);
   CHECK(r.model.model == affine_orb::GeometricModel::kHomography);
-  CHECK(corner_error(r.model.homography, truth, image1.size()) < 5.0);
+  CHECK(affine_orb::test::corner_error(r.model.homography, truth, image1.size()) < 5.0);
   CHECK(inlier_precision(r, truth) > 0.95);
   CHECK(r.inlier_count >= matcher.options().min_inliers);
   CHECK(r.inlier_count == std::count(r.inliers.begin(), r.inliers.end(), 1));
@@ -107,7 +94,7 @@ TEST_CASE("a wide-baseline pair escalates to the views and is solved there") {
   const bool first_verified = first.inliers >= 15 && first.inliers >= 0.1 * first.matches;
   CHECK_FALSE(first_verified);  // stage 0 did not verify it
   CHECK(std::count_if(r.features1.views.begin(), r.features1.views.end(), [](int v) { return v > 0; }) > 0);
-  CHECK(corner_error(r.model.homography, truth, image1.size()) < 5.0);
+  CHECK(affine_orb::test::corner_error(r.model.homography, truth, image1.size()) < 5.0);
   CHECK(correct_inliers(r, truth) >= 20);
 }
 
@@ -151,7 +138,7 @@ TEST_CASE("the escalation stops only on enough inliers making up enough of the m
     const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
     REQUIRE(r.verified);
     CHECK(r.stage == 0);
-    CHECK(corner_error(r.model.homography, truth, image.size()) < 3.0);
+    CHECK(affine_orb::test::corner_error(r.model.homography, truth, image.size()) < 3.0);
   }
   SUBCASE("an unreachable min_inliers runs every stage and reports not verified") {
     options.min_inliers = 1000000;
@@ -300,8 +287,8 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
   CHECK(guided.stages[0].guided_rounds == 2);
   const int correct_plain = correct_inliers(plain, truth);
   const int correct_guided = correct_inliers(guided, truth);
-  const double error_plain = corner_error(plain.model.homography, truth, image.size());
-  const double error_guided = corner_error(guided.model.homography, truth, image.size());
+  const double error_plain = affine_orb::test::corner_error(plain.model.homography, truth, image.size());
+  const double error_guided = affine_orb::test::corner_error(guided.model.homography, truth, image.size());
   CAPTURE(correct_plain);
   CAPTURE(correct_guided);
   CAPTURE(error_plain);
@@ -332,7 +319,7 @@ TEST_CASE("a verified stage-0 homography with imprecise corners escalates under 
   REQUIRE(loose.stage == 0);
   REQUIRE(loose.model.model == affine_orb::GeometricModel::kHomography);
   CHECK(loose.inlier_count >= options.min_inliers);
-  const double loose_error = corner_error(loose.model.homography, truth, image1.size());
+  const double loose_error = affine_orb::test::corner_error(loose.model.homography, truth, image1.size());
   CAPTURE(loose_error);
   CHECK(loose_error > 5.0);
   options.max_half_disagreement = 5.0;
@@ -342,7 +329,7 @@ TEST_CASE("a verified stage-0 homography with imprecise corners escalates under 
   CHECK(*tested.stages[0].half_disagreement > 5.0);
   CHECK(tested.stages[0].inliers == loose.inlier_count);       // the same model, failed on precision alone
   CHECK_FALSE(loose.stages[0].half_disagreement.has_value());  // not measured with the test off
-  const double tested_error = corner_error(tested.model.homography, truth, image1.size());
+  const double tested_error = affine_orb::test::corner_error(tested.model.homography, truth, image1.size());
   CAPTURE(tested_error);
   CHECK(tested_error < loose_error);
 }

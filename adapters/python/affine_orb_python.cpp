@@ -243,6 +243,7 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
     stage["model"] = affine_orb::model_name(s.model);
     stage["half_disagreement"] = s.half_disagreement ? py::object(py::float_(*s.half_disagreement)) : py::none();
     stage["guided_rounds"] = s.guided_rounds;
+    stage["refined"] = s.refined;
     stage["extract_ms"] = s.extract_ms;
     stage["match_ms"] = s.match_ms;
     stage["verify_ms"] = s.verify_ms;
@@ -259,6 +260,12 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
   out["views2"] = views(r.features2.views);
   out["matches"] = matches;
   out["inliers"] = flag_array(r.inliers);
+  py::array_t<float> points2({static_cast<py::ssize_t>(r.points2.size()), static_cast<py::ssize_t>(2)});
+  for (std::size_t i = 0; i < r.points2.size(); ++i) {
+    points2.mutable_at(static_cast<py::ssize_t>(i), 0) = r.points2[i].x;
+    points2.mutable_at(static_cast<py::ssize_t>(i), 1) = r.points2[i].y;
+  }
+  out["points2"] = points2;
   out["model"] = affine_orb::model_name(r.model.model);
   out["homography"] = r.model.homography_found ? py::object(matrix_array(r.model.homography)) : py::none();
   out["fundamental"] = r.model.fundamental_found ? py::object(matrix_array(r.model.fundamental)) : py::none();
@@ -393,8 +400,8 @@ PYBIND11_MODULE(affine_orb, m) {
       "match_images",
       [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
          const std::vector<std::pair<double, double>>& stages, int min_inliers, double min_inlier_ratio,
-         int guided_rounds, double max_half_disagreement, bool all_stages, const std::string& descriptor, const std::string& spreading, int threads,
-         const py::handle& mask1, const py::handle& mask2) {
+         int guided_rounds, double max_half_disagreement, bool refine, bool all_stages, const std::string& descriptor,
+         const std::string& spreading, int threads, const py::handle& mask1, const py::handle& mask2) {
         affine_orb::TwoViewOptions options;
         options.extractor.features = features;
         options.extractor.views.max_tilt = max_tilt;
@@ -407,6 +414,7 @@ PYBIND11_MODULE(affine_orb, m) {
         options.min_inlier_ratio = min_inlier_ratio;
         options.guided.iterations = guided_rounds;
         options.max_half_disagreement = max_half_disagreement;
+        options.refine = refine;
         options.all_stages = all_stages;
         options.check();
         py::array_t<std::uint8_t> s1, s2, s3, s4;
@@ -422,7 +430,8 @@ PYBIND11_MODULE(affine_orb, m) {
       py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = default_stages,
       py::arg("min_inliers") = two_view.min_inliers, py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
       py::arg("guided_rounds") = two_view.guided.iterations,
-      py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
+      py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("refine") = two_view.refine,
+      py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
       py::arg("threads") = two_view.extractor.threads, py::arg("mask1") = py::none(), py::arg("mask2") = py::none(),
       "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
       "`features` keypoints; while the pair is not verified (min_inliers inliers of the chosen model, at least "
@@ -431,12 +440,14 @@ PYBIND11_MODULE(affine_orb, m) {
       "verified homography is refined first by guided_rounds rounds of matching within a gate around its "
       "predictions and re-estimation (0 = off); with max_half_disagreement > 0 (pixels), the stage verifies only "
       "when homographies fitted to the two halves of its inliers map image 1's corners within that distance of "
-      "each other. "
+      "each other; with refine, image 2's point of every match is aligned with image 1's patch under the verified "
+      "homography (sub-pixel correspondences) and the homography re-estimated on them. "
       "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
-      "into keypoints2), inliers (bool per match, of the chosen model), model (\"homography\", \"fundamental\" "
+      "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image 2's "
+      "point of the correspondence, aligned with refine, else the train keypoint's position), model (\"homography\", \"fundamental\" "
       "or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, or None) and stages (one "
       "dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement (pixels, or None when "
-      "not measured), guided_rounds, milliseconds). Invalid options raise "
+      "not measured), guided_rounds, refined (matches aligned), milliseconds). Invalid options raise "
       "ValueError, wrong types TypeError.");
 }

@@ -2,11 +2,11 @@
 // two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
 // min_inlier_ratio, all_stages, the precision test (max_half_disagreement), guided refinement
-// (rounds, gate radius, ratio), stages to the extreme
+// (rounds, gate radius, ratio), the aligned correspondences (refine), stages to the extreme
 // tilts 4 and 4√2. Invalid options must end in std::invalid_argument, valid ones in a
 // result that keeps every documented invariant: stage reports, the stopping rule, inlier flags,
-// match indices, keypoints inside their image and mask, each stage's keypoints a superset of the
-// stage before; anything else (a crash, a sanitizer report, another exception, a broken
+// match indices, keypoints inside their image and mask, image-2 points of the correspondences
+// within max_shift of their keypoints, each stage's keypoints a superset of the stage before; anything else (a crash, a sanitizer report, another exception, a broken
 // invariant) is a finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
 #include <algorithm>
@@ -69,7 +69,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.guided.iterations = guided % 4;
   options.guided.matching.gate_radius = 2.0 * ((guided >> 2) % 7);
   options.guided.matching.ratio = 0.5f + 0.25f * static_cast<float>(guided >> 5);
-  options.model.ransac.max_iterations = 1 + bytes.next() % 64;
+  // RANSAC iterations 1 to 64; the aligned correspondences on or off, max_shift 0 (invalid) or 2 px.
+  const std::uint8_t verification = bytes.next();
+  options.model.ransac.max_iterations = 1 + verification % 64;
+  options.refine = (verification & 64) != 0;
+  if (verification & 128) options.refinement.max_shift = 0.0;
   options.model.ransac.min_iterations =
       std::min(options.model.ransac.min_iterations, options.model.ransac.max_iterations);
 
@@ -130,6 +134,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (const affine_orb::Match& m : r.matches) {
       require(m.query >= 0 && static_cast<std::size_t>(m.query) < r.features1.size());
       require(m.train >= 0 && static_cast<std::size_t>(m.train) < r.features2.size());
+    }
+    // Image 2's point of each correspondence: the train keypoint's, or aligned within max_shift of it.
+    require(r.points2.size() == r.matches.size());
+    require(r.refined_count >= 0 && r.refined_count <= static_cast<int>(r.matches.size()));
+    if (!options.refine) require(r.refined_count == 0);
+    for (std::size_t i = 0; i < r.matches.size(); ++i) {
+      const cv::Point2f q = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)].pt;
+      require(std::isfinite(r.points2[i].x) && std::isfinite(r.points2[i].y));
+      const double moved = std::hypot(r.points2[i].x - q.x, r.points2[i].y - q.y);
+      require(options.refine ? moved <= options.refinement.max_shift + 1e-3 : moved == 0.0);
     }
     check_features(r.features1, image1, mask1);
     check_features(r.features2, image2, mask2);

@@ -123,6 +123,30 @@ def test_match_images_refinement_and_precision_test_are_reported():
     assert np.abs(project(r["homography"]) - project(truth)).max() < 2.0
 
 
+def test_match_images_refine_aligns_image_2_points():
+    """refine reaches the C++ option: without it points2 are the train keypoints' positions; with it
+    the inliers' image-2 points lie closer to where the ground truth maps their image-1 keypoints."""
+    image1 = cv2.imread(os.path.join(DATA, "oxford", "boat", "img1.png"), cv2.IMREAD_GRAYSCALE)
+    image2 = cv2.imread(os.path.join(DATA, "oxford", "boat", "img3.png"), cv2.IMREAD_GRAYSCALE)
+    truth = np.loadtxt(os.path.join(DATA, "oxford", "boat", "H1to3p"))
+
+    def mean_error(r):
+        keep = [(m.queryIdx, i) for i, (m, inlier) in enumerate(zip(r["matches"], r["inliers"])) if inlier]
+        p1 = np.array([[*r["keypoints1"][q].pt, 1.0] for q, _ in keep]).T
+        mapped = truth @ p1
+        mapped = (mapped[:2] / mapped[2]).T
+        return np.linalg.norm(r["points2"][[i for _, i in keep]] - mapped, axis=1).mean()
+
+    plain = affine_orb.match_images(image1, image2)
+    assert plain["verified"] and plain["points2"].shape == (len(plain["matches"]), 2)
+    assert plain["stages"][-1]["refined"] == 0
+    positions = np.array([plain["keypoints2"][m.trainIdx].pt for m in plain["matches"]], np.float32)
+    assert np.array_equal(plain["points2"], positions)
+    aligned = affine_orb.match_images(image1, image2, refine=True)
+    assert aligned["verified"] and aligned["stages"][-1]["refined"] > 0
+    assert mean_error(aligned) < mean_error(plain)
+
+
 def test_match_images_refuses_bad_input():
     image = np.zeros((64, 64), np.uint8)
     with pytest.raises(ValueError):
@@ -139,8 +163,11 @@ def test_match_images_refuses_bad_input():
         affine_orb.match_images(image, image, guided_rounds=-1)
     with pytest.raises(ValueError):
         affine_orb.match_images(image, image, max_half_disagreement=-1.0)
+    with pytest.raises(TypeError):
+        affine_orb.match_images(image, image, refine="yes")
     r = affine_orb.match_images(image, image)  # a flat image: no keypoints, documented empty result
     assert not r["verified"] and r["matches"] == [] and r["model"] == "none"
+    assert r["points2"].shape == (0, 2)
 
 
 def test_version_is_the_headers_and_cmakes():

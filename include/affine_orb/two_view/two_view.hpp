@@ -28,6 +28,7 @@
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/geometry/ransac.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/two_view/refinement.hpp"
 
 namespace affine_orb {
 
@@ -132,6 +133,21 @@ struct TwoViewOptions {
   /// min_inlier_ratio of the matches, before the precision test and the stopping rule see it (on
   /// by default: GuidedRefinementOptions::iterations).
   GuidedRefinementOptions guided;
+  /// Sub-pixel correspondences (refine_correspondences()) for a homography that has min_inliers
+  /// inliers making up min_inlier_ratio of the matches, after the guided rounds: image 2's point of
+  /// every match is aligned with image 1's patch under the homography, the homography is
+  /// re-estimated on the aligned points by local optimisation (GuidedRefinementOptions' σ and
+  /// passes), and TwoViewResult::points2 holds them. Off by default: on the 44 pairs of
+  /// bench/eval_two_view whose own homographies are within 10 px either way, it lowers the median
+  /// corner error of the matcher's own homography from 1.41 to 1.12 px and of the judge's from 3.13
+  /// to 1.54 px, but the pairs the judge solves stay within those on its 5 px line (37 against 39;
+  /// with ExtractorOptions::subpixel, 40 against 38), and the alignment (about 20 µs a match) makes
+  /// the pairs plain extraction solves cost 1.60x plain's instead of 1.19x. On where the
+  /// correspondences themselves must be precise (mosaics, calibration): on a known warp the aligned
+  /// points lie 0.05 px from the truth (test_refinement).
+  bool refine = false;
+  /// The alignment of `refine`.
+  CorrespondenceRefinementOptions refinement;
   /// Run every stage whatever stage 0 verified (the views on for every pair); the result is then
   /// that of the last stage.
   bool all_stages = false;
@@ -154,6 +170,7 @@ struct TwoViewOptions {
     matching.check();
     model.check();
     guided.check();
+    refinement.check();
     detail::require(extractor.view_budget == ViewBudget::kAdditive,
                     "TwoViewOptions: views on demand need ExtractorOptions::view_budget = kAdditive");
     double previous = 1.0;
@@ -195,6 +212,8 @@ struct TwoViewStageReport {
   std::optional<double> half_disagreement;
   /// Rounds of guided matching run on the stage's homography (TwoViewOptions::guided; 0 when none).
   int guided_rounds = 0;
+  /// Matches whose image-2 point was aligned (TwoViewOptions::refine; 0 when it did not run).
+  int refined = 0;
   double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
   double match_ms = 0.0;    ///< matching, milliseconds
   double verify_ms = 0.0;   ///< RANSAC and model selection, milliseconds
@@ -214,6 +233,12 @@ struct TwoViewResult {
   Features<Bits> features2;
   /// Correspondences of the last stage: Match::query indexes features1, Match::train features2.
   std::vector<Match> matches;
+  /// Per match, image 2's point of the correspondence, pixels of image 2: aligned with image 1's
+  /// patch around the query keypoint where TwoViewOptions::refine accepted it, else the train
+  /// keypoint's position.
+  std::vector<cv::Point2f> points2;
+  /// Matches whose points2 entry was aligned (TwoViewOptions::refine).
+  int refined_count = 0;
   /// Per match, 1 = inlier of the chosen model (model.model; all 0 when none was chosen).
   std::vector<std::uint8_t> inliers;
   int inlier_count = 0;
@@ -266,7 +291,8 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 /// budget), every keypoint so far of image 1 is matched against every keypoint so far of image 2
 /// (match_features()), and select_model() estimates H and F and chooses one; a chosen homography
 /// with min_inliers inliers making up min_inlier_ratio of the matches is refined by guided matching
-/// when TwoViewOptions::guided is on; the escalation stops when the chosen model has min_inliers
+/// when TwoViewOptions::guided is on, then by aligned correspondences when TwoViewOptions::refine
+/// is on; the escalation stops when the chosen model has min_inliers
 /// inliers and min_inlier_ratio of the matches and, under max_half_disagreement, a homography
 /// passes the precision test, or when the stages run out. Stage k's keypoints and descriptors are
 /// a superset of stage k − 1's.
@@ -313,7 +339,7 @@ class TwoViewMatcher {
       const Clock::time_point extracted = Clock::now();
       result.matches = match_features(result.features1, result.features2, options_.matching);
       const Clock::time_point matched = Clock::now();
-      verify(result, image1.size());
+      verify(result, image1, image2);
       const Clock::time_point verified = Clock::now();
 
       report.max_tilt = cursor1.extracted_tilt();
@@ -326,6 +352,7 @@ class TwoViewMatcher {
       report.model = result.model.model;
       report.half_disagreement = result.half_disagreement;
       report.guided_rounds = guided_rounds_;
+      report.refined = result.refined_count;
       report.extract_ms = milliseconds(start, extracted);
       report.match_ms = milliseconds(extracted, matched);
       report.verify_ms = milliseconds(matched, verified);
@@ -351,26 +378,59 @@ class TwoViewMatcher {
   }
 
   /// select_model() on the matched positions; the chosen model's inlier flags and count; a chosen
-  /// homography with enough support refined by guided matching (TwoViewOptions::guided); for a
-  /// chosen homography under the precision test, the disagreement of its two half estimates.
-  void verify(TwoViewResult<kBits>& result, cv::Size size1) {
+  /// homography with enough support refined by guided matching (TwoViewOptions::guided) and then by
+  /// aligned correspondences (TwoViewOptions::refine); for a chosen homography under the precision
+  /// test, the disagreement of its two half estimates.
+  void verify(TwoViewResult<kBits>& result, const cv::Mat& image1, const cv::Mat& image2) {
     matched_points(result.features1.keypoints, result.features2.keypoints, result.matches, points_);
     result.model = ModelSelectionResult{};
     result.inliers.assign(result.matches.size(), 0);
     result.inlier_count = 0;
     result.half_disagreement.reset();
+    result.refined_count = 0;
     guided_rounds_ = 0;
-    if (points_.points1.size() < 8) return;
-    result.model = select_model(points_.points1, points_.points2, options_.model);
-    result.inliers = result.model.chosen_inliers();
-    result.inlier_count = result.model.chosen_inlier_count();
-    if (result.model.model == GeometricModel::kHomography && options_.guided.iterations > 0 && supported(result)) {
-      refine_guided(result);
+    if (points_.points1.size() >= 8) {
+      result.model = select_model(points_.points1, points_.points2, options_.model);
+      result.inliers = result.model.chosen_inliers();
+      result.inlier_count = result.model.chosen_inlier_count();
+      const bool homography = result.model.model == GeometricModel::kHomography;
+      if (homography && options_.guided.iterations > 0 && supported(result)) refine_guided(result);
+      if (homography && options_.refine && supported(result)) refine_positions(result, image1, image2);
+      if (homography && options_.max_half_disagreement > 0.0) {
+        result.half_disagreement = half_disagreement(points_.points1, points_.points2, result.inliers,
+                                                     result.model.homography, image1.size());
+      }
     }
-    if (result.model.model == GeometricModel::kHomography && options_.max_half_disagreement > 0.0) {
-      result.half_disagreement =
-          half_disagreement(points_.points1, points_.points2, result.inliers, result.model.homography, size1);
+    result.points2 = points_.points2;
+  }
+
+  /// TwoViewOptions::refine on the chosen homography of `result`: points_.points2 becomes the
+  /// aligned points, and the homography, its score, inlier flags and count the local optimisation's
+  /// on them (kept as they were when it finds no homography).
+  void refine_positions(TwoViewResult<kBits>& result, const cv::Mat& image1, const cv::Mat& image2) {
+    scales_.resize(result.matches.size());
+    for (std::size_t i = 0; i < result.matches.size(); ++i) {
+      const cv::KeyPoint& k = result.features1.keypoints[static_cast<std::size_t>(result.matches[i].query)];
+      scales_[i] = std::max(1.0f, k.size / Descriptor::kPatchSize);
     }
+    RefinedCorrespondences refined = refine_correspondences(image1, image2, points_.points1, points_.points2, scales_,
+                                                            result.model.homography, options_.refinement);
+    result.refined_count = refined.refined_count;
+    points_.points2 = std::move(refined.points2);
+    const std::optional<HomographyModel> current = HomographyModel::from_pixels(result.model.homography);
+    if (!current) return;
+    const TruncatedChi2Score scoring{options_.guided.sigma, options_.model.homography_chi2, options_.model.score_constant};
+    const HomographyEstimator estimator(points_.points1, points_.points2, scoring);
+    const RansacResult<HomographyModel> fitted =
+        optimise_locally(estimator, evaluate_model(estimator, *current), options_.guided.refinement_passes);
+    if (!fitted.success) return;
+    result.inliers = fitted.inliers;
+    result.inlier_count = fitted.inlier_count;
+    result.model.homography = fitted.model.h;
+    result.model.homography_score = fitted.score;
+    result.model.homography_inliers = fitted.inliers;
+    result.model.homography_inlier_count = fitted.inlier_count;
+    result.model.fundamental_inliers.clear();
   }
 
   /// The guided rounds of TwoViewOptions::guided on the chosen homography of `result`: `result`'s
@@ -426,6 +486,7 @@ class TwoViewMatcher {
   Extractor<Descriptor> extractor1_;
   Extractor<Descriptor> extractor2_;
   MatchedPoints points_;   ///< matched positions, reused across stages
+  std::vector<float> scales_;  ///< per match, the scale of the image-1 keypoint (refine_positions())
   int guided_rounds_ = 0;  ///< guided rounds of the current stage
 };
 

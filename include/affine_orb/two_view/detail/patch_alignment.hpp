@@ -1,0 +1,149 @@
+#pragma once
+/// \file
+/// Internals of refine_correspondences() (two_view/refinement.hpp): bilinear sampling of a grey
+/// image and the inverse-compositional Lucas–Kanade alignment of one patch under a fixed local
+/// affine map, translation only (Baker & Matthews, "Lucas-Kanade 20 Years On: A Unifying
+/// Framework", IJCV 56(3), 2004, section 3.2), with the patch's mean and contrast normalised so
+/// that a change of light between the images does not bias it.
+
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <opencv2/core.hpp>
+
+namespace affine_orb::detail {
+
+/// Grey level of a CV_8UC1 image at (x, y), bilinear between the four pixel centres around it.
+/// The caller keeps 0 <= x < cols − 1 and 0 <= y < rows − 1.
+inline double sample_bilinear(const cv::Mat& image, double x, double y) {
+  const int ix = static_cast<int>(x), iy = static_cast<int>(y);
+  const double ax = x - ix, ay = y - iy;
+  const std::uint8_t* r0 = image.ptr<std::uint8_t>(iy) + ix;
+  const std::uint8_t* r1 = r0 + image.step[0];
+  const double top = r0[0] + ax * (r0[1] - r0[0]);
+  const double bottom = r1[0] + ax * (r1[1] - r1[0]);
+  return top + ay * (bottom - top);
+}
+
+/// True when the parallelogram centre + A·[−half, half]² lies where sample_bilinear() may read.
+inline bool samplable(const cv::Mat& image, const Eigen::Vector2d& centre, const Eigen::Matrix2d& a, double half) {
+  const double ex = half * (std::abs(a(0, 0)) + std::abs(a(0, 1)));
+  const double ey = half * (std::abs(a(1, 0)) + std::abs(a(1, 1)));
+  return centre.x() - ex >= 0.0 && centre.y() - ey >= 0.0 && centre.x() + ex < image.cols - 1 &&
+         centre.y() + ey < image.rows - 1;
+}
+
+/// Buffers of align_patch(), reused across correspondences.
+struct PatchAlignmentWork {
+  std::vector<double> bordered;  ///< image 1's patch with a one-sample border, for the gradients
+  std::vector<double> templ;     ///< image 1's patch, mean-free
+  std::vector<double> gx, gy;    ///< its gradients
+  std::vector<double> warped;    ///< image 2 sampled on the patch's grid
+};
+
+/// What align_patch() found.
+struct PatchAlignment {
+  Eigen::Vector2d point2;    ///< image-2 point aligned with the patch centre, pixels
+  double correlation = 0.0;  ///< normalised cross-correlation of the aligned patches, [-1, 1]
+};
+
+/// Aligns the (2·radius + 1)² patch of image1 centred on `point1` (one sample per pixel) with
+/// image2 sampled through x2 = c + A·u (u the patch offset from point1, pixels of image 1), starting
+/// from c = `start`: translation-only inverse-compositional Lucas–Kanade on mean- and
+/// contrast-normalised patches, until an update is below 0.01 pixels of image 1 or `iterations`
+/// updates. nullopt when a sample would fall outside either image, the patch is too weakly textured in
+/// one direction (the smaller eigenvalue of its structure tensor below `min_texture` grey levels²
+/// per sample) or an update is not finite.
+inline std::optional<PatchAlignment> align_patch(const cv::Mat& image1, const cv::Mat& image2,
+                                                 const Eigen::Vector2d& point1, const Eigen::Vector2d& start,
+                                                 const Eigen::Matrix2d& a, int radius, int iterations,
+                                                 double min_texture, PatchAlignmentWork& work) {
+  const int side = 2 * radius + 1;
+  const int bside = side + 2;
+  const std::size_t n = static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
+  if (!samplable(image1, point1, Eigen::Matrix2d::Identity(), radius + 1.0)) return std::nullopt;
+  work.bordered.resize(static_cast<std::size_t>(bside) * static_cast<std::size_t>(bside));
+  for (int j = 0; j < bside; ++j) {
+    for (int i = 0; i < bside; ++i) {
+      work.bordered[static_cast<std::size_t>(j * bside + i)] =
+          sample_bilinear(image1, point1.x() + (i - radius - 1), point1.y() + (j - radius - 1));
+    }
+  }
+  work.templ.resize(n);
+  work.gx.resize(n);
+  work.gy.resize(n);
+  double mean = 0.0;
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i) mean += work.bordered[static_cast<std::size_t>((j + 1) * bside + i + 1)];
+  mean /= static_cast<double>(n);
+  Eigen::Matrix2d hessian = Eigen::Matrix2d::Zero();
+  double energy = 0.0;
+  for (int j = 0; j < side; ++j) {
+    for (int i = 0; i < side; ++i) {
+      const std::size_t b = static_cast<std::size_t>((j + 1) * bside + i + 1);
+      const std::size_t k = static_cast<std::size_t>(j * side + i);
+      work.templ[k] = work.bordered[b] - mean;
+      // Central differences, per pixel of image 1.
+      work.gx[k] = 0.5 * (work.bordered[b + 1] - work.bordered[b - 1]);
+      work.gy[k] = 0.5 * (work.bordered[b + static_cast<std::size_t>(bside)] - work.bordered[b - static_cast<std::size_t>(bside)]);
+      hessian(0, 0) += work.gx[k] * work.gx[k];
+      hessian(0, 1) += work.gx[k] * work.gy[k];
+      hessian(1, 1) += work.gy[k] * work.gy[k];
+      energy += work.templ[k] * work.templ[k];
+    }
+  }
+  hessian(1, 0) = hessian(0, 1);
+  const double trace = hessian.trace(), det = hessian.determinant();
+  const double smaller = 0.5 * (trace - std::sqrt(std::max(0.0, trace * trace - 4.0 * det)));
+  if (!(smaller >= min_texture * static_cast<double>(n)) || !(energy > 0.0)) return std::nullopt;
+  const Eigen::Matrix2d inverse = hessian.inverse();
+  const double templ_norm = std::sqrt(energy);
+
+  Eigen::Vector2d c = start;
+  work.warped.resize(n);
+  double correlation = 0.0;
+  bool converged = false;
+  for (int it = 0;; ++it) {
+    if (!samplable(image2, c, a, radius)) return std::nullopt;
+    double wmean = 0.0;
+    for (int j = 0; j < side; ++j) {
+      // x2 = c + A·(i − r, j − r), stepped along the row.
+      Eigen::Vector2d x2 = c + a * Eigen::Vector2d(-radius, j - radius);
+      for (int i = 0; i < side; ++i, x2 += a.col(0)) {
+        const double v = sample_bilinear(image2, x2.x(), x2.y());
+        work.warped[static_cast<std::size_t>(j * side + i)] = v;
+        wmean += v;
+      }
+    }
+    wmean /= static_cast<double>(n);
+    double wenergy = 0.0, cross = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      work.warped[k] -= wmean;
+      wenergy += work.warped[k] * work.warped[k];
+      cross += work.warped[k] * work.templ[k];
+    }
+    if (!(wenergy > 0.0)) return std::nullopt;
+    const double wnorm = std::sqrt(wenergy);
+    correlation = cross / (wnorm * templ_norm);
+    if (converged || it == iterations) break;
+    // Image 2's patch scaled to the template's contrast, then the inverse-compositional step.
+    const double gain = templ_norm / wnorm;
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    for (std::size_t k = 0; k < n; ++k) {
+      const double e = gain * work.warped[k] - work.templ[k];
+      b.x() += work.gx[k] * e;
+      b.y() += work.gy[k] * e;
+    }
+    const Eigen::Vector2d delta = inverse * b;
+    if (!delta.allFinite()) return std::nullopt;
+    c -= a * delta;
+    converged = delta.norm() < 0.01;  // one more pass measures the correlation at the final c
+  }
+  return PatchAlignment{c, correlation};
+}
+
+}  // namespace affine_orb::detail

@@ -10,11 +10,13 @@
 // truth maps inside image 2), its distinct correct matches (within 3 px, image-1 points in
 // distinct 2-px cells) and the total time: both extractions, matching and verification by the
 // method's own select_model(), single thread, peers in the same run, pair after pair. The error of
-// the method's own homography is reported beside the judge's.
+// the method's own homography is reported beside the judge's. The matcher's correspondences are
+// its query keypoints and TwoViewResult::points2 (the train keypoints' positions unless aligned).
 //
 // Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
 // keypoints, one-shot views), both also with ExtractorOptions::subpixel, the two-view matcher with views on demand (TwoViewMatcher's
-// defaults; with sub-pixel keypoints; with stages to tilt 4√2; with the precision test max_half_disagreement at 5 and 10 px;
+// defaults; with sub-pixel keypoints; with aligned correspondences (TwoViewOptions::refine), with
+// and without sub-pixel keypoints; with stages to tilt 4√2; with the precision test max_half_disagreement at 5 and 10 px;
 // without the guided refinement, alone and with the precision test at 5 px),
 // cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
 // 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
@@ -135,10 +137,10 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
             const auto start = Clock::now();
             const auto r = matcher->match(a, b);
             o.ms = since(start);
-            for (const affine_orb::Match& m : r.matches) {
-              const cv::KeyPoint& k1 = r.features1.keypoints[static_cast<std::size_t>(m.query)];
-              const cv::KeyPoint& k2 = r.features2.keypoints[static_cast<std::size_t>(m.train)];
-              o.matches.emplace_back(k1.pt, k2.pt);
+            for (std::size_t i = 0; i < r.matches.size(); ++i) {
+              const cv::KeyPoint& k1 = r.features1.keypoints[static_cast<std::size_t>(r.matches[i].query)];
+              const cv::KeyPoint& k2 = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)];
+              o.matches.emplace_back(k1.pt, r.points2[i]);
               o.octaves.emplace_back(k1.octave, k2.octave);
             }
             o.homography_found = r.model.homography_found;
@@ -357,6 +359,12 @@ int main(int argc, char** argv) {
     o.max_half_disagreement = pixels;
     return o;
   };
+  // Image 2's points aligned with image 1's patches under the verified homography
+  // (TwoViewOptions::refine).
+  const auto aligned = [](affine_orb::TwoViewOptions o) {
+    o.refine = true;
+    return o;
+  };
   // Without the guided refinement of a verified homography (TwoViewOptions::guided).
   const auto unguided = [](affine_orb::TwoViewOptions o) {
     o.guided.iterations = 0;
@@ -380,6 +388,8 @@ int main(int argc, char** argv) {
       ours("ours affine default 1000 + 1000, sub-pixel", subpixel(affine), model),
       two_view("ours views on demand", defaults),
       two_view("ours views on demand, sub-pixel", subpixel_views),
+      two_view("ours views on demand, aligned", aligned(defaults)),
+      two_view("ours views on demand, sub-pixel, aligned", aligned(subpixel_views)),
       two_view("ours views on demand, stages to 5.66", extreme),
       two_view("ours views on demand, half disagreement 5 px", precise(defaults, 5.0)),
       two_view("ours views on demand, half disagreement 10 px", precise(defaults, 10.0)),

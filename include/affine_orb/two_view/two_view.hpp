@@ -423,7 +423,12 @@ class TwoViewMatcher {
     const HomographyEstimator estimator(points_.points1, points_.points2, scoring);
     const RansacResult<HomographyModel> fitted =
         optimise_locally(estimator, evaluate_model(estimator, *current), options_.guided.refinement_passes);
-    if (!fitted.success) return;
+    if (fitted.success) take_homography(result, fitted);
+  }
+
+  /// `result`'s chosen homography, its score, inlier flags and count become `fitted`'s, on
+  /// `result.matches`; fundamental_inliers is emptied (its flags indexed other matches).
+  static void take_homography(TwoViewResult<kBits>& result, const RansacResult<HomographyModel>& fitted) {
     result.inliers = fitted.inliers;
     result.inlier_count = fitted.inlier_count;
     result.model.homography = fitted.model.h;
@@ -458,13 +463,7 @@ class TwoViewMatcher {
       if (!refined.success) break;
       current = refined.model;
       result.matches = std::move(matches);
-      result.inliers = refined.inliers;
-      result.inlier_count = refined.inlier_count;
-      result.model.homography = refined.model.h;
-      result.model.homography_score = refined.score;
-      result.model.homography_inliers = refined.inliers;
-      result.model.homography_inlier_count = refined.inlier_count;
-      result.model.fundamental_inliers.clear();
+      take_homography(result, refined);
       ++guided_rounds_;
     }
     matched_points(result.features1.keypoints, result.features2.keypoints, result.matches, points_);

@@ -6,8 +6,8 @@
 // tilts 4 and 4√2. Invalid options must end in std::invalid_argument, valid ones in a
 // result that keeps every documented invariant: stage reports, the stopping rule, inlier flags,
 // match indices, keypoints inside their image and mask, image-2 points of the correspondences
-// within max_shift of their keypoints, each stage's keypoints a superset of the stage before; anything else (a crash, a sanitizer report, another exception, a broken
-// invariant) is a finding.
+// within max_shift of their keypoints, each stage's keypoints a superset of the stage before;
+// anything else (a crash, a sanitizer report, another exception, a broken invariant) is a finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
 #include <algorithm>
 #include <cmath>

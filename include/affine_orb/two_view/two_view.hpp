@@ -419,11 +419,17 @@ class TwoViewMatcher {
     points_.points2 = std::move(refined.points2);
     const std::optional<HomographyModel> current = HomographyModel::from_pixels(result.model.homography);
     if (!current) return;
+    const RansacResult<HomographyModel> fitted = refit(*current);
+    if (fitted.success) take_homography(result, fitted);
+  }
+
+  /// The local optimisation of `start` on the correspondences in points_, at the guided σ
+  /// (GuidedRefinementOptions::sigma, refinement_passes): the re-estimation of the guided rounds
+  /// and of the aligned correspondences.
+  RansacResult<HomographyModel> refit(const HomographyModel& start) const {
     const TruncatedChi2Score scoring{options_.guided.sigma, options_.model.homography_chi2, options_.model.score_constant};
     const HomographyEstimator estimator(points_.points1, points_.points2, scoring);
-    const RansacResult<HomographyModel> fitted =
-        optimise_locally(estimator, evaluate_model(estimator, *current), options_.guided.refinement_passes);
-    if (fitted.success) take_homography(result, fitted);
+    return optimise_locally(estimator, evaluate_model(estimator, start), options_.guided.refinement_passes);
   }
 
   /// `result`'s chosen homography, its score, inlier flags and count become `fitted`'s, on
@@ -443,7 +449,6 @@ class TwoViewMatcher {
   /// matched positions).
   void refine_guided(TwoViewResult<kBits>& result) {
     const GuidedRefinementOptions& guided = options_.guided;
-    const TruncatedChi2Score scoring{guided.sigma, options_.model.homography_chi2, options_.model.score_constant};
     std::optional<HomographyModel> current = HomographyModel::from_pixels(result.model.homography);
     std::vector<cv::Point2f> predicted(result.features1.size());
     GuidedMatchOptions gated = guided.matching;
@@ -457,9 +462,7 @@ class TwoViewMatcher {
       std::vector<Match> matches = match_guided(result.features1, result.features2, predicted, gated);
       matched_points(result.features1.keypoints, result.features2.keypoints, matches, points_);
       if (points_.points1.size() < 8) break;
-      const HomographyEstimator estimator(points_.points1, points_.points2, scoring);
-      const RansacResult<HomographyModel> refined =
-          optimise_locally(estimator, evaluate_model(estimator, *current), guided.refinement_passes);
+      const RansacResult<HomographyModel> refined = refit(*current);
       if (!refined.success) break;
       current = refined.model;
       result.matches = std::move(matches);

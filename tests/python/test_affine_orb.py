@@ -103,12 +103,13 @@ def test_match_images_equals_the_cpp_matcher(pair, min_inliers):
 def test_match_images_refinement_and_precision_test_are_reported():
     """guided_rounds and max_half_disagreement reach the C++ options: graf 1->2 is verified at stage
     0 by a homography refined by the default rounds (none with guided_rounds=0), and the precision
-    test, when on, measures the half disagreement, well under a pixel on this easy pair, whose
-    ground-truth homography the refined model matches at image 1's corners."""
+    test, on by default, measures the half disagreement (about a pixel on this easy pair; None with
+    max_half_disagreement=0), whose ground-truth homography the refined model matches at image 1's
+    corners."""
     image1 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img1.png"), cv2.IMREAD_GRAYSCALE)
     image2 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img2.png"), cv2.IMREAD_GRAYSCALE)
     truth = np.loadtxt(os.path.join(DATA, "oxford", "graf", "H1to2p"))
-    plain = affine_orb.match_images(image1, image2, guided_rounds=0)
+    plain = affine_orb.match_images(image1, image2, guided_rounds=0, max_half_disagreement=0.0)
     assert plain["verified"] and plain["stages"][0]["guided_rounds"] == 0
     assert plain["stages"][0]["half_disagreement"] is None
     r = affine_orb.match_images(image1, image2, max_half_disagreement=5.0)

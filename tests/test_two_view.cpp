@@ -329,11 +329,10 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   CAPTURE(loose_error);
   CHECK(loose_error > 5.0);
   // Measured on the guided model and its matches, the test would pass it.
-  std::vector<cv::Point2f> points1;
-  for (const affine_orb::Match& m : loose.matches)
-    points1.push_back(loose.features1.keypoints[static_cast<std::size_t>(m.query)].pt);
-  const double after_guided =
-      affine_orb::half_disagreement(points1, loose.points2, loose.inliers, loose.model.homography, image1.size());
+  const affine_orb::MatchedPoints matched =
+      affine_orb::matched_points(loose.features1.keypoints, loose.features2.keypoints, loose.matches);
+  const double after_guided = affine_orb::half_disagreement(matched.points1, loose.points2, loose.inliers,
+                                                            loose.model.homography, image1.size());
   CAPTURE(after_guided);
   CHECK(after_guided <= defaults.max_half_disagreement);
 

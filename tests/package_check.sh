@@ -11,8 +11,14 @@
 # It leaves the machine as it found it, also when a step fails: a trap removes the two packages and
 # any missing dependency their installation brought in, so that nothing installed stays behind for the later
 # stages (their tests must use the build tree's headers and module). Needs root, or sudo without a
-# password; skipped, saying so, otherwise. Refuses to run when either package is installed already
-# (it would replace the user's copy and then remove it).
+# password; skipped, saying so, otherwise.
+# A run that is killed (SIGKILL: no trap runs) leaves the packages installed. So the check keeps a
+# stamp, /var/tmp/affine_orb_package_check.stamp, while its packages are installed: the time it
+# began installing, the dependencies apt-get brought in, and after the installation each package's
+# dpkg file list's modification time (dpkg rewrites the list on every installation). A run that finds
+# the packages installed as the stamp says (the same times; no times yet and lists no older than the
+# stamp, if the kill came during apt-get install) removes them and goes on. Installed in any other
+# way (the user's copy), it refuses to run: it would replace that copy and then remove it.
 # Build tree: ${AFFINE_ORB_BUILD_ROOT:-build}/package.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -30,19 +36,51 @@ fi
 
 packages=(libaffine-orb-dev python3-affine-orb)
 installed() { dpkg-query -W -f='${Status}\n' "$1" 2>/dev/null | grep -q "install ok installed"; }
-for p in "${packages[@]}"; do
-  if installed "$p"; then
-    echo "Debian packages: $p is installed already; remove it first (apt-get remove $p)" >&2
+stamp_file=/var/tmp/affine_orb_package_check.stamp
+list_time() {  # modification time of dpkg's file list of package $1
+  local list
+  list=$(ls /var/lib/dpkg/info/"$1".list /var/lib/dpkg/info/"$1":*.list 2>/dev/null | head -n 1)
+  stat -c %Y "$list" 2>/dev/null || echo 0
+}
+export DEBIAN_FRONTEND=noninteractive
+apt_get=(apt-get -q -o DPkg::Lock::Timeout=300)  # waits for another apt-get instead of failing
+
+present=()
+for p in "${packages[@]}"; do installed "$p" && present+=("$p"); done
+if ((${#present[@]})); then
+  ours=0
+  if [[ -f $stamp_file ]]; then
+    ours=1
+    since=$(sed -n 's/^since //p' "$stamp_file")
+    for p in "${present[@]}"; do
+      recorded=$(sed -n "s/^time $p //p" "$stamp_file")
+      now=$(list_time "$p")
+      if [[ -n $recorded ]]; then
+        [[ $recorded == "$now" ]] || ours=0
+      else
+        [[ -n $since ]] && ((now >= since)) || ours=0
+      fi
+    done
+  fi
+  if ((ours)); then
+    leftover=("${present[@]}")
+    for p in $(sed -n 's/^extra //p' "$stamp_file"); do installed "$p" && leftover+=("$p"); done
+    echo "Debian packages: removing what a killed run of this check left installed: ${leftover[*]}"
+    "${as_root[@]}" "${apt_get[@]}" remove -y "${leftover[@]}" > /dev/null ||
+      { echo "Debian packages: apt-get remove ${leftover[*]} failed" >&2; exit 1; }
+  else
+    for p in "${present[@]}"; do
+      echo "Debian packages: $p is installed already, not by this check; remove it first (apt-get remove $p)" >&2
+    done
     exit 1
   fi
-done
+fi
+"${as_root[@]}" rm -f "$stamp_file"
 
 root=${AFFINE_ORB_BUILD_ROOT:-build}
 build="$root/package"
 work=$(mktemp -d /tmp/affine_orb_package.XXXXXX)
 chmod 755 "$work"  # apt reads the .deb files as its unprivileged user
-export DEBIAN_FRONTEND=noninteractive
-apt_get=(apt-get -q -o DPkg::Lock::Timeout=300)  # waits for another apt-get instead of failing
 brought_in=()  # packages that apt-get install added for ours (their dependencies that were missing)
 
 # Removes the two packages and what their installation brought in; runs on every exit.
@@ -58,12 +96,15 @@ cleanup() {
       status=1
     }
   fi
+  local left=0
   for p in "${packages[@]}"; do
     if installed "$p"; then
       echo "Debian packages: $p is still installed" >&2
       status=1
+      left=1
     fi
   done
+  ((left)) || "${as_root[@]}" rm -f "$stamp_file"
   rm -rf "$work"
   exit $status
 }
@@ -93,8 +134,11 @@ debs=("$work/$(basename "$dev")" "$work/$(basename "$python")")
 mapfile -t brought_in < <("${as_root[@]}" "${apt_get[@]}" install -s --no-install-recommends "${debs[@]}" 2>/dev/null |
   sed -n 's/^Inst \([^ ]*\).*/\1/p' | grep -vxF -e libaffine-orb-dev -e python3-affine-orb || true)
 ((${#brought_in[@]} == 0)) || echo "also installs (and will remove): ${brought_in[*]}"
+{ echo "since $(date +%s)"; for p in "${brought_in[@]}"; do echo "extra $p"; done; } |
+  "${as_root[@]}" tee "$stamp_file" > /dev/null
 "${as_root[@]}" "${apt_get[@]}" install -y --no-install-recommends "${debs[@]}" > "$work/install.log" 2>&1 || { cat "$work/install.log"; exit 1; }
 for p in "${packages[@]}"; do installed "$p" || { echo "$p did not install" >&2; exit 1; }; done
+for p in "${packages[@]}"; do echo "time $p $(list_time "$p")"; done | "${as_root[@]}" tee -a "$stamp_file" > /dev/null
 
 echo "-- C++ consumer against /usr (find_package and pkg-config)"
 cmake -DPREFIX=/usr -DSOURCE_DIR="$PWD/tests/consumer" -DWORK_DIR="$work/consumer" -DGENERATOR=Ninja \

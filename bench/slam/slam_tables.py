@@ -203,12 +203,13 @@ def sequence_type(seq):
 # Metrics of the regression list: (runs.csv column or derived key, label, True when larger is better).
 REGRESSION_METRICS = [("keyframes", "keyframes", True), ("poses", "frames with a pose", True),
                       ("reset", "runs with a reset", False), ("relocalised", "relocalises", True),
-                      ("correct", "correct map", True), ("ate", "ATE m", False)]
+                      ("loop", "runs with a loop closure", True), ("correct", "correct map", True),
+                      ("ate", "ATE m", False)]
 
 
 def suite_rows(runs, seqs):
-    """runs.csv's rows with derived per-run fields: reset (0/1), relocalised (0/1) and the obliquity
-    (revisit_sweep RGB-D), correct (0/1, monocular), ate, track_ms."""
+    """runs.csv's rows with derived per-run fields: reset (0/1), loop (0/1: ORB-SLAM2 closed a loop),
+    relocalised (0/1) and the obliquity (revisit_sweep RGB-D), correct (0/1, monocular), ate, track_ms."""
     number = lambda v: float(v) if v not in ("", "None", None) else None
     sides = {}
     rows = []
@@ -219,6 +220,7 @@ def suite_rows(runs, seqs):
         row["second"] = number(r["kf_second_idx"])
         row["poses"] = number(r["poses"]) if r["mode"] == "rgbd" else None
         row["reset"] = 1.0 if (number(r["msg_reset"]) or 0) > 0 else 0.0
+        row["loop"] = 1.0 if (number(r["msg_loop"]) or 0) > 0 else 0.0
         row["ate"] = number(r["ate_rmse"])
         mean = number(r["mean_track_s"])
         row["track_ms"] = mean * 1e3 if mean else None
@@ -254,8 +256,9 @@ def suite(runs, seqs, confs):
             print("\n%s, %s: %d sequences (%s)\n" % (kind, "RGB-D" if mode == "rgbd" else "monocular", len(seeds),
                                                     " ".join(s.rpartition("_s")[2] for s in seeds)))
             print("| configuration | runs | keyframes | second keyframe at frame | runs with a reset | relocalised "
-                  "| obliquity there, ° | correct maps | ATE m | tracking ms, mean | / %s's |" % stock)
-            print("|---|---|---|---|---|---|---|---|---|---|---|")
+                  "| obliquity there, ° | runs with a loop closure | correct maps | ATE m | tracking ms, mean "
+                  "| / %s's |" % stock)
+            print("|---|---|---|---|---|---|---|---|---|---|---|---|")
             base = [r["track_ms"] for r in group if r["conf"] == stock and r["track_ms"]]
             for conf in confs:
                 rs = [r for r in group if r["conf"] == conf]
@@ -263,10 +266,11 @@ def suite(runs, seqs, confs):
                     continue
                 times = [r["track_ms"] for r in rs if r["track_ms"]]
                 ratio = "%.2f" % (statistics.median(times) / statistics.median(base)) if base and times else "–"
-                print("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                print("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                     conf, len(rs), cell([r["keyframes"] for r in rs], "%.0f"), cell([r["second"] for r in rs], "%.0f"),
                     count(rs, "reset"),
-                    count(rs, "relocalised"), cell([r["obliquity"] for r in rs]), count(rs, "correct"),
+                    count(rs, "relocalised"), cell([r["obliquity"] for r in rs]), count(rs, "loop"),
+                    count(rs, "correct"),
                     cell([r["ate"] for r in rs], "%.3f"), cell(times), ratio))
     groundtruth = os.path.join(runs, "kitti", "groundtruth.txt")
     if os.path.exists(groundtruth):

@@ -37,10 +37,8 @@ fi
 packages=(libaffine-orb-dev python3-affine-orb)
 installed() { dpkg-query -W -f='${Status}\n' "$1" 2>/dev/null | grep -q "install ok installed"; }
 stamp_file=/var/tmp/affine_orb_package_check.stamp
-list_time() {  # modification time of dpkg's file list of package $1
-  local list
-  list=$(ls /var/lib/dpkg/info/"$1".list /var/lib/dpkg/info/"$1":*.list 2>/dev/null | head -n 1)
-  stat -c %Y "$list" 2>/dev/null || echo 0
+list_time() {  # modification time of dpkg's file list of package $1 (dpkg >= 1.19.3)
+  dpkg-query -W -f='${db-fsys:Last-Modified}' "$1" 2>/dev/null || echo 0
 }
 export DEBIAN_FRONTEND=noninteractive
 apt_get=(apt-get -q -o DPkg::Lock::Timeout=300)  # waits for another apt-get instead of failing

@@ -80,10 +80,12 @@ struct LevelWork {
   }
 };
 
-/// A view and its per-level records (fixed for an image size, prepare_views()).
+/// A view and its per-level records (fixed for an image size; the view by prepare_views(), the
+/// rest by prepare_view() the first time the view is extracted at that size).
 template <int Bits>
 struct ViewWork {
   AffineView view;
+  bool prepared = false;  ///< renderer, regions and levels are set (prepare_view())
   ViewRenderer renderer;
   /// Per level, the pixels computed (the rest repeats the row's edge pixels): level 0 is
   /// rendered, the others resized, within kRenderMargin level pixels of the image.
@@ -98,6 +100,7 @@ template <int Bits>
 void prepare_view(const AffineView& view, cv::Size size, double antialias, const PyramidOptions& pyramid, int border,
                   double margin, ViewWork<Bits>& work) {
   work.view = view;
+  work.prepared = true;
   work.renderer = ViewRenderer(view, antialias);
   work.levels.resize(static_cast<std::size_t>(pyramid.levels));
   work.regions.resize(static_cast<std::size_t>(pyramid.levels));

@@ -340,7 +340,21 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   REQUIRE(tested.stages.size() >= 2);  // stage 0 did not end the escalation
   REQUIRE(tested.stages[0].half_disagreement.has_value());
   CHECK(*tested.stages[0].half_disagreement > defaults.max_half_disagreement);
-  CHECK(tested.stages[0].inliers == loose.stages[0].inliers);  // the same stage 0, failed on precision alone
+  // The same stage 0 as without the test, failed on precision alone; the guided rounds skip it,
+  // since stage 1 matches everything again and replaces its result.
+  affine_orb::TwoViewOptions unguided = untested;
+  unguided.guided.iterations = 0;
+  unguided.stages.clear();
+  const auto bare = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(unguided).match(image1, image2);
+  CHECK(tested.stages[0].guided_rounds == 0);
+  CHECK(tested.stages[0].matches == bare.stages[0].matches);
+  CHECK(tested.stages[0].inliers == bare.stages[0].inliers);
+  // With all_stages every stage's report is kept, so stage 0 gets its guided rounds as without the test.
+  affine_orb::TwoViewOptions every = defaults;
+  every.all_stages = true;
+  const auto all = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(every).match(image1, image2);
+  CHECK(all.stages[0].guided_rounds == loose.stages[0].guided_rounds);
+  CHECK(all.stages[0].inliers == loose.stages[0].inliers);
   CHECK(tested.verified);
   const double tested_error = affine_orb::test::corner_error(tested.model.homography, truth, image1.size());
   CAPTURE(tested_error);

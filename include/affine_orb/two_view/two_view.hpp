@@ -219,9 +219,11 @@ struct TwoViewStageReport {
   /// (TwoViewOptions::max_half_disagreement); measured only when the test is on and a homography
   /// was chosen.
   std::optional<double> half_disagreement;
-  /// Rounds of guided matching run on the stage's homography (TwoViewOptions::guided; 0 when none).
+  /// Rounds of guided matching run on the stage's homography (TwoViewOptions::guided; 0 when none,
+  /// and on a homography that failed the precision test when a further stage follows).
   int guided_rounds = 0;
-  /// Matches whose image-2 point was aligned (TwoViewOptions::refine; 0 when it did not run).
+  /// Matches whose image-2 point was aligned (TwoViewOptions::refine; 0 when it did not run, as for
+  /// guided_rounds).
   int refined = 0;
   double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
   double match_ms = 0.0;    ///< matching, milliseconds
@@ -348,7 +350,7 @@ class TwoViewMatcher {
       const Clock::time_point extracted = Clock::now();
       result.matches = match_features(result.features1, result.features2, options_.matching);
       const Clock::time_point matched = Clock::now();
-      verify(result, image1, image2);
+      verify(result, image1, image2, k == n_stages || options_.all_stages);
       const Clock::time_point verified = Clock::now();
 
       report.max_tilt = cursor1.extracted_tilt();
@@ -389,8 +391,11 @@ class TwoViewMatcher {
   /// select_model() on the matched positions; the chosen model's inlier flags and count; for a
   /// chosen homography under the precision test, the disagreement of its two half estimates; a
   /// chosen homography with enough support refined by guided matching (TwoViewOptions::guided) and
-  /// then by aligned correspondences (TwoViewOptions::refine).
-  void verify(TwoViewResult<kBits>& result, const cv::Mat& image1, const cv::Mat& image2) {
+  /// then by aligned correspondences (TwoViewOptions::refine). Neither refinement runs on a
+  /// homography that failed the precision test unless the stage is `reported` (the last one, or
+  /// every one with all_stages): the next stage matches everything again and its result replaces
+  /// this one.
+  void verify(TwoViewResult<kBits>& result, const cv::Mat& image1, const cv::Mat& image2, bool reported) {
     matched_points(result.features1.keypoints, result.features2.keypoints, result.matches, points_);
     result.model = ModelSelectionResult{};
     result.inliers.assign(result.matches.size(), 0);
@@ -407,8 +412,9 @@ class TwoViewMatcher {
         result.half_disagreement = half_disagreement(points_.points1, points_.points2, result.inliers,
                                                      result.model.homography, image1.size());
       }
-      if (homography && options_.guided.iterations > 0 && supported(result)) refine_guided(result);
-      if (homography && options_.refine && supported(result)) refine_positions(result, image1, image2);
+      const bool refined = homography && (reported || precise(result));
+      if (refined && options_.guided.iterations > 0 && supported(result)) refine_guided(result);
+      if (refined && options_.refine && supported(result)) refine_positions(result, image1, image2);
     }
     result.points2 = points_.points2;
   }
@@ -487,11 +493,14 @@ class TwoViewMatcher {
            result.inlier_count >= options_.min_inlier_ratio * static_cast<double>(result.matches.size());
   }
 
-  bool is_verified(const TwoViewResult<kBits>& result) const {
-    const bool precise = options_.max_half_disagreement <= 0.0 || result.model.model != GeometricModel::kHomography ||
-                         (result.half_disagreement && *result.half_disagreement <= options_.max_half_disagreement);
-    return precise && supported(result);
+  /// The chosen model passes the precision test (TwoViewOptions::max_half_disagreement; an F model
+  /// and a test that is off always do).
+  bool precise(const TwoViewResult<kBits>& result) const {
+    return options_.max_half_disagreement <= 0.0 || result.model.model != GeometricModel::kHomography ||
+           (result.half_disagreement && *result.half_disagreement <= options_.max_half_disagreement);
   }
+
+  bool is_verified(const TwoViewResult<kBits>& result) const { return precise(result) && supported(result); }
 
   TwoViewOptions options_;
   Extractor<Descriptor> extractor1_;

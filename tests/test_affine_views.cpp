@@ -413,44 +413,55 @@ TEST_CASE("the mask is honoured for keypoints of tilted views too") {
 }
 
 TEST_CASE("duplicate correspondences are removed exactly as defined") {
-  std::mt19937 rng(17);
-  std::uniform_real_distribution<float> coord(0.0f, 40.0f);
-  std::vector<cv::Point2f> p1(60);
-  std::vector<cv::Point2f> p2(60);
-  for (auto& p : p1) p = {coord(rng), coord(rng)};
-  for (auto& p : p2) p = {coord(rng), coord(rng)};
-  std::vector<affine_orb::Match> matches;
-  for (int k = 0; k < 300; ++k) {
-    matches.push_back({static_cast<int>(rng() % 60), static_cast<int>(rng() % 60), static_cast<int>(rng() % 20)});
-  }
-  const auto kept = affine_orb::remove_duplicate_matches(matches, p1, p2, 3.0);
-  // Naive reference: greedy by (distance, query, train), O(n²).
-  auto order = matches;
-  std::sort(order.begin(), order.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
-    return std::tie(a.distance, a.query, a.train) < std::tie(b.distance, b.query, b.train);
-  });
-  std::vector<affine_orb::Match> expected;
-  for (const auto& m : order) {
-    bool duplicate = false;
-    for (const auto& k : expected) {
-      const auto& a = p1[static_cast<std::size_t>(m.query)];
-      const auto& b = p1[static_cast<std::size_t>(k.query)];
-      const auto& c = p2[static_cast<std::size_t>(m.train)];
-      const auto& d = p2[static_cast<std::size_t>(k.train)];
-      duplicate = duplicate || (std::hypot(a.x - b.x, a.y - b.y) < 3.0 && std::hypot(c.x - d.x, c.y - d.y) < 3.0);
+  // Points in a 40 px square (many duplicates), then the same spread over 4e6 px with a few points
+  // at ±1e30 and NaN (the grid's cells widen; a NaN point is never within the radius).
+  for (const float scale : {1.0f, 1e5f}) {
+    CAPTURE(scale);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> coord(0.0f, 40.0f);
+    std::vector<cv::Point2f> p1(60);
+    std::vector<cv::Point2f> p2(60);
+    for (auto& p : p1) p = {coord(rng) * scale, coord(rng) * scale};
+    for (auto& p : p2) p = {coord(rng) * scale, coord(rng) * scale};
+    if (scale > 1.0f) {
+      p1[3] = {1e30f, -1e30f};
+      p1[4] = {std::numeric_limits<float>::quiet_NaN(), 0.0f};
+      p2[5] = {-1e30f, 1e30f};
     }
-    if (!duplicate) expected.push_back(m);
+    std::vector<affine_orb::Match> matches;
+    for (int k = 0; k < 300; ++k) {
+      matches.push_back({static_cast<int>(rng() % 60), static_cast<int>(rng() % 60), static_cast<int>(rng() % 20)});
+    }
+    const auto kept = affine_orb::remove_duplicate_matches(matches, p1, p2, 3.0);
+    // Naive reference: greedy by (distance, query, train), O(n²).
+    auto order = matches;
+    std::sort(order.begin(), order.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
+      return std::tie(a.distance, a.query, a.train) < std::tie(b.distance, b.query, b.train);
+    });
+    std::vector<affine_orb::Match> expected;
+    for (const auto& m : order) {
+      bool duplicate = false;
+      for (const auto& k : expected) {
+        const auto& a = p1[static_cast<std::size_t>(m.query)];
+        const auto& b = p1[static_cast<std::size_t>(k.query)];
+        const auto& c = p2[static_cast<std::size_t>(m.train)];
+        const auto& d = p2[static_cast<std::size_t>(k.train)];
+        duplicate = duplicate || (std::hypot(a.x - b.x, a.y - b.y) < 3.0 && std::hypot(c.x - d.x, c.y - d.y) < 3.0);
+      }
+      if (!duplicate) expected.push_back(m);
+    }
+    std::sort(expected.begin(), expected.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
+      return std::tie(a.query, a.train) < std::tie(b.query, b.train);
+    });
+    CHECK(expected.size() < matches.size());  // the case has duplicates to remove
+    REQUIRE(kept.size() == expected.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      CHECK(kept[i].query == expected[i].query);
+      CHECK(kept[i].train == expected[i].train);
+      CHECK(kept[i].distance == expected[i].distance);
+    }
+    CHECK_THROWS_AS(affine_orb::remove_duplicate_matches(matches, p1, p2, -1.0), std::invalid_argument);
   }
-  std::sort(expected.begin(), expected.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
-    return std::tie(a.query, a.train) < std::tie(b.query, b.train);
-  });
-  REQUIRE(kept.size() == expected.size());
-  for (std::size_t i = 0; i < kept.size(); ++i) {
-    CHECK(kept[i].query == expected[i].query);
-    CHECK(kept[i].train == expected[i].train);
-    CHECK(kept[i].distance == expected[i].distance);
-  }
-  CHECK_THROWS_AS(affine_orb::remove_duplicate_matches(matches, p1, p2, -1.0), std::invalid_argument);
 }
 
 TEST_CASE("the location-aware ratio test equals a naive reference") {
@@ -568,51 +579,60 @@ TEST_CASE("guided matching equals a naive reference over every keypoint of image
     b.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 340), static_cast<float>(rng() % 340)), 31.0f);
     b.views.push_back(0);
   }
-  for (const double gate : {4.0, 10.0, 40.0}) {
-    for (const double exclusion : {0.0, 4.0}) {
-      for (const int max_distance : {40, 100}) {
-        CAPTURE(gate);
-        CAPTURE(exclusion);
-        CAPTURE(max_distance);
-        affine_orb::GuidedMatchOptions options;
-        options.gate_radius = gate;
-        options.ratio_exclusion_radius = exclusion;
-        options.max_distance = max_distance;
-        options.duplicate_radius = 0.0;
-        const auto got = affine_orb::match_guided(a, b, predicted, options);
-        std::vector<affine_orb::Match> expected;
-        const auto squared = [](cv::Point2f p, cv::Point2f q) {
-          return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
-        };
-        for (std::size_t i = 0; i < a.size(); ++i) {
-          if (!std::isfinite(predicted[i].x)) continue;
-          int best = 1 << 30;
-          std::size_t j1 = 0;
-          for (std::size_t j = 0; j < b.size(); ++j) {
-            if (squared(predicted[i], b.keypoints[j].pt) > gate * gate) continue;
-            const int d = affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]);
-            if (d < best) {
-              best = d;
-              j1 = j;
+  // The same with one more image-2 keypoint 1e30 px away, which widens the search grid's cells.
+  affine_orb::Features<256> b_far = b;
+  b_far.keypoints.emplace_back(cv::Point2f(1e30f, -1e30f), 31.0f);
+  b_far.descriptors.push_back(b.descriptors.front());
+  b_far.views.push_back(0);
+  for (const bool far : {false, true}) {
+    CAPTURE(far);
+    const affine_orb::Features<256>& train = far ? b_far : b;
+    for (const double gate : {4.0, 10.0, 40.0}) {
+      for (const double exclusion : {0.0, 4.0}) {
+        for (const int max_distance : {40, 100}) {
+          CAPTURE(gate);
+          CAPTURE(exclusion);
+          CAPTURE(max_distance);
+          affine_orb::GuidedMatchOptions options;
+          options.gate_radius = gate;
+          options.ratio_exclusion_radius = exclusion;
+          options.max_distance = max_distance;
+          options.duplicate_radius = 0.0;
+          const auto got = affine_orb::match_guided(a, train, predicted, options);
+          std::vector<affine_orb::Match> expected;
+          const auto squared = [](cv::Point2f p, cv::Point2f q) {
+            return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
+          };
+          for (std::size_t i = 0; i < a.size(); ++i) {
+            if (!std::isfinite(predicted[i].x)) continue;
+            int best = 1 << 30;
+            std::size_t j1 = 0;
+            for (std::size_t j = 0; j < train.size(); ++j) {
+              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
+              const int d = affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]);
+              if (d < best) {
+                best = d;
+                j1 = j;
+              }
             }
+            if (best > max_distance) continue;
+            int second = 1 << 30;
+            for (std::size_t j = 0; j < train.size(); ++j) {
+              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
+              if (squared(train.keypoints[j].pt, train.keypoints[j1].pt) <= exclusion * exclusion) continue;
+              second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]));
+            }
+            if (second != 1 << 30 && !(best < 0.8 * second)) continue;
+            expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
           }
-          if (best > max_distance) continue;
-          int second = 1 << 30;
-          for (std::size_t j = 0; j < b.size(); ++j) {
-            if (squared(predicted[i], b.keypoints[j].pt) > gate * gate) continue;
-            if (squared(b.keypoints[j].pt, b.keypoints[j1].pt) <= exclusion * exclusion) continue;
-            second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
+          REQUIRE(got.size() == expected.size());
+          for (std::size_t k = 0; k < got.size(); ++k) {
+            CHECK(got[k].query == expected[k].query);
+            CHECK(got[k].train == expected[k].train);
+            CHECK(got[k].distance == expected[k].distance);
           }
-          if (second != 1 << 30 && !(best < 0.8 * second)) continue;
-          expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
+          if (gate == 10.0 && max_distance == 100) CHECK(got.size() > 60);  // the planted partners are found
         }
-        REQUIRE(got.size() == expected.size());
-        for (std::size_t k = 0; k < got.size(); ++k) {
-          CHECK(got[k].query == expected[k].query);
-          CHECK(got[k].train == expected[k].train);
-          CHECK(got[k].distance == expected[k].distance);
-        }
-        if (gate == 10.0 && max_distance == 100) CHECK(got.size() > 60);  // the planted partners are found
       }
     }
   }

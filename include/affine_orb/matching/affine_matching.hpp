@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "affine_orb/core/detail/check.hpp"
@@ -110,35 +110,29 @@ inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, c
   if (radius == 0.0) {
     kept = std::move(matches);
   } else {
-    // Kept matches hashed by the grid cell (side = radius) of their image-1 point.
-    std::unordered_map<long long, std::vector<std::size_t>> grid;
-    auto key = [](long long cx, long long cy) { return cx * 2000003LL + cy; };
+    // Every match's image-1 point in a grid of cells of side `radius`; a match is compared with the
+    // kept ones among its neighbours there.
+    std::vector<cv::Point2f> first(matches.size());
+    for (std::size_t i = 0; i < matches.size(); ++i) first[i] = points1[static_cast<std::size_t>(matches[i].query)];
+    detail::PointGrid grid;
+    grid.build(first, radius);
+    std::vector<std::uint8_t> is_kept(matches.size(), 0);
     const double r2 = radius * radius;
-    for (const Match& m : matches) {
-      const cv::Point2f& p = points1[static_cast<std::size_t>(m.query)];
-      const cv::Point2f& q = points2[static_cast<std::size_t>(m.train)];
-      const long long cx = static_cast<long long>(std::floor(p.x / radius));
-      const long long cy = static_cast<long long>(std::floor(p.y / radius));
+    for (std::size_t i = 0; i < matches.size(); ++i) {
+      const cv::Point2f& p = first[i];
+      const cv::Point2f& q = points2[static_cast<std::size_t>(matches[i].train)];
       bool duplicate = false;
-      for (long long dy = -1; dy <= 1 && !duplicate; ++dy) {
-        for (long long dx = -1; dx <= 1 && !duplicate; ++dx) {
-          const auto it = grid.find(key(cx + dx, cy + dy));
-          if (it == grid.end()) continue;
-          for (std::size_t k : it->second) {
-            const cv::Point2f& kp = points1[static_cast<std::size_t>(kept[k].query)];
-            const cv::Point2f& kq = points2[static_cast<std::size_t>(kept[k].train)];
-            const double d1 = (kp.x - p.x) * (kp.x - p.x) + (kp.y - p.y) * (kp.y - p.y);
-            const double d2 = (kq.x - q.x) * (kq.x - q.x) + (kq.y - q.y) * (kq.y - q.y);
-            if (d1 < r2 && d2 < r2) {
-              duplicate = true;
-              break;
-            }
-          }
-        }
-      }
+      grid.for_each_near(p, [&](int k) {
+        if (duplicate || !is_kept[static_cast<std::size_t>(k)]) return;
+        const cv::Point2f& kp = first[static_cast<std::size_t>(k)];
+        const cv::Point2f& kq = points2[static_cast<std::size_t>(matches[static_cast<std::size_t>(k)].train)];
+        const double d1 = (kp.x - p.x) * (kp.x - p.x) + (kp.y - p.y) * (kp.y - p.y);
+        const double d2 = (kq.x - q.x) * (kq.x - q.x) + (kq.y - q.y) * (kq.y - q.y);
+        duplicate = d1 < r2 && d2 < r2;
+      });
       if (duplicate) continue;
-      grid[key(cx, cy)].push_back(kept.size());
-      kept.push_back(m);
+      is_kept[i] = 1;
+      kept.push_back(matches[i]);
     }
   }
   std::sort(kept.begin(), kept.end(), [](const Match& a, const Match& b) {

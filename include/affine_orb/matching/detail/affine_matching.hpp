@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "affine_orb/core/detail/check.hpp"
@@ -16,6 +15,80 @@
 
 namespace affine_orb {
 namespace detail {
+
+/// Points bucketed into square cells over their bounding box (a counting sort: one index array,
+/// no allocation per cell), to visit the points near a position. Every point within `side` of a
+/// position lies in the 3 x 3 cells around it. Non-finite points are left out.
+class PointGrid {
+ public:
+  /// Buckets `points` into cells of side `side` (> 0), widened where the bounding box would need
+  /// more than kMaxCellsPerSide cells along a side (far-flung input stays bounded in memory).
+  void build(const std::vector<cv::Point2f>& points, double side) {
+    double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;
+    bool any = false;
+    for (const cv::Point2f& p : points) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
+      x0 = any ? std::min(x0, static_cast<double>(p.x)) : p.x;
+      y0 = any ? std::min(y0, static_cast<double>(p.y)) : p.y;
+      x1 = any ? std::max(x1, static_cast<double>(p.x)) : p.x;
+      y1 = any ? std::max(y1, static_cast<double>(p.y)) : p.y;
+      any = true;
+    }
+    x0_ = x0;
+    y0_ = y0;
+    side_ = std::max({side, (x1 - x0) / kMaxCellsPerSide, (y1 - y0) / kMaxCellsPerSide});
+    columns_ = any ? static_cast<int>((x1 - x0) / side_) + 1 : 0;
+    rows_ = any ? static_cast<int>((y1 - y0) / side_) + 1 : 0;
+    start_.assign(static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_) + 1, 0);
+    cell_of_.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const cv::Point2f& p = points[i];
+      const bool finite = std::isfinite(p.x) && std::isfinite(p.y);
+      cell_of_[i] = finite ? cell(column(p.x), row(p.y)) : -1;
+      if (cell_of_[i] >= 0) ++start_[static_cast<std::size_t>(cell_of_[i]) + 1];
+    }
+    for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    index_.resize(static_cast<std::size_t>(start_.back()));
+    fill_ = start_;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (cell_of_[i] >= 0) index_[static_cast<std::size_t>(fill_[static_cast<std::size_t>(cell_of_[i])]++)] = static_cast<int>(i);
+    }
+  }
+
+  /// Calls fn(i) for every point i in the 3 x 3 cells around `p` (rows, then columns, then
+  /// increasing i within a cell); nothing for a non-finite `p`.
+  template <class Fn>
+  void for_each_near(const cv::Point2f& p, Fn fn) const {
+    if (columns_ == 0 || !std::isfinite(p.x) || !std::isfinite(p.y)) return;
+    const double fx = std::floor((p.x - x0_) / side_);
+    const double fy = std::floor((p.y - y0_) / side_);
+    if (fx < -1.0 || fy < -1.0 || fx > columns_ || fy > rows_) return;
+    const int cx = static_cast<int>(fx);
+    const int cy = static_cast<int>(fy);
+    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, rows_ - 1); ++y) {
+      for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, columns_ - 1); ++x) {
+        const int c = cell(x, y);
+        for (int k = start_[static_cast<std::size_t>(c)]; k < start_[static_cast<std::size_t>(c) + 1]; ++k) {
+          fn(index_[static_cast<std::size_t>(k)]);
+        }
+      }
+    }
+  }
+
+ private:
+  static constexpr double kMaxCellsPerSide = 1024.0;
+
+  int column(float x) const { return std::min(static_cast<int>((x - x0_) / side_), columns_ - 1); }
+  int row(float y) const { return std::min(static_cast<int>((y - y0_) / side_), rows_ - 1); }
+  int cell(int x, int y) const { return y * columns_ + x; }
+
+  double x0_ = 0.0, y0_ = 0.0, side_ = 1.0;
+  int columns_ = 0, rows_ = 0;
+  std::vector<int> start_;    ///< per cell, the first entry of index_; one more entry at the end
+  std::vector<int> fill_;     ///< build()'s insertion cursor per cell
+  std::vector<int> cell_of_;  ///< per point, its cell (−1: not finite)
+  std::vector<int> index_;    ///< point indices, cell by cell
+};
 
 /// The keypoints' positions, pixels, in their order.
 inline std::vector<cv::Point2f> positions(const std::vector<cv::KeyPoint>& keypoints) {
@@ -77,13 +150,8 @@ template <int Bits>
 std::vector<Match> match_gated(const Features<Bits>& a, const Features<Bits>& b,
                                const std::vector<cv::Point2f>& predicted, double gate_radius, float ratio,
                                double exclusion_radius, int max_distance) {
-  std::unordered_map<long long, std::vector<int>> grid;
-  const auto key = [](long long cx, long long cy) { return cx * 2000003LL + cy; };
-  const auto cell = [gate_radius](float v) { return static_cast<long long>(std::floor(v / gate_radius)); };
-  for (std::size_t j = 0; j < b.size(); ++j) {
-    const cv::Point2f& q = b.keypoints[j].pt;
-    grid[key(cell(q.x), cell(q.y))].push_back(static_cast<int>(j));
-  }
+  PointGrid grid;
+  grid.build(positions(b.keypoints), gate_radius);
   const auto squared = [](const cv::Point2f& p, const cv::Point2f& q) {
     return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
   };
@@ -95,17 +163,10 @@ std::vector<Match> match_gated(const Features<Bits>& a, const Features<Bits>& b,
     const cv::Point2f& p = predicted[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || std::abs(p.x) > 1e7f || std::abs(p.y) > 1e7f) continue;
     candidates.clear();
-    const long long cx = cell(p.x), cy = cell(p.y);
-    for (long long dy = -1; dy <= 1; ++dy) {
-      for (long long dx = -1; dx <= 1; ++dx) {
-        const auto it = grid.find(key(cx + dx, cy + dy));
-        if (it == grid.end()) continue;
-        for (const int j : it->second) {
-          if (squared(p, b.keypoints[static_cast<std::size_t>(j)].pt) > gate2) continue;
-          candidates.push_back({j, hamming_distance(a.descriptors[i], b.descriptors[static_cast<std::size_t>(j)])});
-        }
-      }
-    }
+    grid.for_each_near(p, [&](int j) {
+      if (squared(p, b.keypoints[static_cast<std::size_t>(j)].pt) > gate2) return;
+      candidates.push_back({j, hamming_distance(a.descriptors[i], b.descriptors[static_cast<std::size_t>(j)])});
+    });
     KnnMatch test;
     test.query = static_cast<int>(i);
     for (const Neighbour& c : candidates) {

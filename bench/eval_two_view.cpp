@@ -1,6 +1,6 @@
 // eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b,...]
 //               [--methods SUBSTRING] [--asift-sequences a,b,...|all] [--peer-cache FILE] [--sweep]
-//               [--placement]
+//               [--placement] [--repeats N]
 //
 // Two-view matching judged where users feel it: on every Oxford pair 1->2 ... 1->6, opencv-doc's
 // graf 1->3 (subset "oxford") and every pair of ../shared/data/pairs/ (hpatches, homogr, evd), per
@@ -29,7 +29,10 @@
 // TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
 // demand, with and without sub-pixel positions, per octave of the keypoint in image 1 and in image
 // 2, the residuals |H·x1 − x2| (ground truth H, pixels of image 2, level-0 coordinates) of the
-// matches correct within 3 px over all pairs run: count, median and 90th percentile.
+// matches correct within 3 px over all pairs run: count, median and 90th percentile. --repeats N
+// runs every method it computes N times on each pair in a row and reports the median time (the
+// methods are deterministic: the outcome is the last run's); one run by default. Rows read from
+// --peer-cache keep the time of the run that wrote them.
 //
 // Writes DIR/eval_two_view.md (per subset and method, pairs solved and seconds, and the union of
 // all methods; the summary over all pairs; then every pair) and DIR/eval_two_view.csv, and prints
@@ -37,6 +40,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -300,6 +304,21 @@ void placement_table(const std::string& method, const std::vector<Row>& rows,
   md << "| " << method << " | all |" << stats(all) << stats(all) << "\n";
 }
 
+/// `method` run `repeats` times on a pair: the last run's outcome with the median of the times (the
+/// upper of the two middle ones for an even count).
+Outcome run_repeated(const Method& method, const cv::Mat& a, const cv::Mat& b,
+                     const affine_orb::bench::ViewpointPair& pair, int repeats) {
+  std::vector<double> ms;
+  Outcome o;
+  for (int r = 0; r < repeats; ++r) {
+    o = method.run(a, b, pair);
+    ms.push_back(o.ms);
+  }
+  std::nth_element(ms.begin(), ms.begin() + static_cast<std::ptrdiff_t>(ms.size() / 2), ms.end());
+  o.ms = ms[ms.size() / 2];
+  return o;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -311,6 +330,7 @@ int main(int argc, char** argv) {
   std::string cache_path;
   bool sweep = false;
   bool placement = false;
+  int repeats = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     const bool has_value = i + 1 < argc;
@@ -326,6 +346,8 @@ int main(int argc, char** argv) {
       subsets = std::string(",") + argv[++i] + ",";
     } else if (flag == "--methods" && has_value) {
       method_filter = argv[++i];
+    } else if (flag == "--repeats" && has_value && std::atoi(argv[i + 1]) >= 1) {
+      repeats = std::atoi(argv[++i]);
     } else if (flag == "--peer-cache" && has_value) {
       cache_path = argv[++i];
     } else if (flag == "--asift-sequences" && has_value) {
@@ -334,7 +356,8 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b] "
-                   "[--methods SUBSTRING] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement]\n");
+                   "[--methods SUBSTRING] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement] "
+                   "[--repeats N]\n");
       return 2;
     }
   }
@@ -459,7 +482,7 @@ int main(int argc, char** argv) {
       } else {
         row.pair = pair.name();
         row.method = method.name;
-        row.outcome = method.run(a, b, pair);
+        row.outcome = run_repeated(method, a, b, pair, repeats);
         row.matches = row.outcome.matches.size();
         row.correct = affine_orb::bench::correct_matches(row.outcome.matches, pair.h);
         row.corner_error = judge_error(row.outcome.matches, pair, a.size(), b.size());

@@ -21,22 +21,26 @@ namespace detail {
 /// position lies in the 3 x 3 cells around it. Non-finite points are left out.
 class PointGrid {
  public:
-  /// Buckets `points` into cells of side `side` (> 0), widened where the bounding box would need
-  /// more than kMaxCellsPerSide cells along a side (far-flung input stays bounded in memory).
+  /// Buckets `points` into cells of side `side` (> 0), widened to one point per cell on average
+  /// where that is larger (a few kilobytes for a thousand points over a large image, instead of
+  /// a cell per 2 px) and where the bounding box would need more than kMaxCellsPerSide cells
+  /// along a side (far-flung input stays bounded in memory).
   void build(const std::vector<cv::Point2f>& points, double side) {
     double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;
-    bool any = false;
+    std::size_t finite = 0;
     for (const cv::Point2f& p : points) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
-      x0 = any ? std::min(x0, static_cast<double>(p.x)) : p.x;
-      y0 = any ? std::min(y0, static_cast<double>(p.y)) : p.y;
-      x1 = any ? std::max(x1, static_cast<double>(p.x)) : p.x;
-      y1 = any ? std::max(y1, static_cast<double>(p.y)) : p.y;
-      any = true;
+      x0 = finite > 0 ? std::min(x0, static_cast<double>(p.x)) : p.x;
+      y0 = finite > 0 ? std::min(y0, static_cast<double>(p.y)) : p.y;
+      x1 = finite > 0 ? std::max(x1, static_cast<double>(p.x)) : p.x;
+      y1 = finite > 0 ? std::max(y1, static_cast<double>(p.y)) : p.y;
+      ++finite;
     }
+    const bool any = finite > 0;
     x0_ = x0;
     y0_ = y0;
-    side_ = std::max({side, (x1 - x0) / kMaxCellsPerSide, (y1 - y0) / kMaxCellsPerSide});
+    const double per_point = any ? std::sqrt((x1 - x0) * (y1 - y0) / static_cast<double>(finite)) : 0.0;
+    side_ = std::max({side, per_point, (x1 - x0) / kMaxCellsPerSide, (y1 - y0) / kMaxCellsPerSide});
     columns_ = any ? static_cast<int>((x1 - x0) / side_) + 1 : 0;
     rows_ = any ? static_cast<int>((y1 - y0) / side_) + 1 : 0;
     start_.assign(static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_) + 1, 0);

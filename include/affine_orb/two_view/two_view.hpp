@@ -133,8 +133,8 @@ struct TwoViewOptions {
   /// before them, 2.8 px after, on a model 26 px off). F models are not tested. 10 px (e ≈ the
   /// judge's 5 px), against no test on the 68 pairs of bench/eval_two_view: stops on a pair left
   /// unsolved 18 → 13, verified pairs whose own homography is over 5 px off 19 → 15, own
-  /// homographies within 5 px 39 → 40, pairs solved 39 both (5 px: the same), 1.28x the time over
-  /// all pairs (the escalations) and 1.08x on the pairs plain extraction solves (graf 1→4).
+  /// homographies within 5 px 39 → 40, pairs solved 39 both (5 px: the same), 1.26x the time over
+  /// all pairs (the escalations) and 1.09x on the pairs plain extraction solves (graf 1→4).
   double max_half_disagreement = 10.0;
   /// Guided matching and local optimisation of a homography that has min_inliers inliers making up
   /// min_inlier_ratio of the matches, after the precision test and before the stopping rule counts
@@ -150,7 +150,7 @@ struct TwoViewOptions {
   /// pair at the median, but the matcher's own homography barely moves (26 better, 17 worse, median
   /// change −0.06 px); the pairs the judge solves stay within those on its 5 px line (38 against
   /// 39; with ExtractorOptions::subpixel, 40 against 39), and the alignment (about 20 µs a match)
-  /// makes the pairs plain extraction solves cost 1.79x plain's instead of 1.39x. On where the
+  /// makes the pairs plain extraction solves cost 1.60x plain's instead of 1.17x. On where the
   /// correspondences themselves must be precise (mosaics, calibration): on a known warp the aligned
   /// points lie 0.05 px from the truth (test_refinement).
   bool refine = false;

@@ -412,9 +412,9 @@ class TwoViewMatcher {
         result.half_disagreement = half_disagreement(points_.points1, points_.points2, result.inliers,
                                                      result.model.homography, image1.size());
       }
-      const bool refined = homography && (reported || precise(result));
-      if (refined && options_.guided.iterations > 0 && supported(result)) refine_guided(result);
-      if (refined && options_.refine && supported(result)) refine_positions(result, image1, image2);
+      const bool refinable = homography && (reported || precise(result));
+      if (refinable && options_.guided.iterations > 0 && supported(result)) refine_guided(result);
+      if (refinable && options_.refine && supported(result)) refine_positions(result, image1, image2);
     }
     result.points2 = points_.points2;
   }

@@ -27,35 +27,32 @@ class PointGrid {
   /// along a side (far-flung input stays bounded in memory).
   void build(const std::vector<cv::Point2f>& points, double side) {
     double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;
-    std::size_t finite = 0;
+    std::size_t count = 0;  // finite points
     for (const cv::Point2f& p : points) {
-      if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
-      x0 = finite > 0 ? std::min(x0, static_cast<double>(p.x)) : p.x;
-      y0 = finite > 0 ? std::min(y0, static_cast<double>(p.y)) : p.y;
-      x1 = finite > 0 ? std::max(x1, static_cast<double>(p.x)) : p.x;
-      y1 = finite > 0 ? std::max(y1, static_cast<double>(p.y)) : p.y;
-      ++finite;
+      if (!finite(p)) continue;
+      x0 = count > 0 ? std::min(x0, static_cast<double>(p.x)) : p.x;
+      y0 = count > 0 ? std::min(y0, static_cast<double>(p.y)) : p.y;
+      x1 = count > 0 ? std::max(x1, static_cast<double>(p.x)) : p.x;
+      y1 = count > 0 ? std::max(y1, static_cast<double>(p.y)) : p.y;
+      ++count;
     }
-    const bool any = finite > 0;
     x0_ = x0;
     y0_ = y0;
-    const double per_point = any ? std::sqrt((x1 - x0) * (y1 - y0) / static_cast<double>(finite)) : 0.0;
+    const double per_point = count > 0 ? std::sqrt((x1 - x0) * (y1 - y0) / static_cast<double>(count)) : 0.0;
     side_ = std::max({side, per_point, (x1 - x0) / kMaxCellsPerSide, (y1 - y0) / kMaxCellsPerSide});
-    columns_ = any ? static_cast<int>((x1 - x0) / side_) + 1 : 0;
-    rows_ = any ? static_cast<int>((y1 - y0) / side_) + 1 : 0;
+    columns_ = count > 0 ? static_cast<int>((x1 - x0) / side_) + 1 : 0;
+    rows_ = count > 0 ? static_cast<int>((y1 - y0) / side_) + 1 : 0;
+    // Counting sort: cell sizes, their prefix sums (start_), then each point at its cell's cursor.
     start_.assign(static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_) + 1, 0);
-    cell_of_.resize(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const cv::Point2f& p = points[i];
-      const bool finite = std::isfinite(p.x) && std::isfinite(p.y);
-      cell_of_[i] = finite ? cell(column(p.x), row(p.y)) : -1;
-      if (cell_of_[i] >= 0) ++start_[static_cast<std::size_t>(cell_of_[i]) + 1];
+    for (const cv::Point2f& p : points) {
+      if (finite(p)) ++start_[static_cast<std::size_t>(cell_of(p)) + 1];
     }
     for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
     index_.resize(static_cast<std::size_t>(start_.back()));
-    fill_ = start_;
+    std::vector<int> cursor(start_.begin(), start_.end() - 1);
     for (std::size_t i = 0; i < points.size(); ++i) {
-      if (cell_of_[i] >= 0) index_[static_cast<std::size_t>(fill_[static_cast<std::size_t>(cell_of_[i])]++)] = static_cast<int>(i);
+      if (!finite(points[i])) continue;
+      index_[static_cast<std::size_t>(cursor[static_cast<std::size_t>(cell_of(points[i]))]++)] = static_cast<int>(i);
     }
   }
 
@@ -63,7 +60,7 @@ class PointGrid {
   /// increasing i within a cell); nothing for a non-finite `p`.
   template <class Fn>
   void for_each_near(const cv::Point2f& p, Fn fn) const {
-    if (columns_ == 0 || !std::isfinite(p.x) || !std::isfinite(p.y)) return;
+    if (columns_ == 0 || !finite(p)) return;
     const double fx = std::floor((p.x - x0_) / side_);
     const double fy = std::floor((p.y - y0_) / side_);
     if (fx < -1.0 || fy < -1.0 || fx > columns_ || fy > rows_) return;
@@ -82,16 +79,18 @@ class PointGrid {
  private:
   static constexpr double kMaxCellsPerSide = 1024.0;
 
-  int column(float x) const { return std::min(static_cast<int>((x - x0_) / side_), columns_ - 1); }
-  int row(float y) const { return std::min(static_cast<int>((y - y0_) / side_), rows_ - 1); }
+  static bool finite(const cv::Point2f& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
   int cell(int x, int y) const { return y * columns_ + x; }
+  /// The cell of a finite point inside the bounding box build() measured.
+  int cell_of(const cv::Point2f& p) const {
+    return cell(std::min(static_cast<int>((p.x - x0_) / side_), columns_ - 1),
+                std::min(static_cast<int>((p.y - y0_) / side_), rows_ - 1));
+  }
 
   double x0_ = 0.0, y0_ = 0.0, side_ = 1.0;
   int columns_ = 0, rows_ = 0;
-  std::vector<int> start_;    ///< per cell, the first entry of index_; one more entry at the end
-  std::vector<int> fill_;     ///< build()'s insertion cursor per cell
-  std::vector<int> cell_of_;  ///< per point, its cell (−1: not finite)
-  std::vector<int> index_;    ///< point indices, cell by cell
+  std::vector<int> start_;  ///< per cell, the first entry of index_; one more entry at the end
+  std::vector<int> index_;  ///< point indices, cell by cell
 };
 
 /// The keypoints' positions, pixels, in their order.

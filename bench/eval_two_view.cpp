@@ -398,8 +398,7 @@ int main(int argc, char** argv) {
   // run only while the pair is not verified.
   affine_orb::TwoViewOptions extreme = defaults;
   extreme.extractor.views.max_tilt = 4.0 * std::sqrt(2.0);
-  extreme.stages.push_back({4.0, 0.5});
-  extreme.stages.push_back({4.0 * std::sqrt(2.0), 0.5});
+  extreme.stages = affine_orb::stages_up_to(extreme.extractor.views);
   // The affine peers: 18 views (tilts to 2.83, cv::AffineFeature's maxTilt 3), 43 on EVD (tilts to
   // 5.66, maxTilt 5), rotation step 72°/t as ASIFT.
   const auto affine_peer = [](cv::Ptr<cv::Feature2D> backend, int max_tilt) {

@@ -64,7 +64,8 @@ std::string usage() {
          "                     at most " +
          std::to_string(total) +
          " keypoints per image in all\n"
-         "  --max-tilt T       largest simulated tilt, 1 = no tilted views (default 2.828); the stages stop there\n"
+         "  --max-tilt T       largest simulated tilt, 1 = no tilted views (default 2.828); the stages go as far:\n"
+         "                     beyond 2.828 one more per factor sqrt(2) (4, 5.66, ...), each adding 0.5 x features\n"
          "  --all-stages       run every stage (the views on for every pair) instead of stopping when verified\n"
          "  --min-inliers N    inliers that verify a pair and end the escalation (default " +
          std::to_string(two_view.min_inliers) +
@@ -117,15 +118,11 @@ struct Plan {
   int min_inliers = affine_orb::TwoViewOptions{}.min_inliers;
 };
 
-/// The matcher's options for `plan`: its stages up to the extractor's max_tilt (the cap).
+/// The matcher's options for `plan`: its stages up to the extractor's max_tilt (stages_up_to()).
 affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
   affine_orb::TwoViewOptions options;
   options.extractor = plan.extractor;
-  options.stages.erase(std::remove_if(options.stages.begin(), options.stages.end(),
-                                      [&](const affine_orb::ViewStage& stage) {
-                                        return stage.max_tilt > plan.extractor.views.max_tilt * (1.0 + 1e-3);
-                                      }),
-                       options.stages.end());
+  options.stages = affine_orb::stages_up_to(plan.extractor.views);
   options.all_stages = plan.all_stages;
   options.min_inliers = plan.min_inliers;
   return options;

@@ -386,6 +386,68 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   CHECK(tested_error < 5.0);
 }
 
+TEST_CASE("stages_up_to follows the view set: the default stages, cut at max_tilt, then one per further tilt") {
+  const double r2 = std::sqrt(2.0);
+  const auto tilts_and_budgets = [](double max_tilt, double ratio) {
+    affine_orb::AffineViewOptions views;
+    views.max_tilt = max_tilt;
+    views.tilt_ratio = ratio;
+    std::vector<std::pair<double, double>> out;
+    for (const affine_orb::ViewStage& s : affine_orb::stages_up_to(views)) out.emplace_back(s.max_tilt, s.view_features);
+    return out;
+  };
+  const auto same = [](const std::vector<std::pair<double, double>>& got,
+                       const std::vector<std::pair<double, double>>& want) {
+    REQUIRE(got.size() == want.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      CHECK(got[i].first == doctest::Approx(want[i].first).epsilon(1e-9));
+      CHECK(got[i].second == want[i].second);
+    }
+  };
+  // The default view set gives exactly the default stages.
+  const affine_orb::TwoViewOptions defaults;
+  const std::vector<affine_orb::ViewStage> by_default = affine_orb::stages_up_to(defaults.extractor.views);
+  REQUIRE(by_default.size() == defaults.stages.size());
+  for (std::size_t i = 0; i < by_default.size(); ++i) {
+    CHECK(by_default[i].max_tilt == defaults.stages[i].max_tilt);
+    CHECK(by_default[i].view_features == defaults.stages[i].view_features);
+  }
+  same(tilts_and_budgets(1.0, r2), {});
+  same(tilts_and_budgets(r2, r2), {{r2, 0.25}});               // the first stage, cut at √2
+  same(tilts_and_budgets(2.5, r2), {{2.0, 0.25}});             // no view in (2, 2.5]
+  same(tilts_and_budgets(4.0 * r2, r2), {{2.0, 0.25}, {2.0 * r2, 0.5}, {4.0, 0.5}, {4.0 * r2, 0.5}});
+  same(tilts_and_budgets(16.0, r2),
+       {{2.0, 0.25}, {2.0 * r2, 0.5}, {4.0, 0.5}, {4.0 * r2, 0.5}, {8.0, 0.5}, {8.0 * r2, 0.5}, {16.0, 0.5}});
+  same(tilts_and_budgets(8.0, 2.0), {{2.0, 0.25}, {4.0, 0.5}, {8.0, 0.5}});  // no view in (2, 2√2]
+  // Each list is valid for its view set, every stage adds at least one tilt of the set, and the
+  // stages together cover every view.
+  for (const double max_tilt : {1.0, 1.5, r2, 2.0, 3.0, 4.0 * r2, 10.0, 16.0}) {
+    for (const double ratio : {r2, 1.5, 2.0}) {
+      CAPTURE(max_tilt);
+      CAPTURE(ratio);
+      affine_orb::TwoViewOptions options;
+      options.extractor.views.max_tilt = max_tilt;
+      options.extractor.views.tilt_ratio = ratio;
+      options.stages = affine_orb::stages_up_to(options.extractor.views);
+      CHECK_NOTHROW(options.check());
+      const auto parameters = affine_orb::view_parameters(options.extractor.views);
+      double previous = 1.0;
+      for (const affine_orb::ViewStage& stage : options.stages) {
+        CHECK(std::any_of(parameters.begin(), parameters.end(), [&](const std::pair<double, double>& p) {
+          return p.first > previous * (1.0 + 1e-3) && p.first <= stage.max_tilt * (1.0 + 1e-3);
+        }));
+        previous = stage.max_tilt;
+      }
+      CHECK(std::all_of(parameters.begin(), parameters.end(), [&](const std::pair<double, double>& p) {
+        return p.first <= previous * (1.0 + 1e-3);
+      }));
+    }
+  }
+  affine_orb::AffineViewOptions bad;
+  bad.max_tilt = 0.5;
+  CHECK_THROWS_AS(affine_orb::stages_up_to(bad), std::invalid_argument);
+}
+
 TEST_CASE("a plane at tilt 8 is out of the default stages' reach and verified by the stages to tilt 4√2") {
   // Tilt 8 (82.8° of latitude) along a direction 30° off the image axes: the default stages, whose
   // views end at tilt 2√2 in both images, find no model (5 inliers); the two stages beyond them, 4
@@ -402,8 +464,7 @@ TEST_CASE("a plane at tilt 8 is out of the default stages' reach and verified by
 
   affine_orb::TwoViewOptions extreme = defaults;
   extreme.extractor.views.max_tilt = 4.0 * std::sqrt(2.0);
-  extreme.stages.push_back({4.0, 0.5});
-  extreme.stages.push_back({4.0 * std::sqrt(2.0), 0.5});
+  extreme.stages = affine_orb::stages_up_to(extreme.extractor.views);
   const auto r = affine_orb::match_images(image1, image2, extreme);
   REQUIRE(r.verified);
   CHECK(r.stage > static_cast<int>(defaults.stages.size()));

@@ -393,13 +393,10 @@ PYBIND11_MODULE(affine_orb, m) {
       "octaves2: the keypoints' pyramid octaves (cv2.KeyPoint.octave), which scale each point's sigma by "
       "1.2^octave; both or neither.");
   const affine_orb::TwoViewOptions two_view;
-  py::list default_stages;
-  for (const affine_orb::ViewStage& stage : two_view.stages)
-    default_stages.append(py::make_tuple(stage.max_tilt, stage.view_features));
   m.def(
       "match_images",
       [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
-         const std::vector<std::pair<double, double>>& stages, int min_inliers, double min_inlier_ratio,
+         const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers, double min_inlier_ratio,
          int guided_rounds, double max_half_disagreement, bool refine, bool all_stages, const std::string& descriptor,
          const std::string& spreading, int threads, const py::handle& mask1, const py::handle& mask2) {
         affine_orb::TwoViewOptions options;
@@ -408,8 +405,12 @@ PYBIND11_MODULE(affine_orb, m) {
         options.extractor.threads = threads;
         options.extractor.spreading = one_of(spreading, "spreading", "quadtree", affine_orb::Spreading::kQuadtree,
                                              "strongest", affine_orb::Spreading::kStrongest);
-        options.stages.clear();
-        for (const auto& [tilt, view_features] : stages) options.stages.push_back({tilt, view_features});
+        if (stages) {
+          options.stages.clear();
+          for (const auto& [tilt, view_features] : *stages) options.stages.push_back({tilt, view_features});
+        } else {
+          options.stages = affine_orb::stages_up_to(options.extractor.views);
+        }
         options.min_inliers = min_inliers;
         options.min_inlier_ratio = min_inlier_ratio;
         options.guided.iterations = guided_rounds;
@@ -427,7 +428,7 @@ PYBIND11_MODULE(affine_orb, m) {
         throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
       },
       py::arg("image1"), py::arg("image2"), py::arg("features") = two_view.extractor.features,
-      py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = default_stages,
+      py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = py::none(),
       py::arg("min_inliers") = two_view.min_inliers, py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
       py::arg("guided_rounds") = two_view.guided.iterations,
       py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("refine") = two_view.refine,
@@ -436,7 +437,9 @@ PYBIND11_MODULE(affine_orb, m) {
       "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
       "`features` keypoints; while the pair is not verified (min_inliers inliers of the chosen model, at least "
       "min_inlier_ratio of the matches), each stage (max_tilt, view_features) adds the views of tilts up to "
-      "max_tilt with view_features x features keypoints per image, and matching and H/F selection run again. A "
+      "max_tilt with view_features x features keypoints per image, and matching and H/F selection run again. "
+      "stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
+      "stage of 0.5 per further factor sqrt(2), e.g. (4, 0.5) and (5.66, 0.5) for max_tilt=5.66). A "
       "chosen homography verifies only when homographies fitted to the two halves of its RANSAC inliers map image "
       "1's corners within max_half_disagreement pixels of each other (0 = no precision test; 10 by default, "
       "twice the 5 px a solved pair may be off); a supported one is then refined by guided_rounds rounds of "

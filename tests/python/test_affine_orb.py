@@ -148,6 +148,20 @@ def test_match_images_refine_aligns_image_2_points():
     assert mean_error(aligned) < mean_error(plain)
 
 
+def test_match_images_stages_follow_max_tilt():
+    """stages=None gives the stages up to max_tilt (affine_orb::stages_up_to): with an unreachable
+    min_inliers every stage runs, 2 with the default 2.83, 4 with 5.66 (tilts 4 and 5.66 added), 1
+    with 2; explicit stages are taken as given."""
+    image1 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img1.png"), cv2.IMREAD_GRAYSCALE)
+    image2 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img3.png"), cv2.IMREAD_GRAYSCALE)
+    for max_tilt, tilts in ((2.83, [1.0, 2.0, 2.83]), (5.66, [1.0, 2.0, 2.83, 4.0, 5.66]), (2.0, [1.0, 2.0])):
+        r = affine_orb.match_images(image1, image2, features=300, max_tilt=max_tilt, min_inliers=100000)
+        assert not r["verified"]
+        assert [round(s["max_tilt"], 2) for s in r["stages"]] == tilts
+    r = affine_orb.match_images(image1, image2, features=300, max_tilt=5.66, stages=[(4.0, 1.0)], min_inliers=100000)
+    assert [round(s["max_tilt"], 2) for s in r["stages"]] == [1.0, 4.0]
+
+
 def test_match_images_refuses_bad_input():
     image = np.zeros((64, 64), np.uint8)
     with pytest.raises(ValueError):

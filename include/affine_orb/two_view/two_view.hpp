@@ -103,7 +103,8 @@ struct TwoViewOptions {
   /// The stages after stage 0, in increasing max_tilt; empty: plain matching only. The default
   /// (+0.25 N up to tilt 2, +0.5 N up to 2√2) solves as many pairs as one stage of every view, or
   /// three stages, or stages up to tilt 4 do, with the fewest views run; doubling the stages'
-  /// budgets solves fewer (bench/eval_two_view --sweep).
+  /// budgets solves fewer (bench/eval_two_view --sweep). stages_up_to(extractor.views) gives the
+  /// stages for another view set (to 4√2 for views at 70–85°).
   std::vector<ViewStage> stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}};
   /// Matching after each stage: every keypoint so far of image 1 against every keypoint so far of
   /// image 2 (location-aware ratio test, duplicate removal; affine_matching.hpp).
@@ -215,9 +216,9 @@ struct TwoViewOptions {
 /// to 5.66") they solve Homogr LePoint3 (on the judge's 5 px line) and verify EVD adam at 1.6 px,
 /// which the default stages leave unverified, for 1.5x the default's time over all pairs (each
 /// pair they do not verify runs two more stages); a plane at tilt 8 is verified at stage 3
-/// (test_two_view). Set
-/// `options.extractor.views` first, then `options.stages = stages_up_to(options.extractor.views)`.
-/// Throws std::invalid_argument for invalid view options.
+/// (test_two_view). Set `options.extractor.views` first, then
+/// `options.stages = stages_up_to(options.extractor.views)`. Throws std::invalid_argument for
+/// invalid view options.
 inline std::vector<ViewStage> stages_up_to(const AffineViewOptions& views) {
   views.check();
   const double tolerance = 1.0 + 1e-3;  // view_parameters()'

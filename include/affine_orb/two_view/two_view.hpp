@@ -29,6 +29,7 @@
 #include "affine_orb/geometry/ransac.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/two_view/refinement.hpp"
+#include "affine_orb/views/affine_views.hpp"
 
 namespace affine_orb {
 
@@ -220,11 +221,12 @@ struct TwoViewOptions {
 /// `options.stages = stages_up_to(options.extractor.views)`. Throws std::invalid_argument for
 /// invalid view options.
 inline std::vector<ViewStage> stages_up_to(const AffineViewOptions& views) {
-  views.check();
   const double tolerance = 1.0 + 1e-3;  // view_parameters()'
   const double cap = views.max_tilt * tolerance;
-  std::vector<double> series;  // computed as view_parameters() computes it
-  for (double t = views.tilt_ratio; t <= cap; t *= views.tilt_ratio) series.push_back(t);
+  std::vector<double> series;  // the tilts above 1 of the view set, increasing
+  for (const auto& [tilt, rotation] : view_parameters(views)) {
+    if (tilt > 1.0 && (series.empty() || tilt != series.back())) series.push_back(tilt);
+  }
   std::vector<ViewStage> stages;
   double lower = 1.0;
   for (const ViewStage& stage : TwoViewOptions{}.stages) {

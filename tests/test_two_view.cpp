@@ -17,32 +17,28 @@
 
 namespace {
 
+/// Whether the ground truth maps match m's image-1 keypoint within 3 px of its image-2 keypoint.
+bool is_correct(const affine_orb::Features<256>& features1, const affine_orb::Features<256>& features2,
+                const affine_orb::Match& m, const cv::Matx33d& truth) {
+  const cv::Point2f p = features1.keypoints[static_cast<std::size_t>(m.query)].pt;
+  const cv::Point2f q = features2.keypoints[static_cast<std::size_t>(m.train)].pt;
+  const cv::Point2d x = affine_orb::test::apply_homography(truth, cv::Point2d(p.x, p.y));
+  return std::hypot(x.x - q.x, x.y - q.y) < 3.0;
+}
+
 /// Inliers that the ground truth maps within 3 px of their match.
 int correct_inliers(const affine_orb::TwoViewResult<256>& r, const cv::Matx33d& truth) {
   int correct = 0;
   for (std::size_t i = 0; i < r.matches.size(); ++i) {
-    if (!r.inliers[i]) continue;
-    const cv::Point2f p = r.features1.keypoints[static_cast<std::size_t>(r.matches[i].query)].pt;
-    const cv::Point2f q = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)].pt;
-    const cv::Point2d m = affine_orb::test::apply_homography(truth, cv::Point2d(p.x, p.y));
-    correct += std::hypot(m.x - q.x, m.y - q.y) < 3.0;
+    correct += r.inliers[i] && is_correct(r.features1, r.features2, r.matches[i], truth);
   }
   return correct;
 }
 
 /// Share of the inliers that the ground truth maps within 3 px of their match.
 double inlier_precision(const affine_orb::TwoViewResult<256>& r, const cv::Matx33d& truth) {
-  int inliers = 0;
-  int correct = 0;
-  for (std::size_t i = 0; i < r.matches.size(); ++i) {
-    if (!r.inliers[i]) continue;
-    ++inliers;
-    const cv::Point2f p = r.features1.keypoints[static_cast<std::size_t>(r.matches[i].query)].pt;
-    const cv::Point2f q = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)].pt;
-    const cv::Point2d m = affine_orb::test::apply_homography(truth, cv::Point2d(p.x, p.y));
-    correct += std::hypot(m.x - q.x, m.y - q.y) < 3.0;
-  }
-  return inliers > 0 ? static_cast<double>(correct) / inliers : 0.0;
+  const auto inliers = std::count(r.inliers.begin(), r.inliers.end(), 1);
+  return inliers > 0 ? static_cast<double>(correct_inliers(r, truth)) / static_cast<double>(inliers) : 0.0;
 }
 
 /// Image 1 of graf seen by a camera turned by `degrees` about the vertical axis through the image
@@ -484,10 +480,7 @@ TEST_CASE("a plane at tilt 8 is out of the default stages' reach and verified by
     options.ratio_exclusion_radius = radius;
     int correct = 0;
     for (const affine_orb::Match& m : affine_orb::match_features(r.features1, r.features2, options)) {
-      const cv::Point2f p = r.features1.keypoints[static_cast<std::size_t>(m.query)].pt;
-      const cv::Point2f q = r.features2.keypoints[static_cast<std::size_t>(m.train)].pt;
-      const cv::Point2d x = affine_orb::test::apply_homography(truth, cv::Point2d(p.x, p.y));
-      correct += std::hypot(x.x - q.x, x.y - q.y) < 3.0;
+      correct += is_correct(r.features1, r.features2, m, truth);
     }
     return correct;
   };

@@ -560,6 +560,11 @@ int main(int argc, char** argv) {
   md << "| method | pairs solved | distinct correct matches | total ms | vs affine default, same pairs | "
         "vs plain 2000, pairs it solves | stopped early, unsolved | stages run (matcher) |\n"
      << "|---|---:|---:|---:|---:|---:|---:|---|\n";
+  const auto ratio = [](double a, double b) {
+    char text[32] = "";
+    if (b > 0) std::snprintf(text, sizeof(text), "%.2fx", a / b);
+    return std::string(text);
+  };
   for (const Method& m : methods) {
     int solved = 0, pairs_run = 0, wrong = 0;
     std::size_t distinct = 0;
@@ -588,11 +593,6 @@ int main(int argc, char** argv) {
     for (const auto& [stage, count] : stages) {
       stage_text += (stage_text.empty() ? "" : ", ") + std::to_string(count) + "× " + std::to_string(stage);
     }
-    const auto ratio = [](double a, double b) {
-      char text[32] = "";
-      if (b > 0) std::snprintf(text, sizeof(text), "%.2fx", a / b);
-      return std::string(text);
-    };
     char line[512];
     std::snprintf(line, sizeof(line), "| %s | %d / %d | %zu | %.0f | %s | %s | %s | %s |\n", m.name.c_str(), solved,
                   pairs_run, distinct, ms, ratio(ms, ms_default).c_str(), ratio(ms_easy, ms_plain_easy).c_str(),

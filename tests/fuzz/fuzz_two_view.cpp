@@ -3,10 +3,11 @@
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
 // min_inlier_ratio, all_stages, the precision test (max_half_disagreement), guided refinement
 // (rounds, gate radius, ratio), the aligned correspondences (refine), stages to the extreme
-// tilts 4 and 4√2, given or from stages_up_to(). Invalid options must end in std::invalid_argument, valid ones in a
-// result that keeps every documented invariant: stage reports, the stopping rule, inlier flags,
-// match indices, keypoints inside their image and mask, image-2 points of the correspondences
-// within max_shift of their keypoints, each stage's keypoints a superset of the stage before;
+// tilts 4 and 4√2, given or from stages_up_to(). Invalid options must end in
+// std::invalid_argument, valid ones in a result that keeps every documented invariant: stage
+// reports, the stopping rule, inlier flags, match indices, keypoints inside their image and mask,
+// image-2 points of the correspondences within max_shift of their keypoints, each stage's
+// keypoints a superset of the stage before;
 // anything else (a crash, a sanitizer report, another exception, a broken invariant) is a finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
 #include <algorithm>
@@ -55,11 +56,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (flags & 32) options.extractor.views.max_tilt = 5.66;
   options.stages.clear();
   const int stages = bytes.next() % 5;  // 4: the stages of stages_up_to()
-  for (int s = 0; s < stages && stages < 4; ++s) {
-    const std::uint8_t b = bytes.next();
-    options.stages.push_back({kTilts[b % 6], (b >> 3) * 0.125 - 0.25});  // view_features may be < 0
+  if (stages == 4) {
+    options.stages = affine_orb::stages_up_to(options.extractor.views);
+  } else {
+    for (int s = 0; s < stages; ++s) {
+      const std::uint8_t b = bytes.next();
+      options.stages.push_back({kTilts[b % 6], (b >> 3) * 0.125 - 0.25});  // view_features may be < 0
+    }
   }
-  if (stages == 4) options.stages = affine_orb::stages_up_to(options.extractor.views);
   options.min_inliers = bytes.next() % 40;               // < 8 is invalid
   options.min_inlier_ratio = (bytes.next() % 12) * 0.1;  // > 1 is invalid
   options.all_stages = (flags & 1) != 0;

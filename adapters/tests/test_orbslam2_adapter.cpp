@@ -40,4 +40,5 @@ TEST_CASE_TEMPLATE_INVOKE(empty, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(initialisation, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(options, Orbslam2);
+TEST_CASE_TEMPLATE_INVOKE(walk, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(bad_input, Orbslam2);

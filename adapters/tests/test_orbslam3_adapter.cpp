@@ -41,6 +41,7 @@ TEST_CASE_TEMPLATE_INVOKE(empty, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(initialisation, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(options, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(walk, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(bad_input, Orbslam3);
 
 TEST_CASE("lapping area: keypoints with x in [a, b] go to the end with their rows; the rest are counted") {

@@ -1,9 +1,9 @@
 // walk.cpp -- the measures of adapters/tests/walk.hpp (a camera walking along a wall, known
 // geometry) for one ORBextractor: compiled by walk.sh against a fork's src/ORBextractor.cc (ORB-SLAM's
 // own extractor, or the adapter installed in it) or against an affine_orb checkout's adapter, so that
-// stock's figures and the adapter's come from the same code. Prints one tab-separated line per wall:
-// name, keypoints per frame (mean), found again one frame on, 20 frames on, within 40 px of the
-// border, cells occupied.
+// stock's figures and the adapter's come from the same code. Prints one Markdown table row per wall:
+// name, wall, keypoints per frame (mean), found again one frame on, 20 frames on, within 40 px of
+// the border, cells occupied.
 //
 // usage: walk NAME WALL...   (each WALL an image of at least 800 x 640 pixels)
 #include <cstdio>
@@ -47,11 +47,14 @@ int main(int argc, char** argv) {
       keypoints += static_cast<double>(f.keypoints.size()) / walk::kFrames;
       return f;
     });
+    // The wall's name: its folder (the Oxford sequence), or the file name without a folder.
     std::string name = argv[i];
     const std::size_t slash = name.find_last_of('/');
-    const std::size_t parent = slash == std::string::npos || slash == 0 ? std::string::npos : name.find_last_of('/', slash - 1);
-    if (parent != std::string::npos) name = name.substr(parent + 1);
-    std::printf("%s\t%s\t%.0f\t%.3f\t%.3f\t%.3f\t%.3f\n", argv[1], name.c_str(), keypoints, m.next, m.last, m.border,
+    if (slash != std::string::npos && slash > 0) {
+      const std::size_t parent = name.find_last_of('/', slash - 1);
+      name = name.substr(parent == std::string::npos ? 0 : parent + 1, slash - (parent == std::string::npos ? 0 : parent + 1));
+    }
+    std::printf("| %s | %s | %.0f | %.3f | %.3f | %.3f | %.3f |\n", argv[1], name.c_str(), keypoints, m.next, m.last, m.border,
                 m.occupied);
   }
   return 0;

@@ -1,7 +1,7 @@
 #!/bin/bash
 # walk.sh NAME=SOURCE... -- the walk along a wall (adapters/tests/walk.hpp) for each extractor, on the
 # Oxford walls graf, boat, bikes and trees (img1): keypoints found again one frame and 20 frames on,
-# within 40 px of the border, cells occupied; one table, the extractors side by side.
+# within 40 px of the border, cells occupied; one Markdown table, the extractors side by side.
 # SOURCE is either
 #   an ORB-SLAM2 or ORB-SLAM3 tree: its own src/ORBextractor.cc (stock), or the adapter that
 #     adapters/orbslam*/install.sh put there (then with the affine_orb checkout its CMakeLists.txt names);
@@ -16,7 +16,8 @@ WALLS=()
 for w in graf boat bikes trees; do WALLS+=("$DATA/oxford/$w/img1.png"); done
 OPENCV=$(pkg-config --cflags --libs opencv4)
 BIN=$(mktemp -d); trap 'rm -rf "$BIN"' EXIT
-printf 'extractor\twall\tkeypoints\tfound 1 frame on\t20 frames on\twithin 40 px of the border\tcells occupied\n'
+echo '| extractor | wall | keypoints | found again 1 frame on | 20 frames on | within 40 px of the border | cells occupied |'
+echo '|---|---|---|---|---|---|---|'
 for arg in "$@"; do
   name=${arg%%=*}; src=$(readlink -f "${arg#*=}")
   flags=(-O2 -std=c++17 -w -I"$PROJECT/adapters/tests")

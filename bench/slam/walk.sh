@@ -11,11 +11,16 @@ set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 PROJECT=$(cd "$HERE/../.." && pwd)
 DATA=${DATA:-$PROJECT/../shared/data}
-[ $# -ge 1 ] || { sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n '2,/^# Environment/p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2; }
 WALLS=()
 for w in graf boat bikes trees; do WALLS+=("$DATA/oxford/$w/img1.png"); done
 OPENCV=$(pkg-config --cflags --libs opencv4)
 BIN=$(mktemp -d); trap 'rm -rf "$BIN"' EXIT
+for arg in "$@"; do  # every source checked before the table starts
+  src=${arg#*=}
+  [ -f "$src/adapters/orbslam2/ORBextractor.cc" ] || [ -f "$src/src/ORBextractor.cc" ] ||
+    { echo "$src: neither an ORB-SLAM tree nor an affine_orb checkout" >&2; exit 2; }
+done
 echo '| extractor | wall | keypoints | found again 1 frame on | 20 frames on | within 40 px of the border | cells occupied |'
 echo '|---|---|---|---|---|---|---|'
 for arg in "$@"; do
@@ -24,14 +29,12 @@ for arg in "$@"; do
   if [ -f "$src/adapters/orbslam2/ORBextractor.cc" ]; then  # an affine_orb checkout
     cc=$src/adapters/orbslam2/ORBextractor.cc
     flags+=(-I"$src/adapters/orbslam2" -I"$src/adapters/common" -I"$src/include" -I/usr/include/eigen3)
-  elif [ -f "$src/src/ORBextractor.cc" ]; then  # a fork
+  else  # a fork
     cc=$src/src/ORBextractor.cc
     flags+=(-I"$src/include")
     grep -q 'namespace ORB_SLAM3' "$src/include/ORBextractor.h" && flags+=(-DWALK_ORBSLAM3)
     affine=$(sed -n 's/^set(AFFINE_ORB_DIR "\(.*\)")$/\1/p' "$src/CMakeLists.txt")
     [ -n "$affine" ] && flags+=(-I"$affine/include" -I"$affine/adapters/common" -I/usr/include/eigen3)
-  else
-    echo "$src: neither an ORB-SLAM tree nor an affine_orb checkout" >&2; exit 2
   fi
   # shellcheck disable=SC2086  # OPENCV holds several words
   ${CXX:-g++} "${flags[@]}" "$HERE/walk.cpp" "$cc" -o "$BIN/$name" $OPENCV

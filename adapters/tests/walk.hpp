@@ -1,11 +1,11 @@
 #pragma once
 // A walk along a wall with known geometry, and what ORB-SLAM's tracking asks of the keypoints
-// extracted on it. The wall is a photo (Oxford graf 1, a wall seen head-on); the camera moves along
-// it and slowly towards it, so frame k shows the wall through a known similarity and every keypoint
-// of one frame has an exact position in every other. No SLAM runs: the measures are those that
-// ORB-SLAM's tracking turns into tracked map points (Tracking::TrackLocalMap finds a map point again
-// by projection, within a radius scaled by the octave, at a neighbouring octave, with a descriptor
-// distance threshold).
+// extracted on it. The wall is a photo of at least 800 x 640 pixels (the tests use Oxford graf 1, a
+// wall seen head-on); the camera moves along it and slowly towards it, so frame k shows the wall
+// through a known similarity and every keypoint of one frame has an exact position in every other.
+// No SLAM runs: the measures are those that ORB-SLAM's tracking turns into tracked map points
+// (Tracking::TrackLocalMap finds a map point again by projection, within a radius scaled by the
+// octave, at a neighbouring octave, with a descriptor distance threshold).
 //
 // Used by conformance.hpp's "walk" case on the adapters, and usable on any extractor with the
 // ORBextractor call (stock ORB-SLAM's own, to measure the figures that case states).

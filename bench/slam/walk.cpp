@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
     const std::size_t slash = name.find_last_of('/');
     if (slash != std::string::npos && slash > 0) {
       const std::size_t parent = name.find_last_of('/', slash - 1);
-      name = name.substr(parent == std::string::npos ? 0 : parent + 1, slash - (parent == std::string::npos ? 0 : parent + 1));
+      const std::size_t first = parent == std::string::npos ? 0 : parent + 1;
+      name = name.substr(first, slash - first);
     }
     std::printf("| %s | %s | %.0f | %.3f | %.3f | %.3f | %.3f |\n", argv[1], name.c_str(), keypoints, m.next, m.last, m.border,
                 m.occupied);

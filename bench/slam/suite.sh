@@ -1,14 +1,18 @@
 #!/bin/bash
-# suite.sh -- the ORB-SLAM2 regression suite of the drop-in: stock against the adapter's defaults
-# (A0) and its recovery default (R3) on many seeds of every rendered sequence, RGB-D and monocular,
-# plus mono_kitti on KITTI 00; prints one table per sequence type and every sequence where an
-# adapter configuration is worse than stock beyond the run-to-run range (slam_tables.py suite).
+# suite.sh -- the regression suite of the drop-in, in ORB-SLAM2 or ORB-SLAM3: stock against the
+# adapter's defaults (A0) and its recovery default (R3) on many seeds of every rendered sequence,
+# RGB-D and monocular, plus mono_kitti on KITTI 00; prints one table per sequence type and every
+# sequence where an adapter configuration is worse than stock beyond the run-to-run range
+# (slam_tables.py suite).
 #
 # usage: suite.sh --stock TREE --adapter TREE [options]
-#   --stock TREE       ORB-SLAM2 built by ../shared/slam/build_orbslam2.sh (TARGETS="rgbd_tum mono_tum mono_kitti")
-#   --adapter TREE     a copy with the adapter installed by adapters/orbslam2/install.sh --recovery and
-#                      rebuilt; A0 runs it with AFFINE_ORB_RECOVERY_IMAGE_FEATURES=1 (the recovery
-#                      extraction then equals the normal one), R3 with the recovery defaults
+#   --stock TREE       the fork built with rgbd_tum, mono_tum and mono_kitti: ORB-SLAM2 by
+#                      ../shared/slam/build_orbslam2.sh (TARGETS="rgbd_tum mono_tum mono_kitti"), or
+#                      ORB-SLAM3 built with the same examples (told by its include/Atlas.h)
+#   --adapter TREE     a copy with the adapter installed by adapters/orbslam2/install.sh --recovery
+#                      (adapters/orbslam3/ for ORB-SLAM3) and rebuilt; A0 runs it with
+#                      AFFINE_ORB_RECOVERY_IMAGE_FEATURES=1 (the recovery extraction then equals the
+#                      normal one), R3 with the recovery defaults
 #   --vocab FILE       vocabulary, text format (default /tmp/orbslam2/voc.txt)
 #   --synth DIR        renders: DIR/SEQUENCE_sSEED/ (default /tmp/synth); missing ones are rendered
 #   --runs DIR         runs (default /tmp/slam_suite; KITTI 00 in DIR/kitti)
@@ -23,6 +27,8 @@
 #   --tables-only      print the tables of the runs already in --runs
 #   --confs '...'      the configurations the tables show, stock first (default 'S A0 R3'; other names
 #                      come from runs added with ../shared/slam/run.sh into the same --runs)
+# ORB-SLAM3 reads the renders' camera.yaml only with Camera.type: the runs read the renders through
+# RUNS/sequences/, links to their files beside a camera.yaml that adds `Camera.type: "PinHole"`.
 # Environment: SLAM_HARNESS (default ../shared/slam beside this project), KITTI_DATA as kitti_runs.sh.
 # Every step can be repeated: renders are reused, runs are redone (run.sh --first to add more).
 set -euo pipefail
@@ -62,8 +68,12 @@ tables() {  # the configurations of CONFS that have runs, stock first
 }
 if [ "$TABLES_ONLY" = 1 ]; then tables; exit 0; fi
 [ -n "$STOCK" ] && [ -n "$ADAPTER" ] || usage
+fork() { if [ -f "$1/include/Atlas.h" ]; then echo orbslam3; else echo orbslam2; fi; }
+FORK=$(fork "$STOCK")
+[ "$(fork "$ADAPTER")" = "$FORK" ] ||
+  { echo "--stock $STOCK and --adapter $ADAPTER are not the same fork" >&2; exit 2; }
 grep -q "SetRecovering" "$ADAPTER/src/Tracking.cc" ||
-  { echo "$ADAPTER: no recovery lines in src/Tracking.cc (adapters/orbslam2/install.sh --recovery)" >&2; exit 2; }
+  { echo "$ADAPTER: no recovery lines in src/Tracking.cc (adapters/$FORK/install.sh --recovery)" >&2; exit 2; }
 
 names=()
 for s in $SEQUENCES; do
@@ -82,9 +92,20 @@ for s in $SEQUENCES; do
     date -Is > "$d/render_done.txt"
   done
 done
+RUN_SEQS=$SYNTH
+if [ "$FORK" = orbslam3 ]; then
+  RUN_SEQS=$RUNS/sequences
+  for name in "${names[@]}"; do
+    rm -rf "${RUN_SEQS:?}/$name"; mkdir -p "$RUN_SEQS/$name"
+    for f in "$SYNTH/$name"/*; do
+      [ "${f##*/}" = camera.yaml ] || ln -s "$(readlink -f "$f")" "$RUN_SEQS/$name/"
+    done
+    { cat "$SYNTH/$name/camera.yaml"; echo; echo 'Camera.type: "PinHole"'; } > "$RUN_SEQS/$name/camera.yaml"
+  done
+fi
 # Seeds outermost (run.sh interleaves the configurations within each sequence and run).
 for name in "${names[@]}"; do
-  "$HARNESS/run.sh" --stock "$STOCK" --affine "$ADAPTER" --vocab "$VOCAB" --seqs "$SYNTH" --runs "$RUNS" \
+  "$HARNESS/run.sh" --stock "$STOCK" --affine "$ADAPTER" --vocab "$VOCAB" --seqs "$RUN_SEQS" --runs "$RUNS" \
     --conf S=stock --conf 'A0=affine AFFINE_ORB_RECOVERY_IMAGE_FEATURES=1' --conf R3=affine \
     --modes "$MODES" --repeats "$REPEATS" "$name"
 done

@@ -7,6 +7,7 @@
   slam_tables.py rgbd RUNS_CSV CONF...               RGB-D rows of the same
   slam_tables.py kitti RUNS GROUNDTRUTH CONF...      KITTI 00 monocular runs
   slam_tables.py suite RUNS SEQS CONF...             bench/slam/suite.sh's tables (the first CONF is stock)
+  slam_tables.py atlas RUNS CONF...                  ORB-SLAM3: what became of each run's first map
 
 Every cell is the median (min–max) over a configuration's runs. Needs ../shared/slam/ate.py (found
 beside this project, or through SLAM_HARNESS) and numpy; use /usr/bin/python3 on Debian.
@@ -28,6 +29,12 @@ suite: one table per sequence type (SEQS/TYPE_sSEED, every seed pooled) and mode
   configuration is worse than stock beyond the run-to-run range: all of its runs worse than all of
   stock's in a metric (fewer keyframes, frames with a pose, relocalisations or correct maps, more
   resets, a larger ATE), judged where both have at least kMinRuns runs.
+atlas: ORB-SLAM3 runs (RUNS/CONF/SEQUENCE/MODE_I/log.txt), per sequence and mode, then pooled over
+  the seeds of each sequence type: the keyframes
+  the first map made before tracking was lost (the keyframe id the next map starts at), and what
+  ORB-SLAM3 did with it: dropped it (a map of at most 10 keyframes is reset at once), kept it in its
+  atlas and started a new map, or tracked on (no loss, or relocalised within the 3 s it tries);
+  then the runs where a later map merged with an earlier one.
 kitti: the runs whose map starts (>= 3 keyframes), when the first keyframe was taken (s from the
   first frame), keyframes, Sim(3) ATE of the keyframes (m), mean tracking time (ms).
 """
@@ -49,6 +56,9 @@ kCorrectM = 0.10      # a relocalised pose counts when within 10 cm of the groun
 kCorrectMapM = 0.10   # a monocular map counts as correct with Sim(3) ATE <= 10 cm ...
 kCoverage = 0.50      # ... over at least half of the sequence's frames
 kMinRuns = 2          # suite: runs per side below which a sequence has no run-to-run range to judge by
+# ORB-SLAM3 prints no "System Reseting" at its default verbosity; this line of its local mapping
+# marks the same event, a map dropped (one of fewer than 10 keyframes lost, or a failed initialisation).
+kOrbSlam3Reset = "LM: Active map reset recieved"
 
 
 def cell(values, fmt="%.1f"):
@@ -208,7 +218,7 @@ REGRESSION_METRICS = [("keyframes", "keyframes", True), ("poses", "frames with a
 
 
 def suite_rows(runs, seqs):
-    """runs.csv's rows with derived per-run fields: reset (0/1), loop (0/1: ORB-SLAM2 closed a loop),
+    """runs.csv's rows with derived per-run fields: reset (0/1: the fork dropped its map), loop (0/1: a loop closed),
     relocalised (0/1) and the obliquity (revisit_sweep RGB-D), correct (0/1, monocular), ate, track_ms."""
     number = lambda v: float(v) if v not in ("", "None", None) else None
     sides = {}
@@ -219,7 +229,8 @@ def suite_rows(runs, seqs):
         row["keyframes"] = number(r["keyframes"])
         row["second"] = number(r["kf_second_idx"])
         row["poses"] = number(r["poses"]) if r["mode"] == "rgbd" else None
-        row["reset"] = 1.0 if (number(r["msg_reset"]) or 0) > 0 else 0.0
+        log = read_log(os.path.join(runs, r["conf"], r["seq"], "%s_%s" % (r["mode"], r["run"])))
+        row["reset"] = 1.0 if (number(r["msg_reset"]) or 0) > 0 or kOrbSlam3Reset in log else 0.0
         row["loop"] = 1.0 if (number(r["msg_loop"]) or 0) > 0 else 0.0
         row["ate"] = number(r["ate_rmse"])
         mean = number(r["mean_track_s"])
@@ -302,6 +313,57 @@ def suite(runs, seqs, confs):
         print("- none")
 
 
+def first_map(log):
+    """(keyframes the first map made before it was lost or None, 'dropped'/'kept'/'tracked on', merged)
+    from an ORB-SLAM3 log: the order of its map resets, new maps and map starts."""
+    events = re.findall(r"(%s)|Creation of new map with id: (\d+)|First KF:(\d+);" % re.escape(kOrbSlam3Reset), log)
+    starts = [int(k) for _, _, k in events if k]
+    keyframes = starts[1] if len(starts) > 1 else None
+    fate = "tracked on"
+    for reset, new_map, _ in events:
+        if reset:
+            fate = "dropped"
+            break
+        if new_map and int(new_map) > 0:
+            fate = "kept"
+            break
+    return keyframes, fate, "Merge detected" in log
+
+
+def atlas(runs, confs):
+    print("| sequence | mode | configuration | runs | keyframes of the first map when lost | dropped | kept "
+          "| tracked on | runs with a map merge |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    groups = {}
+    for conf in confs:
+        for d in sorted(glob.glob(os.path.join(runs, conf, "*", "*_*"))):
+            m = re.fullmatch(r"(rgbd|mono)_\d+", os.path.basename(d))
+            if not m or not os.path.exists(os.path.join(d, "log.txt")):
+                continue
+            groups.setdefault((os.path.basename(os.path.dirname(d)), m.group(1), conf), []).append(
+                first_map(read_log(d)))
+
+    def row(name, mode, conf, rs):
+        print("| %s | %s | %s | %d | %s | %d | %d | %d | %d |" % (
+            name, "RGB-D" if mode == "rgbd" else "monocular", conf, len(rs), cell([r[0] for r in rs], "%.0f"),
+            sum(r[1] == "dropped" for r in rs), sum(r[1] == "kept" for r in rs),
+            sum(r[1] == "tracked on" for r in rs), sum(r[2] for r in rs)))
+
+    seed = lambda seq: int(seq.rpartition("_s")[2]) if sequence_type(seq) != seq else 0
+    for kind in sorted({sequence_type(g[0]) for g in groups}):
+        for mode in ("rgbd", "mono"):
+            seqs = sorted({g[0] for g in groups if sequence_type(g[0]) == kind and g[1] == mode}, key=seed)
+            for seq in seqs:
+                for conf in confs:
+                    if (seq, mode, conf) in groups:
+                        row(seq, mode, conf, groups[(seq, mode, conf)])
+            if len(seqs) > 1:
+                for conf in confs:
+                    pooled = [r for seq in seqs for r in groups.get((seq, mode, conf), [])]
+                    if pooled:
+                        row("%s, %d sequences" % (kind, len(seqs)), mode, conf, pooled)
+
+
 def main(argv):
     if len(argv) >= 4 and argv[0] == "relocalisation":
         relocalisation(argv[1], argv[2], argv[3:])
@@ -311,6 +373,8 @@ def main(argv):
         rgbd(argv[1], argv[2:])
     elif len(argv) >= 4 and argv[0] == "suite":
         suite(argv[1], argv[2], argv[3:])
+    elif len(argv) >= 3 and argv[0] == "atlas":
+        atlas(argv[1], argv[2:])
     elif len(argv) >= 4 and argv[0] == "kitti":
         kitti(argv[1], argv[2], argv[3:])
     else:

@@ -30,9 +30,8 @@ suite: one table per sequence type (SEQS/TYPE_sSEED, every seed pooled) and mode
   stock's in a metric (fewer keyframes, frames with a pose, relocalisations or correct maps, more
   resets, a larger ATE), judged where both have at least kMinRuns runs.
 atlas: ORB-SLAM3 runs (RUNS/CONF/SEQUENCE/MODE_I/log.txt), per sequence and mode, then pooled over
-  the seeds of each sequence type: the keyframes
-  the first map made before tracking was lost (the keyframe id the next map starts at), and what
-  ORB-SLAM3 did with it: dropped it (a map of at most 10 keyframes is reset at once), kept it in its
+  the seeds of each sequence type: the keyframes the first map made before tracking was lost (the
+  keyframe id the next map starts at), and what ORB-SLAM3 did with it: dropped it (a map of at most 10 keyframes is reset at once), kept it in its
   atlas and started a new map, or tracked on (no loss, or relocalised within the 3 s it tries);
   then the runs where a later map merged with an earlier one.
 kitti: the runs whose map starts (>= 3 keyframes), when the first keyframe was taken (s from the
@@ -57,7 +56,7 @@ kCorrectMapM = 0.10   # a monocular map counts as correct with Sim(3) ATE <= 10 
 kCoverage = 0.50      # ... over at least half of the sequence's frames
 kMinRuns = 2          # suite: runs per side below which a sequence has no run-to-run range to judge by
 # ORB-SLAM3 prints no "System Reseting" at its default verbosity; this line of its local mapping
-# marks the same event, a map dropped (one of fewer than 10 keyframes lost, or a failed initialisation).
+# marks the same event, a map dropped (one of at most 10 keyframes lost, or a failed initialisation).
 kOrbSlam3Reset = "LM: Active map reset recieved"
 
 

@@ -8,7 +8,7 @@
 # usage: suite.sh --stock TREE --adapter TREE [options]
 #   --stock TREE       the fork built with rgbd_tum, mono_tum and mono_kitti: ORB-SLAM2 by
 #                      ../shared/slam/build_orbslam2.sh (TARGETS="rgbd_tum mono_tum mono_kitti"), or
-#                      ORB-SLAM3 built with the same examples (told by its include/Atlas.h)
+#                      ORB-SLAM3 built with the same examples (told as install.sh tells them)
 #   --adapter TREE     a copy with the adapter installed by adapters/orbslam2/install.sh --recovery
 #                      (adapters/orbslam3/ for ORB-SLAM3) and rebuilt; A0 runs it with
 #                      AFFINE_ORB_RECOVERY_IMAGE_FEATURES=1 (the recovery extraction then equals the
@@ -68,8 +68,12 @@ tables() {  # the configurations of CONFS that have runs, stock first
 }
 if [ "$TABLES_ONLY" = 1 ]; then tables; exit 0; fi
 [ -n "$STOCK" ] && [ -n "$ADAPTER" ] || usage
-fork() { if [ -f "$1/include/Atlas.h" ]; then echo orbslam3; else echo orbslam2; fi; }
+fork() {  # orbslam2, orbslam3 or None: the tree as adapters/common/install_adapter.py reads it
+  /usr/bin/python3 -B -c 'import pathlib, sys; sys.path.insert(0, sys.argv[1]); import install_adapter
+print(install_adapter.fork_kind(pathlib.Path(sys.argv[2])))' "$HERE/../../adapters/common" "$1"
+}
 FORK=$(fork "$STOCK")
+[ "$FORK" != None ] || { echo "--stock $STOCK: not an ORB-SLAM2 or ORB-SLAM3 tree" >&2; exit 2; }
 [ "$(fork "$ADAPTER")" = "$FORK" ] ||
   { echo "--stock $STOCK and --adapter $ADAPTER are not the same fork" >&2; exit 2; }
 grep -q "SetRecovering" "$ADAPTER/src/Tracking.cc" ||

@@ -8,6 +8,7 @@
   slam_tables.py kitti RUNS GROUNDTRUTH CONF...      KITTI 00 monocular runs
   slam_tables.py suite RUNS SEQS CONF...             bench/slam/suite.sh's tables (the first CONF is stock)
   slam_tables.py atlas RUNS CONF...                  ORB-SLAM3: what became of each run's first map
+  slam_tables.py span RUNS SEQS CONF...              monocular maps judged on the frames every map covers
 
 Every cell is the median (min–max) over a configuration's runs. Needs ../shared/slam/ate.py (found
 beside this project, or through SLAM_HARNESS) and numpy; use /usr/bin/python3 on Debian.
@@ -34,6 +35,15 @@ atlas: ORB-SLAM3 runs (RUNS/CONF/SEQUENCE/MODE_I/log.txt), per sequence and mode
   keyframe id the next map starts at), and what ORB-SLAM3 did with it: dropped it (a map of at most 10 keyframes is reset at once), kept it in its
   atlas and started a new map, or tracked on (no loss, or relocalised within the 3 s it tries);
   then the runs where a later map merged with an earlier one.
+span: monocular runs of rendered sequences (RUNS/CONF/SEQUENCE/mono_I/KeyFrameTrajectory.txt, the last
+  map), per sequence, then pooled over the seeds of each sequence type: the span every run's map covers
+  (from the latest first keyframe to the earliest last keyframe over the runs of every CONF that have
+  a map of >= 3 keyframes), then per configuration the Sim(3) ATE of the whole map, the Sim(3) ATE of
+  its keyframes inside the span alone, the runs correct there (<= kCorrectMapM), and the map's scale
+  drift: the largest over the smallest Sim(3) scale of windows of kDriftWindow consecutive keyframes
+  (1 for a map whose scale holds; a monocular map can drift where its motion leaves the scale
+  weakly observed). A map that starts earlier than another is judged by `suite` on frames the other
+  never maps; this compares the two where both exist.
 kitti: the runs whose map starts (>= 3 keyframes), when the first keyframe was taken (s from the
   first frame), keyframes, Sim(3) ATE of the keyframes (m), mean tracking time (ms).
 """
@@ -54,6 +64,7 @@ import ate  # noqa: E402  (../shared/slam/ate.py)
 kCorrectM = 0.10      # a relocalised pose counts when within 10 cm of the ground truth
 kCorrectMapM = 0.10   # a monocular map counts as correct with Sim(3) ATE <= 10 cm ...
 kCoverage = 0.50      # ... over at least half of the sequence's frames
+kDriftWindow = 12     # span: keyframes per window of the scale-drift measure (about 2 s of monocular `shake`)
 kMinRuns = 2          # suite: runs per side below which a sequence has no run-to-run range to judge by
 # ORB-SLAM3 prints no "System Reseting" at its default verbosity; this line of its local mapping
 # marks the same event, a map dropped (one of at most 10 keyframes lost, or a failed initialisation).
@@ -363,6 +374,82 @@ def atlas(runs, confs):
                         row("%s, %d sequences" % (kind, len(seqs)), mode, conf, pooled)
 
 
+def keyframe_maps(runs, conf, seq):
+    """(runs, [(timestamps, poses)]): the monocular runs of CONF on SEQ and the last map of every one
+    with >= 3 keyframes."""
+    directories = sorted(glob.glob(os.path.join(runs, conf, seq, "mono_*")))
+    maps = []
+    for d in directories:
+        path = os.path.join(d, "KeyFrameTrajectory.txt")
+        if os.path.exists(path):
+            t, p = ate.read_tum(path)
+            if len(t) >= 3:
+                maps.append((t, p))
+    return len(directories), maps
+
+
+def scale_drift(t_gt, p_gt, t, p):
+    """Largest over smallest Sim(3) scale of windows of kDriftWindow consecutive associated keyframes
+    (windows start every kDriftWindow // 3), or None for a map of fewer keyframes."""
+    ie, ig = ate.associate(t, t_gt)
+    if len(ie) < kDriftWindow:
+        return None
+    scales = [ate.umeyama(p[ie[i:i + kDriftWindow], :3], p_gt[ig[i:i + kDriftWindow], :3], True)[0]
+              for i in range(0, len(ie) - kDriftWindow + 1, kDriftWindow // 3)]
+    return max(scales) / min(scales)
+
+
+def map_errors(t_gt, p_gt, t, p, begin, end):
+    """(Sim(3) ATE of the whole map, of its keyframes in [begin, end] (None for fewer than 3), scale drift)."""
+    res, _ = ate.evaluate(t_gt, p_gt, t, p, sim3=True)
+    keep = (t >= begin) & (t <= end)
+    inside = ate.evaluate(t_gt, p_gt, t[keep], p[keep], sim3=True)[0] if keep.sum() >= 3 else {}
+    return (res["ate"]["rmse"] if "ate" in res else None, inside["ate"]["rmse"] if "ate" in inside else None,
+            scale_drift(t_gt, p_gt, t, p))
+
+
+def span_row(name, span_text, conf, runs, errors):
+    inside = [e[1] for e in errors if e[1] is not None]
+    print("| %s | %s | %s | %d/%d | %s | %s | %s | %s |" % (
+        name, span_text, conf, len(errors), runs, cell([e[0] for e in errors], "%.3f"), cell(inside, "%.3f"),
+        "%d/%d" % (sum(1 for a in inside if a <= kCorrectMapM), len(inside)) if inside else "–",
+        cell([e[2] for e in errors], "%.2f")))
+
+
+def span(runs, seqs, confs):
+    sequences = sorted({os.path.basename(os.path.dirname(d)) for c in confs
+                        for d in glob.glob(os.path.join(runs, c, "*", "mono_*"))},
+                       key=lambda q: (sequence_type(q), int(q.rpartition("_s")[2]) if sequence_type(q) != q else 0))
+    print("| sequence | span, s from the first frame | configuration | maps / runs | ATE m, whole map "
+          "| ATE m, inside the span | correct inside the span (<= %.2f m) | scale drift, max/min |" % kCorrectMapM)
+    print("|---|---|---|---|---|---|---|---|")
+    pooled = {}
+    for seq in sequences:
+        truth = os.path.join(seqs, seq, "groundtruth.txt")
+        if not os.path.exists(truth):
+            continue
+        t_gt, p_gt = ate.read_tum(truth)
+        found = {c: keyframe_maps(runs, c, seq) for c in confs}
+        every = [m for c in confs for m in found[c][1]]
+        begin = max((t[0] for t, _ in every), default=0.0)
+        end = min((t[-1] for t, _ in every), default=0.0)
+        span_text = "%.1f–%.1f" % (begin - t_gt[0], end - t_gt[0]) if end > begin else "none"
+        for conf in confs:
+            n, maps = found[conf]
+            if n == 0:
+                continue
+            errors = [map_errors(t_gt, p_gt, t, p, begin, end) for t, p in maps]
+            group = pooled.setdefault((sequence_type(seq), conf), [0, 0, []])
+            group[0] += 1
+            group[1] += n
+            group[2] += errors
+            span_row(seq, span_text, conf, n, errors)
+    for (kind, conf), (sequences_of_kind, n, errors) in sorted(pooled.items(),
+                                                              key=lambda g: (g[0][0], confs.index(g[0][1]))):
+        if sequences_of_kind > 1:
+            span_row("%s, %d sequences" % (kind, sequences_of_kind), "", conf, n, errors)
+
+
 def main(argv):
     if len(argv) >= 4 and argv[0] == "relocalisation":
         relocalisation(argv[1], argv[2], argv[3:])
@@ -374,6 +461,8 @@ def main(argv):
         suite(argv[1], argv[2], argv[3:])
     elif len(argv) >= 3 and argv[0] == "atlas":
         atlas(argv[1], argv[2:])
+    elif len(argv) >= 4 and argv[0] == "span":
+        span(argv[1], argv[2], argv[3:])
     elif len(argv) >= 4 and argv[0] == "kitti":
         kitti(argv[1], argv[2], argv[3:])
     else:

@@ -3,7 +3,8 @@
 # adapter's defaults (A0) and its recovery default (R3) on many seeds of every rendered sequence,
 # RGB-D and monocular, plus mono_kitti on KITTI 00; prints one table per sequence type and every
 # sequence where an adapter configuration is worse than stock beyond the run-to-run range
-# (slam_tables.py suite).
+# (slam_tables.py suite), then the monocular maps judged on the frames every map covers, with their
+# scale drift (slam_tables.py span).
 #
 # usage: suite.sh --stock TREE --adapter TREE [options]
 #   --stock TREE       the fork built with rgbd_tum, mono_tum and mono_kitti: ORB-SLAM2 by
@@ -65,6 +66,8 @@ tables() {  # the configurations of CONFS that have runs, stock first
   [ -d "$RUNS/kitti" ] && /usr/bin/python3 "$HARNESS/kitti_to_tum.py" "$KITTI/poses.txt" "$KITTI/times.txt" \
     "$RUNS/kitti/groundtruth.txt" > /dev/null
   /usr/bin/python3 "$HERE/slam_tables.py" suite "$RUNS" "$SYNTH" "${present[@]}"
+  echo; echo "Monocular maps where every configuration's map exists (slam_tables.py span):"; echo
+  /usr/bin/python3 "$HERE/slam_tables.py" span "$RUNS" "$SYNTH" "${present[@]}"
 }
 if [ "$TABLES_ONLY" = 1 ]; then tables; exit 0; fi
 [ -n "$STOCK" ] && [ -n "$ADAPTER" ] || usage

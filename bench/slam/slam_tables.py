@@ -32,9 +32,10 @@ suite: one table per sequence type (SEQS/TYPE_sSEED, every seed pooled) and mode
   resets, a larger ATE), judged where both have at least kMinRuns runs.
 atlas: ORB-SLAM3 runs (RUNS/CONF/SEQUENCE/MODE_I/log.txt), per sequence and mode, then pooled over
   the seeds of each sequence type: the keyframes the first map made before tracking was lost (the
-  keyframe id the next map starts at), and what ORB-SLAM3 did with it: dropped it (a map of at most 10 keyframes is reset at once), kept it in its
-  atlas and started a new map, or tracked on (no loss, or relocalised within the 3 s it tries);
-  then the runs where a later map merged with an earlier one.
+  keyframe id the next map starts at), and what ORB-SLAM3 did with it: dropped it (a map of at most
+  10 keyframes is reset at once), kept it in its atlas and started a new map, or tracked on (no
+  loss, or relocalised within the 3 s it tries); then the runs where a later map merged with an
+  earlier one.
 span: monocular runs of rendered sequences (RUNS/CONF/SEQUENCE/mono_I/KeyFrameTrajectory.txt, the last
   map), per sequence, then pooled over the seeds of each sequence type: the span every run's map covers
   (from the latest first keyframe to the earliest last keyframe over the runs of every CONF that have
@@ -191,6 +192,16 @@ def rgbd(runs_csv, confs):
                 cell([m * 1e3 if m else None for m in means]), ratio))
 
 
+def keyframe_map(directory):
+    """(timestamps, poses) of a run's KeyFrameTrajectory.txt (its last map), or None without a map of
+    >= 3 keyframes."""
+    path = os.path.join(directory, "KeyFrameTrajectory.txt")
+    if not os.path.exists(path):
+        return None
+    t, p = ate.read_tum(path)
+    return (t, p) if len(t) >= 3 else None
+
+
 def kitti(runs, groundtruth, confs):
     t_gt, p_gt = ate.read_tum(groundtruth)
     print("| configuration | maps | first keyframe at s | keyframes | Sim(3) ATE m | tracking ms, mean |")
@@ -199,11 +210,11 @@ def kitti(runs, groundtruth, confs):
         results = []
         for d in sorted(glob.glob(os.path.join(runs, conf, "kitti00", "mono_*"))):
             _, mean_ms = tracking_times(read_log(d))
-            path = os.path.join(d, "KeyFrameTrajectory.txt")
-            t, p = ate.read_tum(path) if os.path.exists(path) else (np.zeros(0), None)
-            if len(t) < 3:
+            keyframes = keyframe_map(d)
+            if keyframes is None:
                 results.append((None, None, None, mean_ms))
                 continue
+            t, p = keyframes
             res, _ = ate.evaluate(t_gt, p_gt, t, p, sim3=True)
             results.append((t[0] - t_gt[0], len(t), res["ate"]["rmse"] if "ate" in res else None, mean_ms))
         if not results:
@@ -218,6 +229,11 @@ def sequence_type(seq):
     """'oblique' for SEQS/oblique_s3 (suite.sh's names), else the name itself."""
     base, _, seed = seq.rpartition("_s")
     return base if base and seed.isdigit() else seq
+
+
+def sequence_seed(seq):
+    """3 for oblique_s3 (suite.sh's names), else 0."""
+    return int(seq.rpartition("_s")[2]) if sequence_type(seq) != seq else 0
 
 
 # Metrics of the regression list: (runs.csv column or derived key, label, True when larger is better).
@@ -359,10 +375,9 @@ def atlas(runs, confs):
             sum(r[1] == "dropped" for r in rs), sum(r[1] == "kept" for r in rs),
             sum(r[1] == "tracked on" for r in rs), sum(r[2] for r in rs)))
 
-    seed = lambda seq: int(seq.rpartition("_s")[2]) if sequence_type(seq) != seq else 0
     for kind in sorted({sequence_type(g[0]) for g in groups}):
         for mode in ("rgbd", "mono"):
-            seqs = sorted({g[0] for g in groups if sequence_type(g[0]) == kind and g[1] == mode}, key=seed)
+            seqs = sorted({g[0] for g in groups if sequence_type(g[0]) == kind and g[1] == mode}, key=sequence_seed)
             for seq in seqs:
                 for conf in confs:
                     if (seq, mode, conf) in groups:
@@ -376,16 +391,10 @@ def atlas(runs, confs):
 
 def keyframe_maps(runs, conf, seq):
     """(runs, [(timestamps, poses)]): the monocular runs of CONF on SEQ and the last map of every one
-    with >= 3 keyframes."""
+    with >= 3 keyframes (keyframe_map)."""
     directories = sorted(glob.glob(os.path.join(runs, conf, seq, "mono_*")))
-    maps = []
-    for d in directories:
-        path = os.path.join(d, "KeyFrameTrajectory.txt")
-        if os.path.exists(path):
-            t, p = ate.read_tum(path)
-            if len(t) >= 3:
-                maps.append((t, p))
-    return len(directories), maps
+    maps = [keyframe_map(d) for d in directories]
+    return len(directories), [m for m in maps if m is not None]
 
 
 def scale_drift(t_gt, p_gt, t, p):
@@ -419,7 +428,7 @@ def span_row(name, span_text, conf, runs, errors):
 def span(runs, seqs, confs):
     sequences = sorted({os.path.basename(os.path.dirname(d)) for c in confs
                         for d in glob.glob(os.path.join(runs, c, "*", "mono_*"))},
-                       key=lambda q: (sequence_type(q), int(q.rpartition("_s")[2]) if sequence_type(q) != q else 0))
+                       key=lambda q: (sequence_type(q), sequence_seed(q)))
     print("| sequence | span, s from the first frame | configuration | maps / runs | ATE m, whole map "
           "| ATE m, inside the span | correct inside the span (<= %.2f m) | scale drift, max/min |" % kCorrectMapM)
     print("|---|---|---|---|---|---|---|---|")

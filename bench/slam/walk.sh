@@ -1,7 +1,9 @@
 #!/bin/bash
 # walk.sh NAME=SOURCE... -- the walk along a wall (adapters/tests/walk.hpp) for each extractor, on the
 # Oxford walls graf, boat, bikes and trees (img1): keypoints found again one frame and 20 frames on,
-# within 40 px of the border, cells occupied; one Markdown table, the extractors side by side.
+# within 40 px of the border, cells occupied, and the share of the first extractor's keypoints (every
+# frame's) that each other one also picks: same octave, within one level pixel; all octaves and
+# octave 0. One Markdown table, the extractors side by side.
 # SOURCE is either
 #   an ORB-SLAM2 or ORB-SLAM3 tree: its own src/ORBextractor.cc (stock), or the adapter that
 #     adapters/orbslam*/install.sh put there (then with the affine_orb checkout its CMakeLists.txt names);
@@ -21,8 +23,10 @@ for arg in "$@"; do  # every source checked before the table starts
   [ -f "$src/adapters/orbslam2/ORBextractor.cc" ] || [ -f "$src/src/ORBextractor.cc" ] ||
     { echo "$src: neither an ORB-SLAM tree nor an affine_orb checkout" >&2; exit 2; }
 done
-echo '| extractor | wall | keypoints | found again 1 frame on | 20 frames on | within 40 px of the border | cells occupied |'
-echo '|---|---|---|---|---|---|---|'
+first=${1%%=*}
+echo "| extractor | wall | keypoints | found again 1 frame on | 20 frames on | within 40 px of the border | cells occupied | shared with $first | octave 0 |"
+echo '|---|---|---|---|---|---|---|---|---|'
+mode=--save
 for arg in "$@"; do
   name=${arg%%=*}; src=$(readlink -f "${arg#*=}")
   flags=(-O2 -std=c++17 -w -I"$PROJECT/adapters/tests")
@@ -38,5 +42,6 @@ for arg in "$@"; do
   fi
   # shellcheck disable=SC2086  # OPENCV holds several words
   ${CXX:-g++} "${flags[@]}" "$HERE/walk.cpp" "$cc" -o "$BIN/$name" $OPENCV
-  "$BIN/$name" "$name" "${WALLS[@]}"
+  "$BIN/$name" "$name" $mode "$BIN/first" "${WALLS[@]}"
+  mode=--shared
 done

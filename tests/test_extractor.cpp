@@ -265,6 +265,43 @@ TEST_CASE("the extractor returns exactly the budget, geometric per level, spread
   }
 }
 
+TEST_CASE("without carrying shortfalls each level keeps at most its own budget, and the same keypoints") {
+  // A small image with a large budget: the coarse levels have fewer candidates than their share.
+  // Carrying gives the budget in full, the short levels' difference taken mostly by level 0;
+  // without it a level keeps min(its budget, its candidates), and a level short of candidates has
+  // them all either way, so level l gets min(budget_l, what carrying gave it), with the same
+  // keypoints wherever the counts agree.
+  cv::Mat image;
+  cv::resize(affine_orb::test::oxford_image("boat", 1), image, cv::Size(320, 256), 0, 0, cv::INTER_AREA);
+  const int n = 3000;
+  affine_orb::ExtractorOptions options;
+  options.features = n;
+  options.views.max_tilt = 1.0;
+  affine_orb::Extractor<affine_orb::Rbrief> carrying(options);
+  options.carry_shortfalls = false;
+  affine_orb::Extractor<affine_orb::Rbrief> capped(options);
+  const auto with = carrying.extract(image);
+  const auto without = capped.extract(image);
+  REQUIRE(static_cast<int>(with.size()) == n);
+  const auto budgets = affine_orb::level_budgets(n, 1.2, 8);
+  std::vector<std::vector<cv::Point2f>> with_levels(8);
+  std::vector<std::vector<cv::Point2f>> without_levels(8);
+  for (const auto& kp : with.keypoints) with_levels[static_cast<std::size_t>(kp.octave)].push_back(kp.pt);
+  for (const auto& kp : without.keypoints) without_levels[static_cast<std::size_t>(kp.octave)].push_back(kp.pt);
+  int short_levels = 0;
+  for (std::size_t l = 0; l < 8; ++l) {
+    CAPTURE(l);
+    const int got = static_cast<int>(without_levels[l].size());
+    CHECK(got == std::min(budgets[l], static_cast<int>(with_levels[l].size())));
+    short_levels += got < budgets[l];
+    if (got == static_cast<int>(with_levels[l].size())) CHECK(without_levels[l] == with_levels[l]);
+  }
+  CHECK(short_levels > 0);
+  CHECK(static_cast<int>(with_levels[0].size()) > budgets[0]);  // carrying filled level 0 beyond its share
+  CHECK(static_cast<int>(without.size()) < n);
+  check_invariants(without, image, carrying.descriptor().border(), 31.0f);
+}
+
 TEST_CASE("the support region of a view level is exactly the set of pixels whose support maps inside") {
   const cv::Size size(320, 240);
   const int border = 18;

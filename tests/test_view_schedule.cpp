@@ -130,7 +130,7 @@ TEST_CASE("view budgets share a total in proportion to t^e, levels geometric, sh
     std::vector<int> range_budgets;
     for (int& a : available) a = offered(rng);
     for (int g = begin; g < end; ++g) range_budgets.push_back(budgets.group(g));
-    budgets.allocate(begin, end, available);
+    budgets.allocate(begin, end, available, true);
     const std::vector<int> expected = affine_orb::allocate_with_carry(range_budgets, available);
     int carried = 0;
     for (int g = begin; g < end; ++g) {
@@ -139,6 +139,20 @@ TEST_CASE("view budgets share a total in proportion to t^e, levels geometric, sh
       carried += budgets.take(g) > budgets.group(g);
     }
     CHECK(carried > 0);  // some group took a shortfall carried from another
+
+    // Without carrying, every group takes what it can of its own budget and nothing more, and
+    // the groups outside the range keep what the carrying allocation gave them.
+    const int outside = budgets.take(0);
+    budgets.allocate(begin, end, available, false);
+    int short_groups = 0;
+    for (int g = begin; g < end; ++g) {
+      const int offered_here = available[static_cast<std::size_t>(g - begin)];
+      CHECK(budgets.take(g) == std::min(budgets.group(g), offered_here));
+      short_groups += offered_here < budgets.group(g);
+    }
+    CHECK(short_groups > 0);  // the shortfalls the carrying allocation passed on are lost here
+    CHECK(budgets.take(0) == outside);
+    CHECK_THROWS_AS(budgets.allocate(begin, end + 1, available, false), std::invalid_argument);
   }
   affine_orb::detail::ViewBudgets budgets;
   budgets.resize(tilts.size(), levels);

@@ -56,7 +56,8 @@ namespace affine_orb {
 ///    candidates that repeat a keypoint chosen by an earlier view (detail::RepeatGrids,
 ///    ExtractorOptions::repeat_levels); then each level chooses what it describes: the image with
 ///    ViewBudget::kAdditive its final keypoints, exactly as with max_tilt = 1 (`features` of them,
-///    levels geometric, shortfalls carried); every other view a shortlist
+///    levels geometric, shortfalls carried unless ExtractorOptions::carry_shortfalls is false);
+///    every other view a shortlist
 ///    (ExtractorOptions::shortlist);
 /// 4. the chosen keypoints are oriented and described in their view, then mapped back: position
 ///    through the inverse view map, orientation by mapping the direction vector, scale s^l·√t
@@ -66,7 +67,7 @@ namespace affine_orb {
 ///    view_features · features over the tilted views, in proportion to t^view_weight_exponent;
 ///    kAreaSplit: `features` over all views, in proportion to their area 1/t) and, within a view,
 ///    over levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry(),
-///    detail::ViewBudgets); each (view, level) keeps its share of its shortlist by quadtree
+///    detail::ViewBudgets; ExtractorOptions::carry_shortfalls); each (view, level) keeps its share of its shortlist by quadtree
 ///    spreading (distribute_quadtree()) in original coordinates, or its strongest keypoints
 ///    (select_strongest()), per ExtractorOptions::spreading.
 ///
@@ -269,7 +270,7 @@ class Extractor {
     if (direct(v)) {
       available_.clear();
       for (const LevelCandidates& c : work.levels) available_.push_back(static_cast<int>(c.responses.size()));
-      budgets_.allocate(v * levels, (v + 1) * levels, available_);
+      budgets_.allocate(v * levels, (v + 1) * levels, available_, options_.carry_shortfalls);
     }
     for (int l = 0; l < levels; ++l) {
       LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
@@ -316,7 +317,7 @@ class Extractor {
     for (int g = first * levels; g < last * levels; ++g) {
       available_.push_back(static_cast<int>(level_of(g / levels, g % levels).keypoints.size()));
     }
-    budgets_.allocate(first * levels, last * levels, available_);
+    budgets_.allocate(first * levels, last * levels, available_, options_.carry_shortfalls);
     for_each(last - first, [&](int i, int w) {
       ThreadWork& work = thread_work_[static_cast<std::size_t>(w)];
       for (int l = 0; l < levels; ++l) {

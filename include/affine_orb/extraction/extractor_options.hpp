@@ -67,8 +67,8 @@ struct RefineOptions {
 
 /// Extraction parameters (SPEC §2).
 struct ExtractorOptions {
-  /// Number of features returned when the image has enough corners (exactly this many); ORB-SLAM2's
-  /// configuration files use 1000 to 2000. Must be in [1, 1000000].
+  /// Number of features returned when the image has enough corners (exactly this many, with
+  /// carry_shortfalls); ORB-SLAM2's configuration files use 1000 to 2000. Must be in [1, 1000000].
   int features = 1000;
   PyramidOptions pyramid;
   DetectorOptions detector;
@@ -89,6 +89,15 @@ struct ExtractorOptions {
   /// cannot, more, and finds the most distinct correct matches of the three over the Oxford pairs,
   /// most clearly from 40° of viewpoint change on (bench/eval_viewpoint).
   double view_weight_exponent = 1.0;
+  /// What a (view, level) with fewer candidates than its share of the budget does with the
+  /// difference. true: the next level (or view) takes it on, and what is still missing after the
+  /// last is taken, in order, from those with candidates left (allocate_with_carry()), so that the
+  /// output has `features` keypoints whenever the image has that many candidates, mostly from level
+  /// 0 when the coarse levels run short. false: each keeps at most its own share and the output has
+  /// fewer, as ORB-SLAM's own extractor does; the ORB-SLAM adapters use false, since its monocular
+  /// initialisation matches level-0 keypoints only and takes weak ones carried there
+  /// (docs/slam.md, "Shortfalls"). Default true: a fixed count for matching two images.
+  bool carry_shortfalls = true;
   DuplicatePolicy duplicates = DuplicatePolicy::kMerge;
   /// DuplicatePolicy::kMerge: a candidate of view v, level l is a repeat, and dropped before its
   /// view's selection, when a keypoint chosen by an earlier view (lower index; the image is view 0)

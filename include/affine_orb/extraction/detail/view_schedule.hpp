@@ -202,12 +202,21 @@ class ViewBudgets {
   int view(int v) const { return per_view_[static_cast<std::size_t>(v)]; }
   int group(int g) const { return per_group_[static_cast<std::size_t>(g)]; }
 
-  /// What each group g in [begin, end) takes: their budgets with shortfalls carried among them
-  /// (allocate_with_carry()), given what each offers, available[g − begin].
-  void allocate(int begin, int end, const std::vector<int>& available) {
-    range_budgets_.assign(per_group_.begin() + begin, per_group_.begin() + end);
-    allocate_with_carry(range_budgets_, available, range_take_);
-    std::copy(range_take_.begin(), range_take_.end(), take_.begin() + begin);
+  /// What each group g in [begin, end) takes, given what each offers, available[g − begin]: their
+  /// budgets with shortfalls carried among them (allocate_with_carry()) when `carry`, else each
+  /// min(its budget, what it offers).
+  void allocate(int begin, int end, const std::vector<int>& available, bool carry) {
+    require(end - begin == static_cast<int>(available.size()), "ViewBudgets::allocate: size mismatch");
+    if (carry) {
+      range_budgets_.assign(per_group_.begin() + begin, per_group_.begin() + end);
+      allocate_with_carry(range_budgets_, available, range_take_);
+      std::copy(range_take_.begin(), range_take_.end(), take_.begin() + begin);
+      return;
+    }
+    for (int g = begin; g < end; ++g) {
+      take_[static_cast<std::size_t>(g)] =
+          std::min(per_group_[static_cast<std::size_t>(g)], available[static_cast<std::size_t>(g - begin)]);
+    }
   }
   /// What group g takes, as the last allocate() over it decided.
   int take(int g) const { return take_[static_cast<std::size_t>(g)]; }

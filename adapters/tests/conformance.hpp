@@ -51,6 +51,28 @@ constexpr double kViewsTilt = 2.83;
 constexpr int kWindow = 5;
 constexpr int kSearch = 5;
 
+// ORB-SLAM's per-level budget for n features (ORBextractor's constructor): level l gets
+// round(n (1 - 1/s) / (1 - s^-L) s^-l), the last level what the others leave of n.
+inline std::vector<int> orbslam_budgets(int n) {
+  std::vector<int> budget(kLevels);
+  double share = n * (1.0 - 1.0 / kScale) / (1.0 - std::pow(1.0 / kScale, kLevels));
+  int assigned = 0;
+  for (int l = 0; l + 1 < kLevels; ++l) {
+    budget[static_cast<std::size_t>(l)] = static_cast<int>(std::lround(share));
+    assigned += budget[static_cast<std::size_t>(l)];
+    share /= kScale;
+  }
+  budget.back() = n - assigned;
+  return budget;
+}
+
+// Keypoints per octave.
+inline std::vector<int> per_octave(const std::vector<cv::KeyPoint>& keypoints) {
+  std::vector<int> count(kLevels, 0);
+  for (const cv::KeyPoint& kp : keypoints) ++count[static_cast<std::size_t>(kp.octave)];
+  return count;
+}
+
 struct Output {
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
@@ -194,7 +216,8 @@ inline int nearest_octave(int level, double tilt) {
 
 // What the adapter must return, derived from affine_orb::Extractor directly: the extractor with
 // the additive view budget (kFeatures image keypoints, about as many from the tilted views, which
-// must not change the image's: checked against max_tilt 1), each keypoint at its octave, which for
+// must not change the image's: checked against max_tilt 1) and no carried shortfalls (each view
+// and level at most its share, as ORB-SLAM's own extractor), each keypoint at its octave, which for
 // a view keypoint must be the nearest level to its scale s^l·√t by brute force (l recovered from
 // its size Descriptor::kPatchSize·s^l·√t); keypoints whose stereo window does not fit dropped;
 // grouped by octave, the image's first; rows cut to the first 32 bytes. `from_views` receives the
@@ -208,6 +231,7 @@ Output expected_output(const cv::Mat& image, double max_tilt, const std::vector<
   options.pyramid.levels = kLevels;
   options.detector.initial_threshold = kIniFast;
   options.detector.min_threshold = kMinFast;
+  options.carry_shortfalls = false;
   options.views.max_tilt = 1.0;
   affine_orb::Extractor<Descriptor> plain(options);
   const auto plain_features = plain.extract(image);
@@ -605,19 +629,45 @@ TEST_CASE_TEMPLATE_DEFINE("an empty image leaves every output untouched", T, emp
   for (std::size_t l = 0; l < pyramid.size(); ++l) CHECK(extractor.mvImagePyramid[l].data == pyramid[l].data);
 }
 
-TEST_CASE_TEMPLATE_DEFINE("monocular initialisation: the larger extractor returns about that many more", T,
+TEST_CASE_TEMPLATE_DEFINE("monocular initialisation: the larger extractor, ORB-SLAM's budget on every level", T,
                           initialisation) {
-  // Tracking builds a second extractor with kInitialisationFactor x nFeatures for initialisation.
-  const cv::Mat image = affine_orb::test::kitti_frame(0);
+  // Tracking builds a second extractor with kInitialisationFactor x nFeatures for initialisation;
+  // the monocular initialiser matches octave-0 keypoints only. Every level keeps at most ORB-SLAM's
+  // share of the larger budget, as ORB-SLAM's own extractor: a level short of corners does not
+  // pass its shortfall on (to level 0, where it would add weak corners to the initialiser's).
+  const int n = T::kInitialisationFactor * 1000;
+  const std::vector<int> budget = conformance::orbslam_budgets(n);
   typename T::Extractor normal(1000, 1.2f, 8, 20, 7);
-  typename T::Extractor initial(T::kInitialisationFactor * 1000, 1.2f, 8, 20, 7);
-  const conformance::Output a = conformance::run<T>(normal, image);
-  const conformance::Output b = conformance::run<T>(initial, image);
-  CHECK(a.keypoints.size() == 1000);
-  const double ratio = static_cast<double>(b.keypoints.size()) / static_cast<double>(a.keypoints.size());
-  CHECK(ratio >= 0.9 * T::kInitialisationFactor);
-  CHECK(ratio <= T::kInitialisationFactor);
-  conformance::check_output(b, image, initial.GetScaleFactors());
+  typename T::Extractor initial(n, 1.2f, 8, 20, 7);
+  SUBCASE("a KITTI frame has the corners: about that many more") {
+    const cv::Mat image = affine_orb::test::kitti_frame(0);
+    const conformance::Output a = conformance::run<T>(normal, image);
+    const conformance::Output b = conformance::run<T>(initial, image);
+    CHECK(a.keypoints.size() == 1000);
+    const double ratio = static_cast<double>(b.keypoints.size()) / static_cast<double>(a.keypoints.size());
+    CHECK(ratio >= 0.9 * T::kInitialisationFactor);
+    CHECK(ratio <= T::kInitialisationFactor);
+    const std::vector<int> count = conformance::per_octave(b.keypoints);
+    for (int l = 0; l < conformance::kLevels; ++l) CHECK(count[static_cast<std::size_t>(l)] <= budget[static_cast<std::size_t>(l)]);
+    CHECK(count[0] == budget[0]);
+    conformance::check_output(b, image, initial.GetScaleFactors());
+  }
+  SUBCASE("a frame whose coarse levels run short: level 0 keeps its own share") {
+    cv::Mat image;
+    cv::resize(affine_orb::test::kitti_frame(0), image, cv::Size(620, 188), 0, 0, cv::INTER_AREA);
+    const conformance::Output b = conformance::run<T>(initial, image);
+    const std::vector<int> count = conformance::per_octave(b.keypoints);
+    int short_levels = 0;
+    for (int l = 0; l < conformance::kLevels; ++l) {
+      CAPTURE(l);
+      CHECK(count[static_cast<std::size_t>(l)] <= budget[static_cast<std::size_t>(l)]);
+      short_levels += count[static_cast<std::size_t>(l)] < budget[static_cast<std::size_t>(l)];
+    }
+    REQUIRE(short_levels > 0);
+    CHECK(count[0] == budget[0]);
+    CHECK(static_cast<int>(b.keypoints.size()) < n);
+    conformance::check_output(b, image, initial.GetScaleFactors());
+  }
 }
 
 TEST_CASE_TEMPLATE_DEFINE("the mask is honoured and a ROI image is fine", T, mask) {
@@ -699,25 +749,12 @@ TEST_CASE_TEMPLATE_DEFINE("a walk along a wall: per-level budgets, keypoints fou
   REQUIRE(wall.rows >= 640);
   typename T::Extractor extractor(conformance::kFeatures, conformance::kScale, conformance::kLevels,
                                   conformance::kIniFast, conformance::kMinFast);
-  // ORB-SLAM's per-level budget (ORBextractor's constructor): level l gets round(N (1 - 1/s) /
-  // (1 - s^-L) s^-l), the last level what the others leave of N.
-  std::vector<int> budget(conformance::kLevels);
-  double share = conformance::kFeatures * (1.0 - 1.0 / conformance::kScale) /
-                 (1.0 - std::pow(1.0 / conformance::kScale, conformance::kLevels));
-  int assigned = 0;
-  for (int l = 0; l + 1 < conformance::kLevels; ++l) {
-    budget[static_cast<std::size_t>(l)] = static_cast<int>(std::lround(share));
-    assigned += budget[static_cast<std::size_t>(l)];
-    share /= conformance::kScale;
-  }
-  budget.back() = conformance::kFeatures - assigned;
+  const std::vector<int> budget = conformance::orbslam_budgets(conformance::kFeatures);
   int frames_off_budget = 0;
   const walk::Measures m = walk::measure(wall, [&](const cv::Mat& frame) {
     walk::Features f;
     T::extract(extractor, frame, cv::Mat(), f.keypoints, f.descriptors);
-    std::vector<int> count(conformance::kLevels, 0);
-    for (const cv::KeyPoint& kp : f.keypoints) ++count[static_cast<std::size_t>(kp.octave)];
-    frames_off_budget += count != budget;
+    frames_off_budget += conformance::per_octave(f.keypoints) != budget;
     return f;
   });
   CHECK(frames_off_budget == 0);

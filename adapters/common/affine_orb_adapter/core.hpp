@@ -256,6 +256,11 @@ class AdapterCore {
     options.detector.min_threshold = min_th_fast;
     options.detector.score = ScoreType::kFast;  // ORB-SLAM ranks by the FAST score
     options.subpixel = false;                    // ORB-SLAM's keypoints lie on level pixels
+    // A level short of corners keeps its shortfall, as ORB-SLAM's own extractor does: carried to
+    // level 0 of the monocular initialiser's frames (5 x nfeatures in ORB-SLAM3) it gave ORB-SLAM3
+    // maps that drift in scale on the rendered `shake` and lose tracking at once on `fast`
+    // (docs/slam.md, "Shortfalls").
+    options.carry_shortfalls = false;
     options.view_budget = ViewBudget::kAdditive;
     options.duplicates =
         affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;

@@ -634,7 +634,7 @@ TEST_CASE_TEMPLATE_DEFINE("monocular initialisation: the larger extractor, ORB-S
   // Tracking builds a second extractor with kInitialisationFactor x nFeatures for initialisation;
   // the monocular initialiser matches octave-0 keypoints only. Every level keeps at most ORB-SLAM's
   // share of the larger budget, as ORB-SLAM's own extractor: a level short of corners does not
-  // pass its shortfall on (to level 0, where it would add weak corners to the initialiser's).
+  // pass its shortfall on (to level 0, where it would add extra corners to the initialiser's).
   const int n = T::kInitialisationFactor * 1000;
   const std::vector<int> budget = conformance::orbslam_budgets(n);
   typename T::Extractor normal(1000, 1.2f, 8, 20, 7);
@@ -648,7 +648,9 @@ TEST_CASE_TEMPLATE_DEFINE("monocular initialisation: the larger extractor, ORB-S
     CHECK(ratio >= 0.9 * T::kInitialisationFactor);
     CHECK(ratio <= T::kInitialisationFactor);
     const std::vector<int> count = conformance::per_octave(b.keypoints);
-    for (int l = 0; l < conformance::kLevels; ++l) CHECK(count[static_cast<std::size_t>(l)] <= budget[static_cast<std::size_t>(l)]);
+    for (int l = 0; l < conformance::kLevels; ++l) {
+      CHECK(count[static_cast<std::size_t>(l)] <= budget[static_cast<std::size_t>(l)]);
+    }
     CHECK(count[0] == budget[0]);
     conformance::check_output(b, image, initial.GetScaleFactors());
   }
@@ -742,8 +744,9 @@ TEST_CASE_TEMPLATE_DEFINE("a walk along a wall: per-level budgets, keypoints fou
   // (walk.hpp: known geometry, no SLAM), with the adapter's defaults. The bounds sit a little beyond
   // stock ORB-SLAM2's own extractor on the same walk (bench/slam/walk.sh, docs/slam.md "The walk"):
   // found again one frame on 0.671, 20 frames on 0.504, within 40 px of the border 0.082, cells
-  // occupied 0.727 (±0.002 between builds: its quadtree breaks ties by heap address). The adapter before its candidate-rectangle spreading crowded the border (0.121)
-  // and lost more of the first frame's keypoints by the last (0.472); both bounds catch that.
+  // occupied 0.727 (±0.002 between builds: its quadtree breaks ties by heap address). The adapter
+  // before its candidate-rectangle spreading crowded the border (0.121) and lost more of the first
+  // frame's keypoints by the last (0.472); both bounds catch that.
   const cv::Mat wall = affine_orb::test::oxford_image("graf", 1);
   REQUIRE(wall.cols >= 800);
   REQUIRE(wall.rows >= 640);

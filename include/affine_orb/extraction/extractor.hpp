@@ -67,9 +67,9 @@ namespace affine_orb {
 ///    view_features · features over the tilted views, in proportion to t^view_weight_exponent;
 ///    kAreaSplit: `features` over all views, in proportion to their area 1/t) and, within a view,
 ///    over levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry(),
-///    detail::ViewBudgets; ExtractorOptions::carry_shortfalls); each (view, level) keeps its share of its shortlist by quadtree
-///    spreading (distribute_quadtree()) in original coordinates, or its strongest keypoints
-///    (select_strongest()), per ExtractorOptions::spreading.
+///    detail::ViewBudgets; ExtractorOptions::carry_shortfalls); each (view, level) keeps its share
+///    of its shortlist by quadtree spreading (distribute_quadtree()) in original coordinates, or
+///    its strongest keypoints (select_strongest()), per ExtractorOptions::spreading.
 ///
 /// Output order: by octave (0 first), then by view, then by level, then raster order in the view.
 /// The output does not depend on ExtractorOptions::threads.

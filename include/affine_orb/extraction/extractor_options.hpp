@@ -95,7 +95,7 @@ struct ExtractorOptions {
   /// output has `features` keypoints whenever the image has that many candidates, mostly from level
   /// 0 when the coarse levels run short. false: each keeps at most its own share and the output has
   /// fewer, as ORB-SLAM's own extractor does; the ORB-SLAM adapters use false, since its monocular
-  /// initialisation matches level-0 keypoints only and takes weak ones carried there
+  /// initialisation matches level-0 keypoints only and takes the extra ones carried there
   /// (docs/slam.md, "Shortfalls"). Default true: a fixed count for matching two images.
   bool carry_shortfalls = true;
   DuplicatePolicy duplicates = DuplicatePolicy::kMerge;

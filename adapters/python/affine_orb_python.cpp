@@ -177,7 +177,8 @@ Enum one_of(const std::string& text, const char* argument, const char* first_nam
 affine_orb::ExtractorOptions make_options(int features, double max_tilt, int threads, double view_features,
                                           const std::string& view_budget, const std::string& spreading,
                                           const std::string& duplicates, int levels, double scale_factor,
-                                          int initial_threshold, int min_threshold, bool subpixel) {
+                                          int initial_threshold, int min_threshold, bool subpixel,
+                                          bool carry_shortfalls) {
   affine_orb::ExtractorOptions o;
   o.features = features;
   o.views.max_tilt = max_tilt;
@@ -194,6 +195,7 @@ affine_orb::ExtractorOptions make_options(int features, double max_tilt, int thr
   o.detector.initial_threshold = initial_threshold;
   o.detector.min_threshold = min_threshold;
   o.subpixel = subpixel;
+  o.carry_shortfalls = carry_shortfalls;
   o.check();
   return o;
 }
@@ -285,10 +287,11 @@ PYBIND11_MODULE(affine_orb, m) {
                           "Extracts keypoints and binary descriptors from grey images (affine_orb::Extractor).")
       .def(py::init([](int features, double max_tilt, const std::string& descriptor, int threads, double view_features,
                        const std::string& view_budget, const std::string& spreading, const std::string& duplicates,
-                       int levels, double scale_factor, int initial_threshold, int min_threshold, bool subpixel) {
+                       int levels, double scale_factor, int initial_threshold, int min_threshold, bool subpixel,
+                       bool carry_shortfalls) {
              return std::make_unique<PyExtractor>(
                  make_options(features, max_tilt, threads, view_features, view_budget, spreading, duplicates, levels,
-                              scale_factor, initial_threshold, min_threshold, subpixel),
+                              scale_factor, initial_threshold, min_threshold, subpixel, carry_shortfalls),
                  descriptor);
            }),
            py::arg("features") = defaults.features, py::arg("max_tilt") = defaults.views.max_tilt,
@@ -298,10 +301,13 @@ PYBIND11_MODULE(affine_orb, m) {
            py::arg("levels") = defaults.pyramid.levels, py::arg("scale_factor") = defaults.pyramid.scale_factor,
            py::arg("initial_threshold") = defaults.detector.initial_threshold,
            py::arg("min_threshold") = defaults.detector.min_threshold, py::arg("subpixel") = defaults.subpixel,
+           py::arg("carry_shortfalls") = defaults.carry_shortfalls,
            "Options as in affine_orb::ExtractorOptions (features = keypoints from the image; with max_tilt > 1 "
            "the 18 default views add view_features x features more; subpixel: positions at the vertex of the "
-           "FAST score parabolas instead of whole level pixels as ORB's). descriptor: \"rbrief\" (32 bytes) or "
-           "\"brisk\" (64 bytes). Invalid values raise ValueError.")
+           "FAST score parabolas instead of whole level pixels as ORB's; carry_shortfalls=False: a pyramid "
+           "level with fewer corners than its share keeps the shortfall, as ORB-SLAM's extractor does, instead "
+           "of passing it to the other levels, so an image short of corners gives fewer than `features`). "
+           "descriptor: \"rbrief\" (32 bytes) or \"brisk\" (64 bytes). Invalid values raise ValueError.")
       .def("detect_and_compute", &PyExtractor::detect_and_compute, py::arg("image"), py::arg("mask") = py::none(),
            "(keypoints, descriptors) of a 2-D uint8 image: a list of cv2.KeyPoint (original pixels) and an "
            "N x 32 (or 64) uint8 array, row i for keypoint i. mask: None or a 2-D uint8 array of the image size "
@@ -315,7 +321,10 @@ PYBIND11_MODULE(affine_orb, m) {
       .def_property_readonly(
           "max_tilt", [](const PyExtractor& e) { return e.options().views.max_tilt; }, "Largest simulated tilt.")
       .def_property_readonly(
-          "threads", [](const PyExtractor& e) { return e.options().threads; }, "Worker threads.");
+          "threads", [](const PyExtractor& e) { return e.options().threads; }, "Worker threads.")
+      .def_property_readonly(
+          "carry_shortfalls", [](const PyExtractor& e) { return e.options().carry_shortfalls; },
+          "Whether a level's shortfall of corners passes to the other levels.");
 
   m.def(
       "match",

@@ -216,6 +216,43 @@ def test_views_and_defaults():
     assert np.array_equal(descriptors[views == 0], plain_descriptors)
 
 
+def orb_level_budgets(total, scale_factor, levels):
+    """ORB-SLAM's split of a budget over the pyramid: level l gets round(N (1 - f) / (1 - f^L) f^l)
+    with f = 1 / scale_factor, the last level the remainder."""
+    f = 1.0 / scale_factor
+    per_level = total * (1.0 - f) / (1.0 - f ** levels)
+    budgets = []
+    for _ in range(levels - 1):
+        budgets.append(min(int(np.floor(per_level + 0.5)), total - sum(budgets)))
+        per_level *= f
+    return budgets + [total - sum(budgets)]
+
+
+def test_carry_shortfalls_false_keeps_each_level_within_its_share():
+    """A small image with a large budget runs short of corners at the coarse levels. By default the
+    shortfall passes to the other levels (mostly level 0) and the budget is met; with
+    carry_shortfalls=False each level keeps min(its share, what it has), and the levels that had no
+    more than their share keep the very same keypoints."""
+    image = cv2.resize(oxford("boat", 1), (320, 256), interpolation=cv2.INTER_AREA)
+    carrying = affine_orb.Extractor(features=3000, max_tilt=1.0)
+    capped = affine_orb.Extractor(features=3000, max_tilt=1.0, carry_shortfalls=False)
+    assert carrying.carry_shortfalls and not capped.carry_shortfalls
+    with_kps, with_desc = carrying.detect_and_compute(image)
+    without_kps, without_desc = capped.detect_and_compute(image)
+    assert len(with_kps) == 3000 and len(without_kps) < 3000
+    budgets = orb_level_budgets(3000, 1.2, 8)
+    short = 0
+    for level, budget in enumerate(budgets):
+        with_level = [i for i, k in enumerate(with_kps) if k.octave == level]
+        without_level = [i for i, k in enumerate(without_kps) if k.octave == level]
+        assert len(without_level) == min(budget, len(with_level)), level
+        short += len(without_level) < budget
+        if len(without_level) == len(with_level):
+            assert [with_kps[i].pt for i in with_level] == [without_kps[i].pt for i in without_level]
+            assert np.array_equal(with_desc[with_level], without_desc[without_level])
+    assert short > 0 and sum(k.octave == 0 for k in with_kps) > budgets[0]
+
+
 def test_subpixel_positions_move_only_the_points():
     """The default puts level-0 keypoints on whole pixels (as ORB); subpixel=True moves them by at
     most half a pixel and keeps every descriptor."""

@@ -1,0 +1,239 @@
+// init_chain.cpp -- what ORB-SLAM's monocular initialisation gets from one ORBextractor on a sequence,
+// without running SLAM: compiled by init_chain.sh against a fork's src/ORBextractor.cc (ORB-SLAM's own
+// extractor, or the adapter installed in it) or against an affine_orb checkout's adapter.
+//
+// ORB-SLAM2's Tracking::MonocularInitialization takes a frame of more than 100 keypoints as the
+// reference and matches every next frame against it (ORBmatcher::SearchForInitialization): octave-0
+// keypoints only, within a square window of ±100 px around where each reference keypoint was last
+// matched, Hamming distance ≤ 50 (TH_LOW), best < 0.9 × second best, one match per keypoint of the
+// current frame, then only the three largest bins of a histogram of orientation differences in 30°
+// bins (a bin counts when it has at least a tenth of the largest; ORB-SLAM2 divides the angle by its
+// 30 bins, so 13 of them are used, 30° wide). It gives the reference up at the first
+// frame with fewer than 100 matches, and the frame after that becomes the next reference; until
+// then the two-view reconstruction is tried on every frame. So a reference that keeps 100 matches
+// for more frames gives the reconstruction more parallax to work with. ORB-SLAM3's monocular mode
+// does the same with five times the budget (two in ORB-SLAM2).
+//
+// This file implements that matching from the description above (the frames of the sequence are
+// extracted with the monocular initialisation budget: 2 × ORBextractor.nFeatures of camera.yaml, 5 ×
+// with -DWALK_ORBSLAM3) and prints one Markdown table row per sequence:
+//   name, sequence, octave-0 keypoints per frame, matches one frame on (mean over every frame as
+//   reference), frames a reference keeps 100 matches (mean), the references that keep them for 10
+//   frames or more, and the same on the references ORB-SLAM's own chain takes from frame 0 (taken,
+//   and of them 10 frames or more).
+//
+// usage: init_chain NAME SEQUENCE...   (each SEQUENCE a TUM-layout folder: rgb.txt, camera.yaml)
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "ORBextractor.h"
+
+#ifdef WALK_ORBSLAM3
+namespace slam = ORB_SLAM3;
+constexpr int kBudgetFactor = 5;
+#else
+namespace slam = ORB_SLAM2;
+constexpr int kBudgetFactor = 2;
+#endif
+
+namespace {
+
+/// MonocularInitialization's thresholds: keypoints a reference needs (more than), matches a frame
+/// needs to keep the reference (at least), the window half-width (pixels, level-0 coordinates).
+constexpr std::size_t kMinKeypoints = 100;
+constexpr int kMinMatches = 100;
+constexpr float kWindow = 100.f;
+/// SearchForInitialization: TH_LOW (bits of 256), nearest-neighbour ratio, histogram bins and their
+/// width (degrees).
+constexpr int kMaxDistance = 50;
+constexpr double kRatio = 0.9;
+constexpr int kBins = 30;
+constexpr float kBinDegrees = 30.f;
+/// A reference that keeps its matches this many frames counts as a real attempt at parallax.
+constexpr int kLongChain = 10;
+/// Frames followed from each reference at most (longer chains are counted as this long).
+constexpr int kMaxAge = 60;
+
+struct Frame {
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;  // CV_8U, 32 bytes a row
+};
+
+int hamming(const cv::Mat& a, int i, const cv::Mat& b, int j) {
+  const std::uint8_t* p = a.ptr<std::uint8_t>(i);
+  const std::uint8_t* q = b.ptr<std::uint8_t>(j);
+  int bits = 0;
+  for (int k = 0; k < 32; ++k) bits += __builtin_popcount(static_cast<unsigned>(p[k] ^ q[k]));
+  return bits;
+}
+
+/// Matches `current` against `reference` as described above; `last` holds, per reference keypoint,
+/// where it was last matched (pixels, level-0 coordinates) and is moved to this frame's matches.
+int match(const Frame& reference, const Frame& current, std::vector<cv::Point2f>& last) {
+  const int n1 = static_cast<int>(reference.keypoints.size());
+  const int n2 = static_cast<int>(current.keypoints.size());
+  std::vector<int> to2(n1, -1);
+  std::vector<int> to1(n2, -1);
+  std::vector<int> distance2(n2, 1 << 30);
+  for (int i = 0; i < n1; ++i) {
+    if (reference.keypoints[i].octave != 0) continue;
+    int best = 256, second = 256, best_j = -1;
+    for (int j = 0; j < n2; ++j) {
+      const cv::KeyPoint& k = current.keypoints[j];
+      if (k.octave != 0 || std::abs(k.pt.x - last[i].x) >= kWindow || std::abs(k.pt.y - last[i].y) >= kWindow) continue;
+      const int d = hamming(reference.descriptors, i, current.descriptors, j);
+      if (distance2[j] <= d) continue;  // already matched as well or better
+      if (d < best) {
+        second = best;
+        best = d;
+        best_j = j;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best > kMaxDistance || best >= kRatio * second) continue;
+    if (to1[best_j] >= 0) to2[to1[best_j]] = -1;
+    to2[i] = best_j;
+    to1[best_j] = i;
+    distance2[best_j] = best;
+  }
+  std::array<std::vector<int>, kBins> bins;
+  for (int i = 0; i < n1; ++i) {
+    if (to2[i] < 0) continue;
+    float rotation = reference.keypoints[i].angle - current.keypoints[to2[i]].angle;
+    if (rotation < 0.f) rotation += 360.f;
+    int bin = static_cast<int>(std::lround(rotation / kBinDegrees));
+    if (bin == kBins) bin = 0;
+    bins[bin].push_back(i);
+  }
+  std::array<int, kBins> order{};
+  for (int b = 0; b < kBins; ++b) order[b] = b;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return bins[a].size() > bins[b].size(); });
+  const double largest = static_cast<double>(bins[order[0]].size());
+  int matches = 0;
+  for (int rank = 0; rank < kBins; ++rank) {
+    const bool kept = rank < 3 && static_cast<double>(bins[order[rank]].size()) >= 0.1 * largest;
+    for (int i : bins[order[rank]]) {
+      if (kept) {
+        last[i] = current.keypoints[to2[i]].pt;
+        ++matches;
+      }
+    }
+  }
+  return matches;
+}
+
+/// Frames after `r` that keep kMinMatches matches against frame r (0 when r is not a reference).
+int chain(const std::vector<Frame>& frames, std::size_t r, int& first_matches) {
+  first_matches = 0;
+  if (frames[r].keypoints.size() <= kMinKeypoints) return 0;
+  std::vector<cv::Point2f> last;
+  for (const cv::KeyPoint& k : frames[r].keypoints) last.push_back(k.pt);
+  int age = 0;
+  for (std::size_t c = r + 1; c < frames.size() && age < kMaxAge; ++c) {
+    const int matches = frames[c].keypoints.size() <= kMinKeypoints ? 0 : match(frames[r], frames[c], last);
+    if (c == r + 1) first_matches = matches;
+    if (matches < kMinMatches) break;
+    ++age;
+  }
+  return age;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: %s NAME SEQUENCE...\n", argv[0]);
+    return 2;
+  }
+  for (int s = 2; s < argc; ++s) {
+    const std::string folder = argv[s];
+    cv::FileStorage settings(folder + "/camera.yaml", cv::FileStorage::READ);
+    std::ifstream list(folder + "/rgb.txt");
+    if (!settings.isOpened() || !list) {
+      std::fprintf(stderr, "%s: no camera.yaml or rgb.txt\n", folder.c_str());
+      return 2;
+    }
+    const int features = static_cast<int>(settings["ORBextractor.nFeatures"]);
+    const float scale = static_cast<float>(settings["ORBextractor.scaleFactor"]);
+    const int levels = static_cast<int>(settings["ORBextractor.nLevels"]);
+    const int fast_initial = static_cast<int>(settings["ORBextractor.iniThFAST"]);
+    const int fast_minimum = static_cast<int>(settings["ORBextractor.minThFAST"]);
+    const bool rgb_order = static_cast<int>(settings["Camera.RGB"]) != 0;
+    slam::ORBextractor extractor(kBudgetFactor * features, scale, levels, fast_initial, fast_minimum);
+
+    std::vector<Frame> frames;
+    std::string line;
+    double octave0 = 0.0;
+    while (std::getline(list, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream fields(line);
+      Frame f;
+      double time = 0.0;
+      std::string file;
+      fields >> time >> file;
+      const cv::Mat colour = cv::imread(folder + "/" + file, cv::IMREAD_COLOR);
+      if (colour.empty()) {
+        std::fprintf(stderr, "%s/%s: not an image\n", folder.c_str(), file.c_str());
+        return 2;
+      }
+      cv::Mat grey;
+      cv::cvtColor(colour, grey, rgb_order ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
+#ifdef WALK_ORBSLAM3
+      std::vector<int> lapping = {0, 0};
+      extractor(grey, cv::Mat(), f.keypoints, f.descriptors, lapping);
+#else
+      extractor(grey, cv::Mat(), f.keypoints, f.descriptors);
+#endif
+      octave0 += static_cast<double>(std::count_if(f.keypoints.begin(), f.keypoints.end(),
+                                                   [](const cv::KeyPoint& k) { return k.octave == 0; }));
+      frames.push_back(std::move(f));
+    }
+    if (frames.size() < 2) {
+      std::fprintf(stderr, "%s: fewer than two frames\n", folder.c_str());
+      return 2;
+    }
+
+    std::vector<int> ages(frames.size());
+    double first_matches = 0.0, age_sum = 0.0;
+    int long_chains = 0;
+    for (std::size_t r = 0; r + 1 < frames.size(); ++r) {
+      int first = 0;
+      ages[r] = chain(frames, r, first);
+      first_matches += first;
+      age_sum += ages[r];
+      long_chains += ages[r] >= kLongChain;
+    }
+    // ORB-SLAM's own chain: a reference is given up on the frame after its last kept one, and the
+    // frame after that is the next reference (frames of too few keypoints are skipped).
+    int taken = 0, taken_long = 0;
+    for (std::size_t r = 0; r + 1 < frames.size();) {
+      if (frames[r].keypoints.size() <= kMinKeypoints) {
+        ++r;
+        continue;
+      }
+      ++taken;
+      taken_long += ages[r] >= kLongChain;
+      r += static_cast<std::size_t>(ages[r]) + 2;
+    }
+    std::string name = folder;
+    while (name.size() > 1 && name.back() == '/') name.pop_back();
+    name = name.substr(name.find_last_of('/') + 1);
+    const double references = static_cast<double>(frames.size() - 1);
+    std::printf("| %s | %s | %.0f | %.1f | %.2f | %d | %d | %d |\n", argv[1], name.c_str(),
+                octave0 / static_cast<double>(frames.size()), first_matches / references, age_sum / references,
+                long_chains, taken, taken_long);
+  }
+  return 0;
+}

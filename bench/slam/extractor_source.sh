@@ -13,7 +13,7 @@ extractor_check() {
 }
 
 # extractor_compile SOURCE PROGRAM OUTPUT [FLAG...]: PROGRAM.cpp with SOURCE's ORBextractor.cc; an
-# ORB-SLAM3 tree defines WALK_ORBSLAM3.
+# ORB-SLAM3 tree defines WALK_ORBSLAM3, which fork_extractor.hpp reads.
 extractor_compile() {
   local src program output cc opencv
   src=$(readlink -f "$1"); program=$2; output=$3; shift 3

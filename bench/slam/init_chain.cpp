@@ -16,7 +16,7 @@
 //
 // This file implements that matching from the description above (the frames of the sequence are
 // extracted with the monocular initialisation budget: 2 × ORBextractor.nFeatures of camera.yaml, 5 ×
-// with -DWALK_ORBSLAM3) and prints one Markdown table row per sequence:
+// for an ORB-SLAM3 tree) and prints one Markdown table row per sequence:
 //   name, sequence, octave-0 keypoints per frame, matches one frame on (mean over every frame as
 //   reference), frames a reference keeps 100 matches (mean), the references that keep them for 10
 //   frames or more, and the same on the references ORB-SLAM's own chain takes from frame 0 (taken,
@@ -37,15 +37,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "ORBextractor.h"
-
-#ifdef WALK_ORBSLAM3
-namespace slam = ORB_SLAM3;
-constexpr int kBudgetFactor = 5;
-#else
-namespace slam = ORB_SLAM2;
-constexpr int kBudgetFactor = 2;
-#endif
+#include "fork_extractor.hpp"
 
 namespace {
 
@@ -171,7 +163,8 @@ int main(int argc, char** argv) {
     const int fast_initial = static_cast<int>(settings["ORBextractor.iniThFAST"]);
     const int fast_minimum = static_cast<int>(settings["ORBextractor.minThFAST"]);
     const bool rgb_order = static_cast<int>(settings["Camera.RGB"]) != 0;
-    slam::ORBextractor extractor(kBudgetFactor * features, scale, levels, fast_initial, fast_minimum);
+    orb_fork::ORBextractor extractor(orb_fork::kInitialBudgetFactor * features, scale, levels, fast_initial,
+                                     fast_minimum);
 
     std::vector<Frame> frames;
     std::string line;
@@ -179,7 +172,6 @@ int main(int argc, char** argv) {
     while (std::getline(list, line)) {
       if (line.empty() || line[0] == '#') continue;
       std::istringstream fields(line);
-      Frame f;
       double time = 0.0;
       std::string file;
       fields >> time >> file;
@@ -190,12 +182,7 @@ int main(int argc, char** argv) {
       }
       cv::Mat grey;
       cv::cvtColor(colour, grey, rgb_order ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
-#ifdef WALK_ORBSLAM3
-      std::vector<int> lapping = {0, 0};
-      extractor(grey, cv::Mat(), f.keypoints, f.descriptors, lapping);
-#else
-      extractor(grey, cv::Mat(), f.keypoints, f.descriptors);
-#endif
+      Frame f = orb_fork::extract<Frame>(extractor, grey);
       octave0 += static_cast<double>(std::count_if(f.keypoints.begin(), f.keypoints.end(),
                                                    [](const cv::KeyPoint& k) { return k.octave == 0; }));
       frames.push_back(std::move(f));

@@ -18,14 +18,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "ORBextractor.h"
+#include "fork_extractor.hpp"
 #include "walk.hpp"
-
-#ifdef WALK_ORBSLAM3
-namespace slam = ORB_SLAM3;
-#else
-namespace slam = ORB_SLAM2;
-#endif
 
 namespace {
 
@@ -94,17 +88,11 @@ int main(int argc, char** argv) {
       return 2;
     }
     // ORB-SLAM2's TUM1.yaml: 1000 features, scale 1.2, 8 levels, FAST 20 / 7.
-    slam::ORBextractor extractor(1000, 1.2f, 8, 20, 7);
+    orb_fork::ORBextractor extractor(1000, 1.2f, 8, 20, 7);
     double keypoints = 0.0;
     std::vector<walk::Features> frames;
     const walk::Measures m = walk::measure(wall, [&](const cv::Mat& frame) {
-      walk::Features f;
-#ifdef WALK_ORBSLAM3
-      std::vector<int> lapping = {0, 0};
-      extractor(frame, cv::Mat(), f.keypoints, f.descriptors, lapping);
-#else
-      extractor(frame, cv::Mat(), f.keypoints, f.descriptors);
-#endif
+      walk::Features f = orb_fork::extract<walk::Features>(extractor, frame);
       keypoints += static_cast<double>(f.keypoints.size()) / walk::kFrames;
       frames.push_back(f);
       return f;

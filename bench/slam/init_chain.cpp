@@ -34,6 +34,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -62,14 +63,6 @@ struct Frame {
   cv::Mat descriptors;  // CV_8U, 32 bytes a row
 };
 
-int hamming(const cv::Mat& a, int i, const cv::Mat& b, int j) {
-  const std::uint8_t* p = a.ptr<std::uint8_t>(i);
-  const std::uint8_t* q = b.ptr<std::uint8_t>(j);
-  int bits = 0;
-  for (int k = 0; k < 32; ++k) bits += __builtin_popcount(static_cast<unsigned>(p[k] ^ q[k]));
-  return bits;
-}
-
 /// Matches `current` against `reference` as described above; `last` holds, per reference keypoint,
 /// where it was last matched (pixels, level-0 coordinates) and is moved to this frame's matches.
 int match(const Frame& reference, const Frame& current, std::vector<cv::Point2f>& last) {
@@ -84,7 +77,8 @@ int match(const Frame& reference, const Frame& current, std::vector<cv::Point2f>
     for (int j = 0; j < n2; ++j) {
       const cv::KeyPoint& k = current.keypoints[j];
       if (k.octave != 0 || std::abs(k.pt.x - last[i].x) >= kWindow || std::abs(k.pt.y - last[i].y) >= kWindow) continue;
-      const int d = hamming(reference.descriptors, i, current.descriptors, j);
+      const int d = cv::hal::normHamming(reference.descriptors.ptr<std::uint8_t>(i),
+                                         current.descriptors.ptr<std::uint8_t>(j), current.descriptors.cols);
       if (distance2[j] <= d) continue;  // already matched as well or better
       if (d < best) {
         second = best;
@@ -114,32 +108,34 @@ int match(const Frame& reference, const Frame& current, std::vector<cv::Point2f>
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return bins[a].size() > bins[b].size(); });
   const double largest = static_cast<double>(bins[order[0]].size());
   int matches = 0;
-  for (int rank = 0; rank < kBins; ++rank) {
-    const bool kept = rank < 3 && static_cast<double>(bins[order[rank]].size()) >= 0.1 * largest;
+  for (int rank = 0; rank < 3 && static_cast<double>(bins[order[rank]].size()) >= 0.1 * largest; ++rank) {
     for (int i : bins[order[rank]]) {
-      if (kept) {
-        last[i] = current.keypoints[to2[i]].pt;
-        ++matches;
-      }
+      last[i] = current.keypoints[to2[i]].pt;
+      ++matches;
     }
   }
   return matches;
 }
 
-/// Frames after `r` that keep kMinMatches matches against frame r (0 when r is not a reference).
-int chain(const std::vector<Frame>& frames, std::size_t r, int& first_matches) {
-  first_matches = 0;
-  if (frames[r].keypoints.size() <= kMinKeypoints) return 0;
+/// What frame r gives as the reference: the frames after it that keep kMinMatches matches, and the
+/// matches of the frame after it (both 0 when r is not a reference).
+struct Chain {
+  int age = 0;
+  int first_matches = 0;
+};
+
+Chain chain(const std::vector<Frame>& frames, std::size_t r) {
+  Chain result;
+  if (frames[r].keypoints.size() <= kMinKeypoints) return result;
   std::vector<cv::Point2f> last;
   for (const cv::KeyPoint& k : frames[r].keypoints) last.push_back(k.pt);
-  int age = 0;
-  for (std::size_t c = r + 1; c < frames.size() && age < kMaxAge; ++c) {
+  for (std::size_t c = r + 1; c < frames.size() && result.age < kMaxAge; ++c) {
     const int matches = frames[c].keypoints.size() <= kMinKeypoints ? 0 : match(frames[r], frames[c], last);
-    if (c == r + 1) first_matches = matches;
+    if (c == r + 1) result.first_matches = matches;
     if (matches < kMinMatches) break;
-    ++age;
+    ++result.age;
   }
-  return age;
+  return result;
 }
 
 }  // namespace
@@ -196,10 +192,10 @@ int main(int argc, char** argv) {
     double first_matches = 0.0, age_sum = 0.0;
     int long_chains = 0;
     for (std::size_t r = 0; r + 1 < frames.size(); ++r) {
-      int first = 0;
-      ages[r] = chain(frames, r, first);
-      first_matches += first;
-      age_sum += ages[r];
+      const Chain c = chain(frames, r);
+      ages[r] = c.age;
+      first_matches += c.first_matches;
+      age_sum += c.age;
       long_chains += ages[r] >= kLongChain;
     }
     // ORB-SLAM's own chain: a reference is given up on the frame after its last kept one, and the

@@ -70,7 +70,7 @@ tables() {  # the configurations of CONFS that have runs, stock first
   /usr/bin/python3 "$HERE/slam_tables.py" span "$RUNS" "$SYNTH" "${present[@]}"
 }
 if [ "$TABLES_ONLY" = 1 ]; then tables; exit 0; fi
-[ -n "$STOCK" ] && [ -n "$ADAPTER" ] || usage
+if [ -z "$STOCK" ] || [ -z "$ADAPTER" ]; then usage; fi
 fork() {  # orbslam2, orbslam3 or None: the tree as adapters/common/install_adapter.py reads it
   /usr/bin/python3 -B -c 'import pathlib, sys; sys.path.insert(0, sys.argv[1]); import install_adapter
 print(install_adapter.fork_kind(pathlib.Path(sys.argv[2])))' "$HERE/../../adapters/common" "$1"

@@ -145,13 +145,19 @@ class Rbrief {
   }
 
   /// Intensity-centroid orientation in radians on the unsmoothed level image, as ORB computes it:
-  /// CentroidDisc::angle(), whose integer moments are summed 8 columns at a time where the target
-  /// has SSE2 or NEON (the same sums, so the same angle).
+  /// degrees_to_steering(orientation_degrees()).
   float orientation(const LevelData& data, cv::Point2f pt) const {
+    return degrees_to_steering(orientation_degrees(data, pt));
+  }
+
+  /// The same orientation in degrees, the keypoint angle ORB and ORB-SLAM store:
+  /// CentroidDisc::degrees(), whose integer moments are summed 8 columns at a time where the target
+  /// has SSE2 or NEON (the same sums, so the same angle).
+  float orientation_degrees(const LevelData& data, cv::Point2f pt) const {
 #if AFFINE_ORB_SIMD128
-    return centroid_angle_128(data.image, cvRound(pt.x), cvRound(pt.y));
+    return centroid_degrees_128(data.image, cvRound(pt.x), cvRound(pt.y));
 #else
-    return disc_.angle(data.image, cvRound(pt.x), cvRound(pt.y));
+    return disc_.degrees(data.image, cvRound(pt.x), cvRound(pt.y));
 #endif
   }
 
@@ -267,11 +273,11 @@ class Rbrief {
     return d;
   }
 
-  /// CentroidDisc::angle() with the moments m10 = Σ u·I, m01 = Σ v·I summed by 16-bit multiplies
+  /// CentroidDisc::degrees() with the moments m10 = Σ u·I, m01 = Σ v·I summed by 16-bit multiplies
   /// into 32-bit lanes (SSE2's multiply-add, NEON's widening multiply-accumulate): per row pair ±v,
   /// u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|, |v| <= 64, each product below 2^15),
   /// exactly the integers of the scalar loop.
-  float centroid_angle_128(const cv::Mat& image, int cx, int cy) const {
+  float centroid_degrees_128(const cv::Mat& image, int cx, int cy) const {
     const int r = options_.orientation_radius;
     const std::size_t chunks = disc_chunks_.x.size();
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
@@ -293,7 +299,7 @@ class Rbrief {
         m01 = L::multiply_add(m01, L::subtract(b, a), L::load(disc_chunks_.v[k]));
       }
     }
-    return orb_angle(L::total(m01), L::total(m10));
+    return orb_angle_degrees(L::total(m01), L::total(m10));
   }
 #endif
 

@@ -38,13 +38,18 @@ inline std::vector<int> orb_disc_half_widths(int radius) {
   return w;
 }
 
-/// The angle ORB steers its pattern by, in radians in [0, 2π), from the disc's moments: ORB's
-/// cv::fastAtan2(m01, m10) in degrees (accurate to about 0.3°), times the float π/180, exactly as
-/// OpenCV's ORB and ORB-SLAM2 turn a keypoint's angle into the steering angle.
-inline float orb_angle(std::int64_t m01, std::int64_t m10) {
-  const float degrees = cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
-  return degrees * static_cast<float>(CV_PI / 180.0);
+/// The keypoint angle ORB and ORB-SLAM store, in degrees in [0, 360), from the disc's moments:
+/// cv::fastAtan2(m01, m10) (accurate to about 0.3°).
+inline float orb_angle_degrees(std::int64_t m01, std::int64_t m10) {
+  return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
 }
+
+/// The angle ORB steers its pattern by, in radians in [0, 2π): orb_angle_degrees() times the float
+/// π/180, exactly as OpenCV's ORB and ORB-SLAM2 turn a keypoint's angle into the steering angle.
+inline float degrees_to_steering(float degrees) { return degrees * static_cast<float>(CV_PI / 180.0); }
+
+/// degrees_to_steering(orb_angle_degrees(m01, m10)).
+inline float orb_angle(std::int64_t m01, std::int64_t m10) { return degrees_to_steering(orb_angle_degrees(m01, m10)); }
 
 /// Precomputed ORB disc of radius r (orb_disc_half_widths()).
 class CentroidDisc {
@@ -58,7 +63,10 @@ class CentroidDisc {
   /// Orientation (orb_angle(), radians in [0, 2π)) of the disc centred on the integer pixel (x, y)
   /// of a CV_8UC1 image (x right, y down, angle from +x towards +y). The caller guarantees that the
   /// disc lies inside the image (radius() <= x < cols − radius(), likewise y).
-  float angle(const cv::Mat& image, int x, int y) const {
+  float angle(const cv::Mat& image, int x, int y) const { return degrees_to_steering(degrees(image, x, y)); }
+
+  /// The same orientation in degrees (orb_angle_degrees()), as ORB's keypoints carry it.
+  float degrees(const cv::Mat& image, int x, int y) const {
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
     const std::uint8_t* center = image.ptr<std::uint8_t>(y) + x;
     std::int64_t m10 = 0;
@@ -78,7 +86,7 @@ class CentroidDisc {
       }
       m01 += v * row_sum;
     }
-    return orb_angle(m01, m10);
+    return orb_angle_degrees(m01, m10);
   }
 
  private:

@@ -116,7 +116,8 @@ class Rbrief {
   }
 
   /// Smooths only the union of the squares of side 2·border()+1 around `points` (level pixels,
-  /// rounded) when it covers less than half of the level, else the whole level. The union is
+  /// rounded) when it covers less than half of the level, else the whole level (at once, without
+  /// forming the union, when the squares' areas add up to twice the level's or more). The union is
   /// smoothed row run by row run, each pixel once, with cv::GaussianBlur's own integer arithmetic
   /// (detail/gaussian_q8.hpp, reflecting about the level edges), so its pixels equal those of the
   /// full smoothing; when that arithmetic could not be confirmed at construction, the whole level is
@@ -128,6 +129,10 @@ class Rbrief {
       return;
     }
     const int side = 2 * border_ + 1;
+    if (static_cast<double>(points.size()) * side * side >= 2.0 * static_cast<double>(level.total())) {
+      prepare(level, data);
+      return;
+    }
     const cv::Rect bounds(0, 0, level.cols, level.rows);
     data.squares.squares.clear();
     for (const cv::Point2f& p : points) {

@@ -49,18 +49,7 @@ inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, 
                   "fast_score_rect: threshold must be in [1, 255], got " + std::to_string(threshold));
   detail::require(scores.type() == CV_8UC1 && scores.size() == image.size(),
                   "fast_score_rect: the score map must be CV_8UC1 of the image size");
-  rect &= cv::Rect(kFastRadius, kFastRadius, image.cols - 2 * kFastRadius, image.rows - 2 * kFastRadius);
-  if (rect.empty()) return;
-  const std::array<std::ptrdiff_t, 16> offset = detail::circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
-  for (int y = rect.y; y < rect.y + rect.height; ++y) {
-#if AFFINE_ORB_SIMD128
-    detail::score_row_simd(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, kFastRadius,
-                           image.cols - kFastRadius, threshold, scores.ptr<std::uint8_t>(y));
-#else
-    detail::score_row_scalar(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, threshold,
-                             scores.ptr<std::uint8_t>(y));
-#endif
-  }
+  detail::score_rect(image, rect, threshold, scores);
 }
 
 /// Per-pixel FAST scores of `image` restricted to the rectangle `roi`, for pixels whose score is at

@@ -310,6 +310,23 @@ inline void non_max_row(const cv::Mat& scores, int y, int x0, int x1, int thresh
 #endif
 }
 
+/// fast_score_rect() without the argument checks, for callers that made them once (it builds no
+/// message, so hot paths may call it every frame).
+inline void score_rect(const cv::Mat& image, cv::Rect rect, int threshold, cv::Mat& scores) {
+  rect &= cv::Rect(kFastRadius, kFastRadius, image.cols - 2 * kFastRadius, image.rows - 2 * kFastRadius);
+  if (rect.empty()) return;
+  const std::array<std::ptrdiff_t, 16> offset = circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+#if AFFINE_ORB_SIMD128
+    score_row_simd(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, kFastRadius,
+                   image.cols - kFastRadius, threshold, scores.ptr<std::uint8_t>(y));
+#else
+    score_row_scalar(image.ptr<std::uint8_t>(y), offset, rect.x, rect.x + rect.width, threshold,
+                     scores.ptr<std::uint8_t>(y));
+#endif
+  }
+}
+
 /// fast_score_spans() without the argument checks, for callers that made them once.
 inline void score_spans(const cv::Mat& image, const RowSpans& region, int threshold, cv::Mat& scores) {
   const std::array<std::ptrdiff_t, 16> offset = circle_offsets(static_cast<std::ptrdiff_t>(image.step[0]));

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "affine_orb/detection/detail/opencv_resize.hpp"
 #include "affine_orb/detection/detail/resize.hpp"
 #include "affine_orb/detection/fast.hpp"
 #include "affine_orb/detection/pyramid.hpp"
@@ -138,5 +140,54 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
 #endif
     }
     CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("build_resized: every level is what cv::resize makes of the level before, byte for byte") {
+  // cv::resize itself is the reference: random images and sizes (downscales by ORB-SLAM's 1.2 and
+  // others, upscales, exactly half, the same size, one-pixel edges), and a ROI source.
+  std::mt19937 rng(21);
+  std::uniform_int_distribution<int> side(1, 260);
+  std::uniform_int_distribution<int> byte(0, 255);
+  affine_orb::detail::OpenCvResizeWork work;
+  int cases = 0;
+  for (int t = 0; t < 300; ++t) {
+    cv::Mat big(side(rng) + 4, side(rng) + 4, CV_8UC1);
+    for (int y = 0; y < big.rows; ++y) {
+      for (int x = 0; x < big.cols; ++x) big.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(byte(rng));
+    }
+    const cv::Mat src = big(cv::Rect(2, 2, big.cols - 4, big.rows - 4));
+    cv::Size size(side(rng), side(rng));
+    if (t % 4 == 0) size = cv::Size(cvRound(src.cols / 1.2f), cvRound(src.rows / 1.2f));
+    if (t % 17 == 0) size = cv::Size(src.cols / 2, src.rows / 2);
+    if (t % 19 == 0) size = src.size();
+    if (size.width < 1 || size.height < 1) continue;
+    CAPTURE(src.size());
+    CAPTURE(size);
+    cv::Mat expected;
+    cv::resize(src, expected, size, 0.0, 0.0, cv::INTER_LINEAR);
+    cv::Mat got(size, CV_8UC1);
+    affine_orb::detail::resize_linear_8u(src, got, work);
+    CHECK(cv::norm(expected, got, cv::NORM_INF) == 0.0);
+    ++cases;
+  }
+  CHECK(cases > 250);
+  // The pyramid of a real frame at ORB-SLAM's sizes.
+  const cv::Mat image = affine_orb::test::kitti_frame(7);
+  std::vector<cv::Size> sizes = {image.size()};
+  float factor = 1.0f;
+  for (int l = 1; l < 8; ++l) {
+    factor *= 1.2f;
+    sizes.emplace_back(cvRound(static_cast<float>(image.cols) * (1.0f / factor)),
+                       cvRound(static_cast<float>(image.rows) * (1.0f / factor)));
+  }
+  affine_orb::Pyramid pyramid;
+  pyramid.build_resized(image, sizes);
+  cv::Mat previous = image;
+  for (int l = 1; l < 8; ++l) {
+    cv::Mat expected;
+    cv::resize(previous, expected, sizes[static_cast<std::size_t>(l)], 0.0, 0.0, cv::INTER_LINEAR);
+    CHECK(cv::norm(expected, pyramid.level(l), cv::NORM_INF) == 0.0);
+    previous = expected;
   }
 }

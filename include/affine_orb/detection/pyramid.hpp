@@ -11,6 +11,7 @@
 
 #include "affine_orb/core/detail/buffer.hpp"
 #include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/detection/detail/opencv_resize.hpp"
 #include "affine_orb/detection/detail/resize.hpp"
 #include "affine_orb/core/detail/row_spans.hpp"
 
@@ -91,6 +92,24 @@ class Pyramid {
     }
   }
 
+  /// Builds the levels of a CV_8UC1 image as ORB-SLAM's ORBextractor::ComputePyramid does: level 0
+  /// a copy, level l of size sizes[l] the bytes cv::resize (INTER_LINEAR) makes of level l − 1
+  /// (detail/opencv_resize.hpp, in the pyramid's own buffers). `sizes` has one entry per level
+  /// (sizes[0] is the image's). to_level0() keeps the pixel-centre convention, which is not
+  /// ORB-SLAM's keypoint placement.
+  void build_resized(const cv::Mat& image, const std::vector<cv::Size>& sizes) {
+    detail::require_gray8(image, "Pyramid::build_resized");
+    detail::require(static_cast<int>(sizes.size()) == options_.levels && sizes[0] == image.size(),
+                    "Pyramid::build_resized: one size per level expected, the first the image's");
+    image.copyTo(level0(image.size()));
+    opencv_resize_work_.resize(levels_.size());
+    for (int l = 1; l < options_.levels; ++l) {
+      const std::size_t i = static_cast<std::size_t>(l);
+      levels_[i] = detail::fit_buffer(storage_[i], sizes[i], CV_8UC1);
+      detail::resize_linear_8u(levels_[i - 1], levels_[i], opencv_resize_work_[i]);
+    }
+  }
+
   /// Grows the storage to hold the levels of an image of `size` (allocated, not touched: pages
   /// become resident when a build writes them).
   void reserve(cv::Size size) {
@@ -122,6 +141,7 @@ class Pyramid {
   std::vector<cv::Mat> levels_;
   std::vector<cv::Mat> storage_;  ///< per level, the buffer levels_[l] is the top-left part of
   std::vector<detail::ResizeWork> resize_work_;
+  std::vector<detail::OpenCvResizeWork> opencv_resize_work_;  ///< build_resized()'s, per level
 };
 
 }  // namespace affine_orb

@@ -1,0 +1,165 @@
+#pragma once
+/// \file
+/// Internals (namespace detail): cv::resize with INTER_LINEAR on 8-bit single-channel images,
+/// reproduced byte for byte into a caller's buffers (the SLAM forks build their pyramids with it,
+/// and cv::resize allocates its tables on every call). The arithmetic, per axis of source size n
+/// and destination size m (OpenCV's fixed point with 11-bit weights):
+/// - destination index d samples f = (float)((d + 0.5)·n/m − 0.5), s = floor(f), weights
+///   w0 = cvRound((1 − (f − s))·2048), w1 = cvRound((f − s)·2048); along x a sample before the
+///   first or from the last column on takes that column alone (s clamped, weights 2048 and 0),
+///   along y the two rows s and s + 1 are clamped to the image;
+/// - a row of the source resized along x is h = I(s)·w0 + I(s + 1)·w1;
+/// - a destination pixel from the rows h0 (row s) and h1 (row s + 1) with weights b0, b1 is
+///   (((h0 >> 4)·b0 >> 16) + ((h1 >> 4)·b1 >> 16) + 2) >> 2, OpenCV's 16-bit vertical step.
+/// Exactly halving both sizes (OpenCV then averages 2x2 blocks) and equal sizes (a copy) go to
+/// cv::resize itself.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "affine_orb/core/detail/simd.hpp"
+
+namespace affine_orb {
+namespace detail {
+
+/// One axis of the resize: per destination index, its first source index and two weights.
+struct CvResizeAxis {
+  std::vector<int> first;
+  std::vector<int> second;  ///< min(first + 1, n − 1)
+  std::vector<std::int16_t> w0;
+  std::vector<std::int16_t> w1;
+  std::vector<std::int16_t> pairs;  ///< w0, w1 interleaved
+  int n = -1;
+  int m = -1;
+
+  /// `clamp_edges`: along x, a sample outside [0, n − 1) takes the edge column alone. Kept when
+  /// the sizes are those of the last call.
+  void set(int source, int destination, bool clamp_edges) {
+    if (source == n && destination == m) return;
+    n = source;
+    m = destination;
+    first.resize(static_cast<std::size_t>(m));
+    second.resize(static_cast<std::size_t>(m));
+    w0.resize(static_cast<std::size_t>(m));
+    w1.resize(static_cast<std::size_t>(m));
+    pairs.resize(2 * static_cast<std::size_t>(m));
+    const double scale = 1.0 / (static_cast<double>(m) / static_cast<double>(n));
+    for (int d = 0; d < m; ++d) {
+      float f = static_cast<float>((d + 0.5) * scale - 0.5);
+      int s = cvFloor(f);
+      f -= static_cast<float>(s);
+      if (clamp_edges && s < 0) {
+        f = 0.0f;
+        s = 0;
+      }
+      if (clamp_edges && s >= n - 1) {
+        f = 0.0f;
+        s = n - 1;
+      }
+      const std::size_t i = static_cast<std::size_t>(d);
+      first[i] = s;
+      second[i] = std::min(s + 1, n - 1);
+      w0[i] = cv::saturate_cast<std::int16_t>((1.0f - f) * 2048.0f);
+      w1[i] = cv::saturate_cast<std::int16_t>(f * 2048.0f);
+      pairs[2 * i] = w0[i];
+      pairs[2 * i + 1] = w1[i];
+    }
+  }
+};
+
+/// Buffers of resize_linear_8u(), reused across calls.
+struct OpenCvResizeWork {
+  CvResizeAxis x;
+  CvResizeAxis y;
+  std::vector<int> rows[2];  ///< two source rows resized along x
+  int cached[2] = {-1, -1};  ///< which source row each holds
+};
+
+/// Source row `r` resized along x into `out`.
+inline void resize_row_x(const cv::Mat& src, int r, const CvResizeAxis& x, std::vector<int>& out) {
+  const std::uint8_t* row = src.ptr<std::uint8_t>(r);
+  const int* first = x.first.data();
+  const int* second = x.second.data();
+  const std::int16_t* w0 = x.w0.data();
+  const std::int16_t* w1 = x.w1.data();
+  int* o = out.data();
+  const int m = static_cast<int>(x.first.size());
+  int d = 0;
+#if defined(__SSE2__)
+  // Four pixels at a time: each pair of source bytes as two 16-bit lanes, times its two weights
+  // (x.pairs) by one multiply-add.
+  const std::int16_t* pairs = x.pairs.data();
+  for (; d + 4 <= m; d += 4) {
+    const auto pair = [&](int k) { return static_cast<int>(row[first[d + k]]) | (static_cast<int>(row[second[d + k]]) << 16); };
+    const __m128i pixels = _mm_set_epi32(pair(3), pair(2), pair(1), pair(0));
+    const __m128i weights = _mm_loadu_si128(reinterpret_cast<const __m128i*>(pairs + 2 * d));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(o + d), _mm_madd_epi16(pixels, weights));
+  }
+#endif
+  for (; d < m; ++d) o[d] = row[first[d]] * w0[d] + row[second[d]] * w1[d];
+}
+
+/// The destination row from the two source rows resized along x, h0 and h1, with weights b0 and
+/// b1: (((h0 >> 4)·b0 >> 16) + ((h1 >> 4)·b1 >> 16) + 2) >> 2 per pixel, 8 at a time with SSE2
+/// (16-bit high multiplies, as the formula's precision is) where the target has it; the scalar
+/// loop is the reference and does the rest.
+inline void blend_rows(const int* h0, const int* h1, int b0, int b1, int width, std::uint8_t* out) {
+  int x = 0;
+#if defined(__SSE2__)
+  const __m128i v0 = _mm_set1_epi16(static_cast<short>(b0));
+  const __m128i v1 = _mm_set1_epi16(static_cast<short>(b1));
+  const __m128i two = _mm_set1_epi16(2);
+  for (; x + 8 <= width; x += 8) {
+    const __m128i a = _mm_packs_epi32(_mm_srai_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(h0 + x)), 4),
+                                      _mm_srai_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(h0 + x + 4)), 4));
+    const __m128i b = _mm_packs_epi32(_mm_srai_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(h1 + x)), 4),
+                                      _mm_srai_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(h1 + x + 4)), 4));
+    const __m128i sum = _mm_add_epi16(_mm_add_epi16(_mm_mulhi_epi16(a, v0), _mm_mulhi_epi16(b, v1)), two);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + x), _mm_packus_epi16(_mm_srai_epi16(sum, 2), sum));
+  }
+#endif
+  for (; x < width; ++x) out[x] = static_cast<std::uint8_t>((((h0[x] >> 4) * b0 >> 16) + ((h1[x] >> 4) * b1 >> 16) + 2) >> 2);
+}
+
+/// The buffer holding source row `r` resized along x, computed unless one holds it already;
+/// `keep` (0 or 1) is the buffer the caller still needs.
+inline const std::vector<int>& resized_row(const cv::Mat& src, int r, int keep, OpenCvResizeWork& w) {
+  for (int b = 0; b < 2; ++b) {
+    if (w.cached[b] == r) return w.rows[b];
+  }
+  const int b = keep < 0 ? 0 : 1 - keep;
+  resize_row_x(src, r, w.x, w.rows[b]);
+  w.cached[b] = r;
+  return w.rows[b];
+}
+
+/// cv::resize(src, dst, dst.size(), 0, 0, INTER_LINEAR) for CV_8UC1 `src` into the CV_8UC1 `dst`
+/// (its size the destination's, its buffer written in place), the same bytes (file comment).
+inline void resize_linear_8u(const cv::Mat& src, cv::Mat& dst, OpenCvResizeWork& w) {
+  if (dst.size() == src.size() || (src.cols == 2 * dst.cols && src.rows == 2 * dst.rows)) {
+    cv::resize(src, dst, dst.size(), 0.0, 0.0, cv::INTER_LINEAR);
+    return;
+  }
+  w.x.set(src.cols, dst.cols, true);
+  w.y.set(src.rows, dst.rows, false);
+  for (std::vector<int>& row : w.rows) row.resize(static_cast<std::size_t>(dst.cols));
+  w.cached[0] = w.cached[1] = -1;
+  const int last = src.rows - 1;
+  for (int d = 0; d < dst.rows; ++d) {
+    const std::size_t di = static_cast<std::size_t>(d);
+    const int r0 = std::clamp(w.y.first[di], 0, last);
+    const int r1 = std::clamp(w.y.first[di] + 1, 0, last);
+    const std::vector<int>& h0 = resized_row(src, r0, -1, w);
+    const int keep = &h0 == &w.rows[0] ? 0 : 1;
+    const std::vector<int>& h1 = resized_row(src, r1, keep, w);
+    blend_rows(h0.data(), h1.data(), w.y.w0[di], w.y.w1[di], dst.cols, dst.ptr<std::uint8_t>(d));
+  }
+}
+
+}  // namespace detail
+}  // namespace affine_orb

@@ -252,6 +252,15 @@ int main(int argc, char** argv) {
   refined.refine.enabled = true;
   hash_extraction<Rbrief>("affine refined", refined, images);
 
+  ExtractorOptions orbslam2 = plain;
+  orbslam2.image_keypoints = affine_orb::ImageKeypoints::kOrbSlam2;
+  hash_extraction<Rbrief>("ORB-SLAM2 keypoints 1000", orbslam2, images);
+  hash_extraction<Rbrief>("ORB-SLAM2 keypoints 1000, masked", orbslam2, images, true);
+  ExtractorOptions orbslam3 = orbslam2;
+  orbslam3.image_keypoints = affine_orb::ImageKeypoints::kOrbSlam3;
+  orbslam3.features = 5000;
+  orbslam3.views.max_tilt = 2.83;
+  hash_extraction<Rbrief>("ORB-SLAM3 keypoints 5000 + views", orbslam3, images);
   hash_extraction<Brisk>("BRISK plain 1000", plain, images);
   hash_extraction<Brisk>("BRISK affine default", affine, images);
 

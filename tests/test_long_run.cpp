@@ -88,6 +88,22 @@ TEST_CASE("after one pass over the frames, extract() allocates only the three ve
       }
     }
   }
+  // A fork's own keypoints: cv::resize and the cell FAST write into the kept buffers too.
+  for (const auto fork : {affine_orb::ImageKeypoints::kOrbSlam2, affine_orb::ImageKeypoints::kOrbSlam3}) {
+    affine_orb::ExtractorOptions options;
+    options.features = 1000;
+    options.views.max_tilt = 1.0;
+    options.image_keypoints = fork;
+    affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
+    for (const cv::Mat& frame : frames) extractor.extract(frame);
+    for (const cv::Mat& frame : frames) {
+      const long news = g_new_calls;
+      const long mat_buffers = mats.calls;
+      extractor.extract(frame);
+      CHECK(g_new_calls - news == 3);  // keypoints, descriptors, views
+      CHECK(mats.calls - mat_buffers == 0);
+    }
+  }
   cv::Mat::setDefaultAllocator(previous);
 }
 

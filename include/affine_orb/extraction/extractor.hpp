@@ -29,6 +29,7 @@
 #include "affine_orb/detection/fast.hpp"
 #include "affine_orb/detection/pyramid.hpp"
 #include "affine_orb/extraction/detail/extractor.hpp"
+#include "affine_orb/extraction/detail/fork_image.hpp"
 #include "affine_orb/extraction/detail/view_regions.hpp"
 #include "affine_orb/extraction/detail/view_schedule.hpp"
 #include "affine_orb/extraction/extractor_options.hpp"
@@ -96,7 +97,11 @@ class Extractor {
         descriptor_(descriptor_options),
         image_pyramid_(options_.pyramid),
         thread_work_(static_cast<std::size_t>(options_.threads), ThreadWork(options_.pyramid)),
-        turns_(std::make_unique<detail::ViewTurns>()) {}
+        turns_(std::make_unique<detail::ViewTurns>()) {
+    if (fork()) {
+      fork_.scales.set(static_cast<float>(options_.pyramid.scale_factor), options_.pyramid.levels, options_.features);
+    }
+  }
 
   const ExtractorOptions& options() const { return options_; }
   const Descriptor& descriptor() const { return descriptor_; }
@@ -234,6 +239,10 @@ class Extractor {
 
   /// Steps 1–4 for view v on the thread owning `work`; a failure ends every turn still to come.
   void process_view(int v, const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
+    if (v == 0 && fork()) {
+      process_fork_image(image, mask, work);
+      return;
+    }
     try {
       ViewWork& view = view_work_[static_cast<std::size_t>(v)];
       for (LevelWork& level : view.levels) level.clear();
@@ -251,6 +260,33 @@ class Extractor {
       }
       turns_->pass(v);
       if (!empty) describe_view(v, pyramid, mask, work);
+    } catch (...) {
+      turns_->fail();
+      throw;
+    }
+  }
+
+  /// ExtractorOptions::image_keypoints of a fork: the image's keypoints as the fork extracts them
+  /// (detail::extract_fork_level()) on its pyramid, then, in view 0's turn, entered in the repeat
+  /// grids for the views.
+  void process_fork_image(const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
+    try {
+      ViewWork& view = view_work_[0];
+      fork_.scales.fit(image.size());
+      image_pyramid_.build_resized(image, fork_.scales.sizes);
+      const detail::ForkFlavour flavour =
+          options_.image_keypoints == ImageKeypoints::kOrbSlam3
+              ? detail::ForkFlavour{35, detail::OctreeTieOrder::kLeftEdge}
+              : detail::ForkFlavour{30, detail::OctreeTieOrder::kCreation};
+      for (int l = 0; l < options_.pyramid.levels; ++l) {
+        LevelWork& level = view.levels[static_cast<std::size_t>(l)];
+        level.clear();
+        detail::extract_fork_level(descriptor_, image_pyramid_.level(l), l, flavour, options_.detector, mask, fork_,
+                                   work.describe_points, work.descriptor_data, level);
+      }
+      if (!turns_->wait(0)) return;
+      if (merging()) enter_kept(0);
+      turns_->pass(0);
     } catch (...) {
       turns_->fail();
       throw;
@@ -343,6 +379,7 @@ class Extractor {
 
   bool additive() const { return options_.view_budget == ViewBudget::kAdditive; }
   bool merging() const { return options_.duplicates == DuplicatePolicy::kMerge; }
+  bool fork() const { return options_.image_keypoints != ImageKeypoints::kAffineOrb; }
 
   /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
   /// only view), rather than a shortlist chosen from once every view is done.
@@ -445,6 +482,8 @@ class Extractor {
   std::vector<ViewWork> view_work_;
   /// The image's pyramid, kept until the next call (pyramid(), RefineOptions).
   Pyramid image_pyramid_;
+  /// ImageKeypoints of a fork: the buffers of the image's extraction.
+  detail::ForkImageWork fork_;
   /// Counts the images begun, so that extend() recognises the cursor of the current one.
   std::uint64_t image_serial_ = 0;
   /// Per worker thread: the buffers views are processed in.

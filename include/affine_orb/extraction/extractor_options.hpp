@@ -29,6 +29,24 @@ enum class Spreading {
                ///< more repeatable, so more correct matches between two wide-baseline images.
 };
 
+/// Whose extraction the image's own keypoints (view 0) are: affine_orb's, or exactly those of a
+/// SLAM system's ORB extractor, so that a drop-in gives that system its own keypoints and bits.
+enum class ImageKeypoints {
+  /// affine_orb's: its pyramid, detect_candidates() and the `spreading`, `carry_shortfalls` and
+  /// `subpixel` options.
+  kAffineOrb,
+  /// ORB-SLAM2's ORBextractor (raulmur/ORB_SLAM2 f2e6f51), keypoint for keypoint in its order, with
+  /// its rBRIEF bits under Rbrief: cv::resize pyramid, FAST in 30-pixel cells, octree distribution,
+  /// positions p·s^l (extraction/detail/fork_image.hpp). The octree's order among nodes of equal
+  /// size, the heap address in ORB-SLAM2, is creation order here (detection/detail/octree.hpp).
+  /// Uses `features`, `pyramid` and the detector's thresholds; the other detector fields,
+  /// `spreading`, `carry_shortfalls` and `subpixel` do not apply to the image's keypoints.
+  kOrbSlam2,
+  /// ORB-SLAM3's (v1.0, shanpenghui/ORB_SLAM3_Fixed 060181f): as kOrbSlam2 with 35-pixel cells and
+  /// ORB-SLAM3's node order (left edge).
+  kOrbSlam3,
+};
+
 /// How the feature budget is shared between the image and its tilted views.
 enum class ViewBudget {
   /// The image is extracted exactly as with max_tilt = 1 (`features` keypoints, the same ones); the
@@ -70,6 +88,9 @@ struct ExtractorOptions {
   /// Number of features returned when the image has enough corners (exactly this many, with
   /// carry_shortfalls); ORB-SLAM2's configuration files use 1000 to 2000. Must be in [1, 1000000].
   int features = 1000;
+  /// Whose extraction the image's keypoints are (ImageKeypoints); the views are affine_orb's
+  /// either way. kOrbSlam2 and kOrbSlam3 need ViewBudget::kAdditive. Default kAffineOrb.
+  ImageKeypoints image_keypoints = ImageKeypoints::kAffineOrb;
   PyramidOptions pyramid;
   DetectorOptions detector;
   /// The simulated views; max_tilt = 1 gives a plain ORB-style extractor (one view, the image).
@@ -156,6 +177,11 @@ struct ExtractorOptions {
     views.check();
     detail::require(view_budget == ViewBudget::kAdditive || view_budget == ViewBudget::kAreaSplit,
                     "ExtractorOptions::view_budget is invalid");
+    detail::require(image_keypoints == ImageKeypoints::kAffineOrb || image_keypoints == ImageKeypoints::kOrbSlam2 ||
+                        image_keypoints == ImageKeypoints::kOrbSlam3,
+                    "ExtractorOptions::image_keypoints is invalid");
+    detail::require(image_keypoints == ImageKeypoints::kAffineOrb || view_budget == ViewBudget::kAdditive,
+                    "ExtractorOptions::image_keypoints: a fork's keypoints need ViewBudget::kAdditive");
     detail::require(std::isfinite(view_features) && view_features >= 0.0 && view_features <= 16.0,
                     "ExtractorOptions::view_features must be in [0, 16], got " + std::to_string(view_features));
     detail::require(

@@ -1,0 +1,141 @@
+// ExtractorOptions::image_keypoints against the forks' own extractors, compiled from
+// ../shared/slam/stock_extractors (tests/stock): the same keypoints (position, octave, angle, size,
+// response), in the same order, with the same descriptor rows, on real frames at ORB-SLAM's budgets.
+#include <doctest/doctest.h>
+
+#include <cstdio>
+#include <algorithm>
+#include <cstring>
+#include <tuple>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "stock_extractor.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+using affine_orb::Extractor;
+using affine_orb::ExtractorOptions;
+using affine_orb::ImageKeypoints;
+using affine_orb::Rbrief;
+using affine_orb::stock::Fork;
+using affine_orb::stock::Heap;
+using affine_orb::stock::StockExtractor;
+
+/// Keypoints of two outputs equal field by field at the same index, with equal descriptor rows.
+struct Agreement {
+  std::size_t stock = 0;
+  std::size_t ours = 0;
+  std::size_t identical = 0;  ///< same index, every field and the row equal
+};
+
+bool same_keypoint(const cv::KeyPoint& a, const cv::KeyPoint& b) {
+  return a.pt.x == b.pt.x && a.pt.y == b.pt.y && a.octave == b.octave && a.angle == b.angle && a.size == b.size &&
+         a.response == b.response;
+}
+
+/// The stock keypoints that ours also has (same position, octave and row), in any order.
+std::size_t shared(const affine_orb::stock::StockFrame& stock, const affine_orb::Features<256>& ours) {
+  const cv::Mat rows = affine_orb::descriptors_to_mat(ours.descriptors);
+  std::vector<std::tuple<int, float, float, std::string>> mine;
+  for (std::size_t i = 0; i < ours.size(); ++i) {
+    const cv::KeyPoint& k = ours.keypoints[i];
+    mine.emplace_back(k.octave, k.pt.x, k.pt.y, std::string(rows.ptr<char>(static_cast<int>(i)), 32));
+  }
+  std::sort(mine.begin(), mine.end());
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < stock.keypoints.size(); ++i) {
+    const cv::KeyPoint& k = stock.keypoints[i];
+    const auto key = std::make_tuple(k.octave, k.pt.x, k.pt.y, std::string(stock.descriptors.ptr<char>(static_cast<int>(i)), 32));
+    n += std::binary_search(mine.begin(), mine.end(), key);
+  }
+  return n;
+}
+
+Agreement compare(const affine_orb::stock::StockFrame& stock, const affine_orb::Features<256>& ours) {
+  Agreement a;
+  a.stock = stock.keypoints.size();
+  a.ours = ours.size();
+  const cv::Mat rows = affine_orb::descriptors_to_mat(ours.descriptors);
+  for (std::size_t i = 0; i < std::min(a.stock, a.ours); ++i) {
+    if (!same_keypoint(stock.keypoints[i], ours.keypoints[i])) continue;
+    if (std::memcmp(stock.descriptors.ptr(static_cast<int>(i)), rows.ptr(static_cast<int>(i)), 32) != 0) continue;
+    ++a.identical;
+  }
+  return a;
+}
+
+/// KITTI 00 frame `index` (0..159), grey 1241x376.
+cv::Mat kitti00_frame(int index) {
+  char name[40];
+  std::snprintf(name, sizeof(name), "/kitti00/image_0/%06d.png", index);
+  return affine_orb::test::load_gray(affine_orb::test::data_dir() + name);
+}
+
+std::vector<cv::Mat> frames() {
+  std::vector<cv::Mat> out;
+  for (int i = 0; i < 160; i += 20) out.push_back(kitti00_frame(i));
+  for (int i = 0; i <= 50; i += 25) out.push_back(affine_orb::test::kitti_frame(i));
+  for (const char* sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
+    out.push_back(affine_orb::test::oxford_image(sequence, 1));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a fork's image keypoints equal its own extractor's, in order and bit for bit") {
+  const std::vector<cv::Mat> images = frames();
+  for (const Fork fork : {Fork::kOrbSlam2, Fork::kOrbSlam3}) {
+    for (const int nfeatures : {1000, 2000, 4000, 5000}) {
+      ExtractorOptions options;
+      options.features = nfeatures;
+      options.views.max_tilt = 1.0;
+      options.image_keypoints = fork == Fork::kOrbSlam2 ? ImageKeypoints::kOrbSlam2 : ImageKeypoints::kOrbSlam3;
+      Extractor<Rbrief> extractor(options);
+      StockExtractor stock(fork, nfeatures, 1.2f, 8, 20, 7);
+      std::size_t total = 0;
+      std::size_t identical = 0;
+      for (const cv::Mat& image : images) {
+        const affine_orb::stock::StockFrame expected = stock.extract(image, Heap::kGrowing);
+        const affine_orb::Features<256> got = extractor.extract(image);
+        const Agreement a = compare(expected, got);
+        CHECK(a.ours == a.stock);
+        total += a.stock;
+        identical += a.identical;
+      }
+      MESSAGE((fork == Fork::kOrbSlam2 ? "ORB-SLAM2 " : "ORB-SLAM3 ") << nfeatures << ": " << identical << " of "
+                                                                       << total << " identical");
+      CHECK(identical == total);
+    }
+  }
+}
+
+TEST_CASE("ORB-SLAM2 on the system heap: the keypoints its address order decides are few") {
+  // Inside ORB-SLAM2 its octree orders nodes of equal size by heap address, which changes from run
+  // to run; the nodes that order decides are a small share of the keypoints (two runs of the fork
+  // on one frame share 98.6–99.7 % of theirs, bench_fork_extraction).
+  const std::vector<cv::Mat> images = frames();
+  for (const int nfeatures : {1000, 5000}) {
+    ExtractorOptions options;
+    options.features = nfeatures;
+    options.views.max_tilt = 1.0;
+    options.image_keypoints = ImageKeypoints::kOrbSlam2;
+    Extractor<Rbrief> extractor(options);
+    StockExtractor stock(Fork::kOrbSlam2, nfeatures, 1.2f, 8, 20, 7);
+    std::size_t total = 0;
+    std::size_t common = 0;
+    for (const cv::Mat& image : images) {
+      const affine_orb::stock::StockFrame expected = stock.extract(image, Heap::kSystem);
+      total += expected.keypoints.size();
+      common += shared(expected, extractor.extract(image));
+    }
+    CAPTURE(nfeatures);
+    CHECK(static_cast<double>(common) >= 0.97 * static_cast<double>(total));
+  }
+}

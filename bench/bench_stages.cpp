@@ -40,6 +40,9 @@
 #include "affine_orb/affine_orb.hpp"
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "bench_common.hpp"
+#if AFFINE_ORB_HAVE_STOCK
+#include "stock_extractor.hpp"
+#endif
 
 namespace {
 
@@ -373,6 +376,63 @@ BENCHMARK(extract_plain_ours)->Name("extract_plain/ours")->Unit(benchmark::kMill
 BENCHMARK(extract_plain_cv)->Name("extract_plain/cv::ORB")->Unit(benchmark::kMillisecond);
 BENCHMARK(extract_affine_ours)->Name("extract_affine/ours")->Unit(benchmark::kMillisecond);
 BENCHMARK(extract_affine_cv)->Name("extract_affine/cv::AffineFeature(ORB)")->Unit(benchmark::kMillisecond);
+
+// ---- a fork's own keypoints (ExtractorOptions::image_keypoints) against the fork's ORBextractor,
+// where it was found (cmake/stock_extractors.cmake): the cell FAST, the octree, the whole extraction
+void fork_cells_ours(benchmark::State& state) {
+  const cv::Mat& image = inputs().image;
+  const affine_orb::detail::ForkCells cells(image.size(), 30);
+  affine_orb::detail::ForkImageWork work;
+  for (auto _ : state) {
+    affine_orb::detail::detect_in_fork_cells(image, cells, kThreshold, 7, work.score_storage, work.maxima,
+                                             work.points, work.responses);
+    benchmark::DoNotOptimize(work.points.data());
+  }
+  set_items(state, image.total());
+}
+void fork_octree_ours(benchmark::State& state) {
+  const cv::Mat& image = inputs().image;
+  const affine_orb::detail::ForkCells cells(image.size(), 30);
+  affine_orb::detail::ForkImageWork work;
+  affine_orb::detail::detect_in_fork_cells(image, cells, kThreshold, 7, work.score_storage, work.maxima, work.points,
+                                           work.responses);
+  for (auto _ : state) {
+    affine_orb::detail::distribute_octree(work.points, work.responses, cells.width, cells.height, 217,
+                                          affine_orb::detail::OctreeTieOrder::kCreation, work.octree, work.kept);
+    benchmark::DoNotOptimize(work.kept.data());
+  }
+  set_items(state, work.points.size());
+}
+BENCHMARK(fork_cells_ours)->Name("fork_cells/ours");
+BENCHMARK(fork_octree_ours)->Name("fork_octree/ours");
+#if AFFINE_ORB_HAVE_STOCK
+void extract_fork_ours(benchmark::State& state, affine_orb::ImageKeypoints keypoints) {
+  const cv::Mat& image = inputs().image;
+  affine_orb::ExtractorOptions options;
+  options.features = kPlainFeatures;
+  options.views.max_tilt = 1.0;
+  options.image_keypoints = keypoints;
+  affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
+  for (auto _ : state) benchmark::DoNotOptimize(extractor.extract(image).size());
+}
+void extract_fork_stock(benchmark::State& state, affine_orb::stock::Fork fork) {
+  const cv::Mat& image = inputs().image;
+  affine_orb::stock::StockExtractor extractor(fork, kPlainFeatures, 1.2f, 8, kThreshold, 7);
+  for (auto _ : state) benchmark::DoNotOptimize(extractor.extract(image).keypoints.size());
+}
+BENCHMARK_CAPTURE(extract_fork_ours, orbslam2, affine_orb::ImageKeypoints::kOrbSlam2)
+    ->Name("extract_orbslam2/ours")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(extract_fork_stock, orbslam2, affine_orb::stock::Fork::kOrbSlam2)
+    ->Name("extract_orbslam2/ORB_SLAM2::ORBextractor")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(extract_fork_ours, orbslam3, affine_orb::ImageKeypoints::kOrbSlam3)
+    ->Name("extract_orbslam3/ours")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(extract_fork_stock, orbslam3, affine_orb::stock::Fork::kOrbSlam3)
+    ->Name("extract_orbslam3/ORB_SLAM3::ORBextractor")
+    ->Unit(benchmark::kMillisecond);
+#endif
 
 }  // namespace
 

@@ -1,0 +1,162 @@
+// bench_fork_extraction [--rounds N] [--markdown]: affine_orb's extraction of a fork's own keypoints
+// (ExtractorOptions::image_keypoints, what the ORB-SLAM adapters return by default) against that
+// fork's ORBextractor compiled from ../shared/slam/stock_extractors, one thread, interleaved frame by
+// frame, on the KITTI 00 frames (every 10th of 160, 1241x376) at ORB-SLAM's KITTI budget (2000) and
+// its monocular initialiser's (2x, 5x), and on the six Oxford first images at 1000.
+// Per row: median milliseconds per frame of each over the rounds, their ratio, and how many of the
+// fork's keypoints affine_orb returns identically (position, octave, angle, size, response, row, at
+// the same index) with the fork's octree ordering nodes of equal size by creation (tests/stock:
+// growing heap), and how many it shares (same position, octave and row, any order) with the fork
+// on the system heap, where ORB-SLAM2 orders them by address; "stock vs itself" is the same share
+// between two system-heap runs of the fork on the same frame.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "bench_common.hpp"
+#include "stock_extractor.hpp"
+
+namespace {
+
+using affine_orb::stock::Fork;
+using affine_orb::stock::Heap;
+using affine_orb::stock::StockFrame;
+
+struct Workload {
+  std::string name;
+  std::vector<cv::Mat> frames;
+  int features;
+};
+
+cv::Mat read_gray(const std::string& path) {
+  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (image.empty()) {
+    std::fprintf(stderr, "cannot read %s\n", path.c_str());
+    std::exit(1);
+  }
+  return image;
+}
+
+std::vector<cv::Mat> kitti00() {
+  std::vector<cv::Mat> frames;
+  for (int i = 0; i < 160; i += 10) {
+    char name[40];
+    std::snprintf(name, sizeof(name), "/kitti00/image_0/%06d.png", i);
+    frames.push_back(read_gray(affine_orb::bench::data_dir() + name));
+  }
+  return frames;
+}
+
+std::vector<cv::Mat> oxford() {
+  std::vector<cv::Mat> frames;
+  for (const char* sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
+    frames.push_back(read_gray(affine_orb::bench::data_dir() + "/oxford/" + sequence + "/img1.png"));
+  }
+  return frames;
+}
+
+using Key = std::tuple<int, float, float, std::string>;
+
+std::vector<Key> keys(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& rows) {
+  std::vector<Key> out;
+  for (std::size_t i = 0; i < keypoints.size(); ++i) {
+    const cv::KeyPoint& k = keypoints[i];
+    out.emplace_back(k.octave, k.pt.x, k.pt.y, std::string(rows.ptr<char>(static_cast<int>(i)), 32));
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// How many of `a`'s keypoints `b` has (same octave, position and row).
+std::size_t shared(const std::vector<Key>& a, const std::vector<Key>& b) {
+  std::size_t n = 0;
+  for (const Key& k : a) n += std::binary_search(b.begin(), b.end(), k);
+  return n;
+}
+
+/// Keypoints equal field by field at the same index, with equal rows.
+std::size_t identical(const StockFrame& stock, const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& rows) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < std::min(stock.keypoints.size(), keypoints.size()); ++i) {
+    const cv::KeyPoint& a = stock.keypoints[i];
+    const cv::KeyPoint& b = keypoints[i];
+    n += a.pt == b.pt && a.octave == b.octave && a.angle == b.angle && a.size == b.size && a.response == b.response &&
+         std::memcmp(stock.descriptors.ptr(static_cast<int>(i)), rows.ptr(static_cast<int>(i)), 32) == 0;
+  }
+  return n;
+}
+
+double elapsed_ms(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void run(Fork fork, const Workload& w, int rounds) {
+  affine_orb::ExtractorOptions options;
+  options.features = w.features;
+  options.views.max_tilt = 1.0;
+  options.image_keypoints =
+      fork == Fork::kOrbSlam2 ? affine_orb::ImageKeypoints::kOrbSlam2 : affine_orb::ImageKeypoints::kOrbSlam3;
+  affine_orb::Extractor<affine_orb::Rbrief> ours(options);
+  affine_orb::stock::StockExtractor stock(fork, w.features, 1.2f, 8, 20, 7);
+  std::size_t total = 0, same = 0, common = 0, self = 0;
+  for (const cv::Mat& frame : w.frames) {
+    const affine_orb::Features<256> f = ours.extract(frame);
+    const cv::Mat rows = affine_orb::descriptors_to_mat(f.descriptors);
+    const StockFrame growing = stock.extract(frame, Heap::kGrowing);
+    const StockFrame system1 = stock.extract(frame, Heap::kSystem);
+    const StockFrame system2 = stock.extract(frame, Heap::kSystem);
+    const std::vector<Key> mine = keys(f.keypoints, rows);
+    total += growing.keypoints.size();
+    same += identical(growing, f.keypoints, rows);
+    common += shared(keys(system1.keypoints, system1.descriptors), mine);
+    self += shared(keys(system1.keypoints, system1.descriptors), keys(system2.keypoints, system2.descriptors));
+  }
+  std::vector<double> stock_ms, ours_ms;
+  for (int r = 0; r < rounds; ++r) {
+    double s = 0.0, o = 0.0;
+    for (const cv::Mat& frame : w.frames) {
+      auto start = std::chrono::steady_clock::now();
+      stock.extract(frame);
+      s += elapsed_ms(start);
+      start = std::chrono::steady_clock::now();
+      ours.extract(frame);
+      o += elapsed_ms(start);
+    }
+    stock_ms.push_back(s / static_cast<double>(w.frames.size()));
+    ours_ms.push_back(o / static_cast<double>(w.frames.size()));
+  }
+  const double s = affine_orb::bench::median(stock_ms);
+  const double o = affine_orb::bench::median(ours_ms);
+  const auto percent = [total](std::size_t n) { return 100.0 * static_cast<double>(n) / static_cast<double>(total); };
+  std::printf("| %s | %s, %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f |\n",
+              fork == Fork::kOrbSlam2 ? "ORB-SLAM2" : "ORB-SLAM3", w.name.c_str(), w.features, s, o, o / s,
+              percent(same), percent(common), percent(self));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int rounds = 15;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--rounds") rounds = std::max(1, std::atoi(argv[i + 1]));
+  }
+  cv::setNumThreads(1);
+  const std::vector<cv::Mat> kitti = kitti00();
+  const std::vector<Workload> workloads = {
+      {"KITTI 00", kitti, 2000}, {"KITTI 00", kitti, 4000}, {"KITTI 00", kitti, 10000}, {"Oxford", oxford(), 1000}};
+  std::printf("| fork | frames, nfeatures | fork ms | affine_orb ms | ratio | identical %% | shared %% | stock vs itself %% |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (const Fork fork : {Fork::kOrbSlam2, Fork::kOrbSlam3}) {
+    for (const Workload& w : workloads) run(fork, w, rounds);
+  }
+  return 0;
+}

@@ -14,6 +14,7 @@ namespace {
 struct Orbslam2 {
   using Extractor = ORB_SLAM2::ORBextractor;
   using Options = ORB_SLAM2::AffineOrbAdapterOptions;
+  static constexpr affine_orb::ImageKeypoints kFork = affine_orb::ImageKeypoints::kOrbSlam2;
   /// Tracking::Tracking builds mpIniORBextractor with 2·nFeatures.
   static constexpr int kInitialisationFactor = 2;
   static constexpr bool kReturnsCount = false;
@@ -42,3 +43,4 @@ TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(options, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(walk, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(bad_input, Orbslam2);
+TEST_CASE_TEMPLATE_INVOKE(fork_default, Orbslam2);

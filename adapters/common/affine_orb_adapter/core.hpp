@@ -21,12 +21,14 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
+#include <initializer_list>
 #include <locale>
 #include <mutex>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -100,7 +102,7 @@ inline double parse_number(const char* name, const char* text, double lo, double
   in >> value;
   const bool parsed = !in.fail() && (in >> std::ws).eof();
   const bool in_range = parsed && std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
-  affine_orb::detail::require(in_range, std::string(name) + " must be a number in " + (lo_open ? "(" : "[") +
+  require_option(in_range, std::string(name) + " must be a number in " + (lo_open ? "(" : "[") +
                                             format(lo) + ", " + format(hi) + "], got " + quoted(text));
   return value;
 }
@@ -111,10 +113,80 @@ inline int parse_integer(const char* name, const char* text, int lo, int hi) {
   long long value = 0;
   in >> value;
   const bool parsed = !in.fail() && (in >> std::ws).eof();
-  affine_orb::detail::require(parsed && value >= lo && value <= hi, std::string(name) + " must be an integer in [" +
+  require_option(parsed && value >= lo && value <= hi, std::string(name) + " must be an integer in [" +
                                                                         std::to_string(lo) + ", " + std::to_string(hi) +
                                                                         "], got " + quoted(text));
   return static_cast<int>(value);
+}
+
+}  // namespace detail_env
+
+/// One of the named values of an enumerated variable.
+template <class E>
+struct Choice {
+  const char* text;
+  E value;
+};
+
+namespace detail_env {
+
+/// The value of `choices` spelled `text`; std::invalid_argument naming `name` and the choices
+/// otherwise.
+template <class E>
+E parse_choice(const char* name, const char* text, std::initializer_list<Choice<E>> choices) {
+  std::string spelled;
+  for (const Choice<E>& c : choices) {
+    if (std::string(text) == c.text) return c.value;
+    spelled += (spelled.empty() ? "" : " or ") + quoted(c.text);
+  }
+  require_option(false, std::string(name) + " must be " + spelled + ", got " + quoted(text));
+  return choices.begin()->value;
+}
+
+/// An AFFINE_ORB_* variable (options.hpp) and how its value sets its field.
+struct Variable {
+  const char* name;
+  void (*apply)(AdapterOptions& options, const char* text);
+};
+
+/// Every variable of the table in options.hpp.
+inline const std::vector<Variable>& variables() {
+  static const std::vector<Variable> table = {
+      {kEnvKeypoints,
+       [](AdapterOptions& o, const char* v) {
+         o.keypoints = parse_choice<AdapterKeypoints>(
+             kEnvKeypoints, v, {{"fork", AdapterKeypoints::kFork}, {"affine_orb", AdapterKeypoints::kAffineOrb}});
+       }},
+      {kEnvMaxTilt, [](AdapterOptions& o, const char* v) { o.max_tilt = parse_number(kEnvMaxTilt, v, 1.0, 16.0, false); }},
+      {kEnvDescriptor,
+       [](AdapterOptions& o, const char* v) {
+         o.descriptor = parse_choice<AdapterDescriptor>(
+             kEnvDescriptor, v, {{"rbrief", AdapterDescriptor::kRbrief}, {"brisk", AdapterDescriptor::kBrisk}});
+       }},
+      {kEnvThreads, [](AdapterOptions& o, const char* v) { o.threads = parse_integer(kEnvThreads, v, 1, 256); }},
+      {kEnvDuplicates,
+       [](AdapterOptions& o, const char* v) {
+         o.duplicates = parse_choice<AdapterDuplicates>(
+             kEnvDuplicates, v, {{"merge", AdapterDuplicates::kMerge}, {"keep", AdapterDuplicates::kKeepAll}});
+       }},
+      {kEnvMergeRadius,
+       [](AdapterOptions& o, const char* v) { o.merge_radius = parse_number(kEnvMergeRadius, v, 0.0, 64.0, true); }},
+      {kEnvViewFeatures,
+       [](AdapterOptions& o, const char* v) { o.view_features = parse_number(kEnvViewFeatures, v, 0.0, 16.0, false); }},
+      {kEnvRecoveryImageFeatures,
+       [](AdapterOptions& o, const char* v) {
+         o.recovery.image_features = parse_number(kEnvRecoveryImageFeatures, v, 1.0, 16.0, false);
+       }},
+      {kEnvRecoveryMaxTilt,
+       [](AdapterOptions& o, const char* v) {
+         o.recovery.max_tilt = parse_number(kEnvRecoveryMaxTilt, v, 1.0, 16.0, false);
+       }},
+      {kEnvRecoveryViewFeatures,
+       [](AdapterOptions& o, const char* v) {
+         o.recovery.view_features = parse_number(kEnvRecoveryViewFeatures, v, 0.0, 16.0, false);
+       }},
+  };
+  return table;
 }
 
 }  // namespace detail_env
@@ -123,37 +195,8 @@ inline int parse_integer(const char* name, const char* text, int lo, int hi) {
 /// Throws std::invalid_argument naming the variable for a malformed or out-of-range value
 /// (an empty value included).
 inline AdapterOptions apply_environment(AdapterOptions base) {
-  if (const char* v = std::getenv(kEnvMaxTilt))
-    base.max_tilt = detail_env::parse_number(kEnvMaxTilt, v, 1.0, 16.0, false);
-  if (const char* v = std::getenv(kEnvDescriptor)) {
-    const std::string s(v);
-    affine_orb::detail::require(
-        s == "rbrief" || s == "brisk",
-        std::string(kEnvDescriptor) + " must be \"rbrief\" or \"brisk\", got " + detail_env::quoted(v));
-    base.descriptor = s == "rbrief" ? AdapterDescriptor::kRbrief : AdapterDescriptor::kBrisk;
-  }
-  if (const char* v = std::getenv(kEnvThreads)) base.threads = detail_env::parse_integer(kEnvThreads, v, 1, 256);
-  if (const char* v = std::getenv(kEnvDuplicates)) {
-    const std::string s(v);
-    affine_orb::detail::require(
-        s == "merge" || s == "keep",
-        std::string(kEnvDuplicates) + " must be \"merge\" or \"keep\", got " + detail_env::quoted(v));
-    base.duplicates = s == "merge" ? AdapterDuplicates::kMerge : AdapterDuplicates::kKeepAll;
-  }
-  if (const char* v = std::getenv(kEnvMergeRadius)) {
-    base.merge_radius = detail_env::parse_number(kEnvMergeRadius, v, 0.0, 64.0, true);
-  }
-  if (const char* v = std::getenv(kEnvViewFeatures)) {
-    base.view_features = detail_env::parse_number(kEnvViewFeatures, v, 0.0, 16.0, false);
-  }
-  if (const char* v = std::getenv(kEnvRecoveryImageFeatures)) {
-    base.recovery.image_features = detail_env::parse_number(kEnvRecoveryImageFeatures, v, 1.0, 16.0, false);
-  }
-  if (const char* v = std::getenv(kEnvRecoveryMaxTilt)) {
-    base.recovery.max_tilt = detail_env::parse_number(kEnvRecoveryMaxTilt, v, 1.0, 16.0, false);
-  }
-  if (const char* v = std::getenv(kEnvRecoveryViewFeatures)) {
-    base.recovery.view_features = detail_env::parse_number(kEnvRecoveryViewFeatures, v, 0.0, 16.0, false);
+  for (const detail_env::Variable& variable : detail_env::variables()) {
+    if (const char* value = std::getenv(variable.name)) variable.apply(base, value);
   }
   base.check();
   return base;
@@ -216,11 +259,82 @@ inline ExtractionPlan make_plan(int image_features, double max_tilt, double view
   return {image_features, views ? max_tilt : 1.0, views ? view_features : 0.0};
 }
 
+/// ORB-SLAM's five extractor parameters, checked (std::invalid_argument naming `who`).
+struct ForkParameters {
+  int nfeatures = 1000;
+  float scale_factor = 1.2f;
+  int levels = 8;
+  int ini_th_fast = 20;
+  int min_th_fast = 7;
+
+  void check(const std::string& who) const {
+    require_option(nfeatures >= 1 && nfeatures <= 1000000,
+                   who + ": nfeatures must be in [1, 1000000], got " + std::to_string(nfeatures));
+    require_option(std::isfinite(scale_factor) && scale_factor > 1.0f && scale_factor <= 4.0f,
+                   who + ": scaleFactor must be in (1, 4], got " + std::to_string(scale_factor));
+    require_option(levels >= 1 && levels <= 32, who + ": nlevels must be in [1, 32], got " + std::to_string(levels));
+    require_option(ini_th_fast >= 1 && ini_th_fast <= 254,
+                   who + ": iniThFAST must be in [1, 254], got " + std::to_string(ini_th_fast));
+    require_option(min_th_fast >= 1 && min_th_fast <= ini_th_fast,
+                   who + ": minThFAST must be in [1, iniThFAST], got " + std::to_string(min_th_fast));
+  }
+};
+
+/// The ExtractorOptions of an adapter's extractions but for their budget and views: the fork's
+/// parameters, its keypoints (`fork`) unless AdapterKeypoints::kAffineOrb, ranked by the FAST
+/// score on level pixels, each level at most its share (a level short of corners keeps its
+/// shortfall, as ORB-SLAM's own extractor does: carried to level 0 of the monocular initialiser's
+/// frames it gave ORB-SLAM3 maps that drift in scale, docs/slam.md "Shortfalls"), the views adding
+/// to the image's keypoints.
+inline ExtractorOptions base_options(ImageKeypoints fork, const ForkParameters& p, const AdapterOptions& affine) {
+  ExtractorOptions options;
+  options.image_keypoints = affine.keypoints == AdapterKeypoints::kFork ? fork : ImageKeypoints::kAffineOrb;
+  options.pyramid.scale_factor = static_cast<double>(p.scale_factor);
+  options.pyramid.levels = p.levels;
+  options.detector.initial_threshold = p.ini_th_fast;
+  options.detector.min_threshold = p.min_th_fast;
+  options.detector.score = ScoreType::kFast;
+  options.subpixel = false;
+  options.carry_shortfalls = false;
+  options.view_budget = ViewBudget::kAdditive;
+  options.duplicates =
+      affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;
+  options.merge_radius = affine.merge_radius;
+  options.threads = affine.threads;
+  return options;
+}
+
+/// `base` set to extract `plan`, whose views add plan.view_features · nfeatures keypoints.
+inline ExtractorOptions plan_options(ExtractorOptions base, const ExtractionPlan& plan, int nfeatures) {
+  base.features = plan.image_features;
+  base.views.max_tilt = plan.max_tilt;
+  // The extractor's view_features is a fraction of its own image budget.
+  base.view_features = plan.image_features == nfeatures ? plan.view_features
+                                                        : plan.view_features * nfeatures / plan.image_features;
+  return base;
+}
+
+/// An adapter's extractor, and the one for the frames extracted while recovering when its plan
+/// differs.
+template <class Descriptor>
+struct ExtractorPair {
+  Extractor<Descriptor> normal;
+  std::optional<Extractor<Descriptor>> recovery;
+
+  ExtractorPair(const ExtractorOptions& base, const ExtractionPlan& normal_plan, const ExtractionPlan& recovery_plan,
+                int nfeatures)
+      : normal(plan_options(base, normal_plan, nfeatures)) {
+    if (recovery_plan != normal_plan) recovery.emplace(plan_options(base, recovery_plan, nfeatures));
+  }
+  Extractor<Descriptor>& pick(bool recovering) { return recovering && recovery ? *recovery : normal; }
+};
+
 /// ORB-SLAM's five extractor parameters plus the affine options, checked, and the extractors built
-/// from them. `who` names the adapter class in error messages.
+/// from them. `who` names the adapter class in error messages; `fork` is the fork's keypoints
+/// (ImageKeypoints::kOrbSlam2 or kOrbSlam3), which AdapterKeypoints::kFork returns.
 ///
 /// An affine_orb::Extractor with ViewBudget::kAdditive does the work: the image is extracted with
-/// ORB-SLAM2's budget (nfeatures keypoints, geometric over the levels), and those keypoints are the
+/// ORB-SLAM's budget (nfeatures keypoints, geometric over the levels), and those keypoints are the
 /// same with the views on or off, so ORB-SLAM's monocular initialisation, which matches octave-0
 /// keypoints only, keeps all of its candidates. With the views on, the tilted views add about
 /// view_features · nfeatures keypoints where the image has none (AdapterDuplicates::kMerge: a view's
@@ -231,70 +345,15 @@ inline ExtractionPlan make_plan(int image_features, double max_tilt, double view
 /// round(recovery.image_features · nfeatures) features and the recovery views.
 class AdapterCore {
  public:
-  AdapterCore(const char* who, int nfeatures, float scale_factor, int nlevels, int ini_th_fast, int min_th_fast,
-              const AdapterOptions& affine)
-      : who_(who), affine_((affine.check(), affine)) {
-    const std::string w(who);
-    affine_orb::detail::require(nfeatures >= 1 && nfeatures <= 1000000,
-                                w + ": nfeatures must be in [1, 1000000], got " + std::to_string(nfeatures));
-    affine_orb::detail::require(std::isfinite(scale_factor) && scale_factor > 1.0f && scale_factor <= 4.0f,
-                                w + ": scaleFactor must be in (1, 4], got " + std::to_string(scale_factor));
-    affine_orb::detail::require(nlevels >= 1 && nlevels <= 32,
-                                w + ": nlevels must be in [1, 32], got " + std::to_string(nlevels));
-    affine_orb::detail::require(ini_th_fast >= 1 && ini_th_fast <= 254,
-                                w + ": iniThFAST must be in [1, 254], got " + std::to_string(ini_th_fast));
-    affine_orb::detail::require(min_th_fast >= 1 && min_th_fast <= ini_th_fast,
-                                w + ": minThFAST must be in [1, iniThFAST], got " + std::to_string(min_th_fast));
-    scale_factor_ = scale_factor;
-    levels_ = nlevels;
-    scales_ = make_scale_tables(scale_factor, nlevels);
-
-    ExtractorOptions options;
-    options.pyramid.scale_factor = static_cast<double>(scale_factor);
-    options.pyramid.levels = nlevels;
-    options.detector.initial_threshold = ini_th_fast;
-    options.detector.min_threshold = min_th_fast;
-    options.detector.score = ScoreType::kFast;  // ORB-SLAM ranks by the FAST score
-    options.subpixel = false;                    // ORB-SLAM's keypoints lie on level pixels
-    // A level short of corners keeps its shortfall, as ORB-SLAM's own extractor does: carried to
-    // level 0 of the monocular initialiser's frames (5 x nfeatures in ORB-SLAM3) it gave ORB-SLAM3
-    // maps that drift in scale on the rendered `shake` and lose tracking at once on `fast`
-    // (docs/slam.md, "Shortfalls").
-    options.carry_shortfalls = false;
-    options.view_budget = ViewBudget::kAdditive;
-    options.duplicates =
-        affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;
-    options.merge_radius = affine.merge_radius;
-    options.threads = affine.threads;
-    const ExtractionPlan normal = make_plan(nfeatures, affine.max_tilt, affine.view_features);
-    const double recovery_features = std::round(affine.recovery.image_features * nfeatures);
-    affine_orb::detail::require(recovery_features <= 1000000.0,
-                                w + ": recovery.image_features x nfeatures must be at most 1000000, got " +
-                                    detail_env::format(recovery_features));
-    const ExtractionPlan recovery = make_plan(static_cast<int>(recovery_features), affine.recovery.max_tilt,
-                                              affine.recovery.view_features);
-    const auto options_for = [&](const ExtractionPlan& plan) {
-      ExtractorOptions o = options;
-      o.features = plan.image_features;
-      o.views.max_tilt = plan.max_tilt;
-      // The extractor's view_features is a fraction of its own image budget.
-      o.view_features = plan.image_features == nfeatures ? plan.view_features
-                                                         : plan.view_features * nfeatures / plan.image_features;
-      return o;
-    };
-    if (affine.descriptor == AdapterDescriptor::kRbrief) {
-      rbrief_.emplace(options_for(normal));
-      if (recovery != normal) rbrief_recovery_.emplace(options_for(recovery));
-    } else {
-      brisk_.emplace(options_for(normal));
-      if (recovery != normal) brisk_recovery_.emplace(options_for(recovery));
-    }
-  }
+  AdapterCore(const char* who, ImageKeypoints fork, const ForkParameters& parameters, const AdapterOptions& affine)
+      : who_(who), affine_((affine.check(), affine)), parameters_((parameters.check(who), parameters)),
+        scales_(make_scale_tables(parameters.scale_factor, parameters.levels)),
+        extractors_(make_extractors(who, fork, parameters, affine)) {}
 
   const AdapterOptions& affine_options() const { return affine_; }
   const ScaleTables& scales() const { return scales_; }
-  int levels() const { return levels_; }
-  float scale_factor() const { return scale_factor_; }
+  int levels() const { return parameters_.levels; }
+  float scale_factor() const { return parameters_.scale_factor; }
 
   /// Checks the image and mask: nullopt for an empty image (ORB-SLAM's "return, outputs untouched");
   /// std::invalid_argument for a type other than CV_8UC1 or a mask that is neither empty nor CV_8UC1
@@ -304,11 +363,27 @@ class AdapterCore {
     if (image.empty()) return std::nullopt;
     affine_orb::detail::require_gray8(image, who_);
     affine_orb::detail::require_mask(mask, image.size(), who_);
-    if (rbrief_) return convert(recovering && rbrief_recovery_ ? *rbrief_recovery_ : *rbrief_, image, mask);
-    return convert(recovering && brisk_recovery_ ? *brisk_recovery_ : *brisk_, image, mask);
+    return std::visit([&](auto& pair) { return convert(pair.pick(recovering), image, mask); }, extractors_);
   }
 
  private:
+  using Extractors = std::variant<ExtractorPair<Rbrief>, ExtractorPair<Brisk>>;
+
+  static Extractors make_extractors(const std::string& who, ImageKeypoints fork, const ForkParameters& p,
+                                    const AdapterOptions& affine) {
+    const ExtractionPlan normal = make_plan(p.nfeatures, affine.max_tilt, affine.view_features);
+    const double recovery_features = std::round(affine.recovery.image_features * p.nfeatures);
+    require_option(recovery_features <= 1000000.0, who + ": recovery.image_features x nfeatures must be at most "
+                                                         "1000000, got " + detail_env::format(recovery_features));
+    const ExtractionPlan recovery =
+        make_plan(static_cast<int>(recovery_features), affine.recovery.max_tilt, affine.recovery.view_features);
+    const ExtractorOptions base = base_options(fork, p, affine);
+    if (affine.descriptor == AdapterDescriptor::kRbrief) {
+      return Extractors(std::in_place_type<ExtractorPair<Rbrief>>, base, normal, recovery, p.nfeatures);
+    }
+    return Extractors(std::in_place_type<ExtractorPair<Brisk>>, base, normal, recovery, p.nfeatures);
+  }
+
   /// Whether the stereo window around keypoint `pt` fits at octave `o` (kBorderMargin).
   bool fits(cv::Point2f pt, int o, const std::vector<cv::Mat>& pyramid) const {
     const cv::Mat& level = pyramid[static_cast<std::size_t>(o)];
@@ -317,6 +392,13 @@ class AdapterCore {
     const int y = cvRound(pt.y * inv);
     return x >= kBorderMargin && y >= kBorderMargin && x <= level.cols - 1 - kBorderMargin &&
            y <= level.rows - 1 - kBorderMargin;
+  }
+
+  /// ORB-SLAM's keypoint size at octave o: 31·s^o, truncated as the forks store it when the image's
+  /// keypoints are the fork's.
+  float keypoint_size(int o) const {
+    const float size = kOrbPatchSize * scales_.factors[static_cast<std::size_t>(o)];
+    return affine_.keypoints == AdapterKeypoints::kFork ? static_cast<float>(static_cast<int>(size)) : size;
   }
 
   template <class Descriptor>
@@ -335,7 +417,7 @@ class AdapterCore {
     if (!picks.empty()) frame.descriptors.create(static_cast<int>(picks.size()), kDescriptorBytes, CV_8U);
     for (std::size_t i : picks) {
       cv::KeyPoint kp = features.keypoints[i];
-      kp.size = kOrbPatchSize * scales_.factors[static_cast<std::size_t>(kp.octave)];
+      kp.size = keypoint_size(kp.octave);
       // BRISK's 512 bits: the first 256 (bytes 0–31) are kept, see AdapterDescriptor::kBrisk.
       rows.row(static_cast<int>(i))
           .colRange(0, kDescriptorBytes)
@@ -347,13 +429,9 @@ class AdapterCore {
 
   const char* who_;
   AdapterOptions affine_;
-  float scale_factor_ = 1.2f;
-  int levels_ = 8;
+  ForkParameters parameters_;
   ScaleTables scales_;
-  std::optional<Extractor<Rbrief>> rbrief_;
-  std::optional<Extractor<Brisk>> brisk_;
-  std::optional<Extractor<Rbrief>> rbrief_recovery_;  ///< only when the recovery plan differs
-  std::optional<Extractor<Brisk>> brisk_recovery_;    ///< only when the recovery plan differs
+  Extractors extractors_;
 };
 
 /// Writes descriptors to an ORB-SLAM output array: released when there is no keypoint (ORB-SLAM's
@@ -372,33 +450,29 @@ inline void check_lapping_area(const std::vector<int>& area, const char* who) {
       area.size() == 2, std::string(who) + ": vLappingArea must have 2 elements, got " + std::to_string(area.size()));
 }
 
-/// ORB-SLAM3's lapping-area split: keypoints whose x lies in [area[0], area[1]] (level-0 pixels,
-/// bounds included) move to the end of `frame`, descriptor rows with them; both parts keep their
-/// order, so each stays grouped by octave (ORB-SLAM3 itself fills the end part backwards; its
-/// callers use the two parts as sets). Returns the number of keypoints outside the area.
-/// Throws std::invalid_argument unless `area` has exactly two elements.
+/// ORB-SLAM3's lapping-area split, as its own extractor orders it: keypoints whose x lies in
+/// [area[0], area[1]] (level-0 pixels, bounds included) move to the end of `frame`, descriptor rows
+/// with them, the others keep their order at the front and the moved ones fill the end backwards
+/// (the last of them first). Returns the number of keypoints outside the area. Throws
+/// std::invalid_argument unless `area` has exactly two elements.
 inline int split_lapping_area(AdapterFrame& frame, const std::vector<int>& area, const char* who) {
   check_lapping_area(area, who);
   const auto inside = [&](const cv::KeyPoint& kp) { return kp.pt.x >= area[0] && kp.pt.x <= area[1]; };
-  std::vector<std::size_t> order;
-  order.reserve(frame.keypoints.size());
-  for (std::size_t i = 0; i < frame.keypoints.size(); ++i) {
-    if (!inside(frame.keypoints[i])) order.push_back(i);
-  }
-  const int outside = static_cast<int>(order.size());
-  for (std::size_t i = 0; i < frame.keypoints.size(); ++i) {
-    if (inside(frame.keypoints[i])) order.push_back(i);
-  }
+  const std::size_t n = frame.keypoints.size();
+  std::vector<std::size_t> order(n);
+  std::size_t front = 0;
+  std::size_t back = n;
+  for (std::size_t i = 0; i < n; ++i) order[inside(frame.keypoints[i]) ? --back : front++] = i;
   std::vector<cv::KeyPoint> keypoints;
-  keypoints.reserve(order.size());
+  keypoints.reserve(n);
   cv::Mat descriptors(frame.descriptors.size(), CV_8U);
-  for (std::size_t k = 0; k < order.size(); ++k) {
+  for (std::size_t k = 0; k < n; ++k) {
     keypoints.push_back(frame.keypoints[order[k]]);
     frame.descriptors.row(static_cast<int>(order[k])).copyTo(descriptors.row(static_cast<int>(k)));
   }
   frame.keypoints = std::move(keypoints);
   frame.descriptors = descriptors;
-  return outside;
+  return static_cast<int>(front);
 }
 
 }  // namespace affine_orb::adapters

@@ -11,6 +11,7 @@
 ///
 /// | variable                  | field          | values                                     |
 /// |---------------------------|----------------|--------------------------------------------|
+/// | `AFFINE_ORB_KEYPOINTS`    | keypoints      | `fork` or `affine_orb`                     |
 /// | `AFFINE_ORB_MAX_TILT`     | max_tilt       | number in [1, 16]; 1 = views off           |
 /// | `AFFINE_ORB_DESCRIPTOR`   | descriptor     | `rbrief` or `brisk`                        |
 /// | `AFFINE_ORB_THREADS`      | threads        | integer in [1, 256]                        |
@@ -33,6 +34,7 @@ namespace affine_orb {
 namespace adapters {
 
 /// Environment variable names (see the table above).
+constexpr const char* kEnvKeypoints = "AFFINE_ORB_KEYPOINTS";
 constexpr const char* kEnvMaxTilt = "AFFINE_ORB_MAX_TILT";
 constexpr const char* kEnvDescriptor = "AFFINE_ORB_DESCRIPTOR";
 constexpr const char* kEnvThreads = "AFFINE_ORB_THREADS";
@@ -48,6 +50,12 @@ constexpr const char* kEnvRecoveryViewFeatures = "AFFINE_ORB_RECOVERY_VIEW_FEATU
 inline void require_option(bool condition, const std::string& what) {
   if (!condition) throw std::invalid_argument("affine_orb: " + what);
 }
+
+/// Whose keypoints the image gives (affine_orb::ImageKeypoints).
+enum class AdapterKeypoints {
+  kFork,       ///< the fork's own ORBextractor's: the same keypoints, order and rBRIEF bits, faster
+  kAffineOrb,  ///< affine_orb's selection (its pyramid, FAST grid and quadtree spreading; before 0.3 the default)
+};
 
 /// Descriptor computed in every view. ORB-SLAM reads 256 bits per row whichever is chosen.
 enum class AdapterDescriptor {
@@ -92,6 +100,10 @@ struct RecoveryOptions {
 
 /// Options of the drop-in extractors beyond ORB-SLAM's five constructor arguments.
 struct AdapterOptions {
+  /// Whose keypoints the image gives. Default kFork: ORB-SLAM's thresholds (keyframe insertion,
+  /// initialisation, map reset) were tuned on its own extractor's keypoints, and any other selection
+  /// moves them (docs/slam.md); kAffineOrb is affine_orb's spreading.
+  AdapterKeypoints keypoints = AdapterKeypoints::kFork;
   /// Largest simulated tilt t (views t = √2^k <= max_tilt, SPEC §1); 1 = plain ORB extraction.
   /// A value between two tilts keeps the tilts below it: write 1.42 for √2, 2.83 for 2√2.
   /// In [1, 16]. Default 1 (views off): inside ORB-SLAM2 the views cost more tracking time than
@@ -117,6 +129,8 @@ struct AdapterOptions {
 
   void check() const {
     recovery.check();
+    require_option(keypoints == AdapterKeypoints::kFork || keypoints == AdapterKeypoints::kAffineOrb,
+                   "AdapterOptions::keypoints is invalid");
     require_option(std::isfinite(max_tilt) && max_tilt >= 1.0 && max_tilt <= 16.0,
                    "AdapterOptions::max_tilt must be in [1, 16], got " + std::to_string(max_tilt));
     require_option(descriptor == AdapterDescriptor::kRbrief || descriptor == AdapterDescriptor::kBrisk,

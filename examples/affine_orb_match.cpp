@@ -32,6 +32,7 @@
 #include "affine_orb/matching/affine_matching.hpp"
 #include "cli.hpp"
 #include "homography_io.hpp"
+#include "image_correction.hpp"
 
 namespace {
 

@@ -27,8 +27,8 @@
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
-#include "affine_orb/slam/keyframe_tracker.hpp"
 #include "cli.hpp"
+#include "keyframe_tracker.hpp"
 #include "sequence_io.hpp"
 
 namespace {

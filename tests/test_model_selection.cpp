@@ -30,8 +30,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/geometry/image_correction.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
+#include "image_correction.hpp"
 #include "test_data.hpp"
 
 namespace {

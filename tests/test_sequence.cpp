@@ -30,7 +30,7 @@
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
-#include "affine_orb/slam/keyframe_tracker.hpp"
+#include "keyframe_tracker.hpp"
 #include "test_data.hpp"
 
 namespace {

@@ -14,8 +14,6 @@
 #include "affine_orb/geometry/fundamental.hpp"
 #include "affine_orb/detection/harris.hpp"
 #include "affine_orb/geometry/homography.hpp"
-#include "affine_orb/geometry/image_correction.hpp"
-#include "affine_orb/slam/keyframe_tracker.hpp"
 #include "affine_orb/matching/matcher.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/detection/orientation.hpp"

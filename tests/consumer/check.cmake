@@ -1,6 +1,7 @@
 # Builds and runs tests/consumer against an installed affine_orb, twice: with find_package(affine_orb)
 # and with the flags of `pkg-config --cflags --libs affine_orb`; each must find the installed files
-# under the prefix and print the expected version.
+# under the prefix and print the expected version. With the pkg-config flags it also builds and runs
+# moved_paths.cpp, which includes every header at its include path of 0.1.
 #   cmake -DBINARY_DIR=<build tree> ...   installs the build tree into WORK_DIR/prefix first (ctest's
 #                                         install_consumer), then also imports the Python module
 #                                         from there when the build made one;
@@ -67,6 +68,31 @@ endif()
 separate_arguments(flags UNIX_COMMAND "${flags}")
 build_and_run("pkg-config (${flags})" "${WORK_DIR}/consumer_pkg_config"
               "${CXX}" -std=c++17 -O1 "${SOURCE_DIR}/main.cpp" -o "${WORK_DIR}/consumer_pkg_config" ${flags})
+
+# The include paths of 0.1 (every installed affine_orb/*.hpp but the umbrella and version.hpp):
+# moved_paths.cpp includes each, each still compiles and warns with its new path, the program runs.
+file(GLOB old_paths RELATIVE "${PREFIX}/include" "${PREFIX}/include/affine_orb/*.hpp")
+list(REMOVE_ITEM old_paths affine_orb/affine_orb.hpp affine_orb/version.hpp)
+file(READ "${SOURCE_DIR}/moved_paths.cpp" moved_paths_source)
+execute_process(COMMAND "${CXX}" -std=c++17 -O1 "${SOURCE_DIR}/moved_paths.cpp" -o "${WORK_DIR}/moved_paths" ${flags}
+                RESULT_VARIABLE rc ERROR_VARIABLE warnings)
+if(rc)
+  message(FATAL_ERROR "building tests/consumer/moved_paths.cpp failed:\n${warnings}")
+endif()
+foreach(old_path ${old_paths})
+  string(FIND "${moved_paths_source}" "#include <${old_path}>" included)
+  string(FIND "${warnings}" "${old_path} is deprecated: include affine_orb/" warned)
+  if(included EQUAL -1 OR warned EQUAL -1)
+    message(FATAL_ERROR "${old_path}: included by moved_paths.cpp ${included}, deprecation warning ${warned} (-1: no)")
+  endif()
+endforeach()
+execute_process(COMMAND "${WORK_DIR}/moved_paths" RESULT_VARIABLE rc OUTPUT_VARIABLE moved_out
+                OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(rc OR NOT moved_out MATCHES "old include paths: [1-9][0-9]* features, [1-9][0-9]* matches")
+  message(FATAL_ERROR "moved_paths printed \"${moved_out}\" (exit ${rc})")
+endif()
+list(LENGTH old_paths old_path_count)
+message(STATUS "the ${old_path_count} include paths of 0.1 compile, warn and forward: ${moved_out}")
 
 # The Python module, when the build made one: installed under the prefix's Python directory and
 # importable from there.

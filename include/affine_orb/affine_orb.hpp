@@ -14,6 +14,7 @@
 #include "affine_orb/geometry/fundamental.hpp"
 #include "affine_orb/detection/harris.hpp"
 #include "affine_orb/geometry/homography.hpp"
+#include "affine_orb/matching/knn_match.hpp"
 #include "affine_orb/matching/matcher.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/detection/orientation.hpp"

@@ -22,6 +22,7 @@
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/matching/detail/matcher.hpp"
 #include "affine_orb/matching/detail/popcount.hpp"
+#include "affine_orb/matching/knn_match.hpp"
 
 namespace affine_orb {
 
@@ -103,15 +104,6 @@ inline MatchedPoints matched_points(const std::vector<cv::KeyPoint>& keypoints1,
   matched_points(keypoints1, keypoints2, matches, out);
   return out;
 }
-
-/// One neighbour of a query descriptor: index into the train descriptors and distance in bits. The
-/// defaults mark an entry that holds no neighbour (distance larger than any real one).
-using detail::Neighbour;
-
-/// The two nearest train descriptors of one query descriptor, ties broken by the smaller train
-/// index. `count` = min(2, number of train descriptors) says how many of `best`, `second` are real;
-/// the others keep Neighbour's defaults.
-using detail::KnnMatch;
 
 /// Lowe's ratio test on a knn2() result, exactly as MatcherOptions::ratio defines it: false without
 /// neighbours, true with a single one, else best.distance < ratio · second.distance.

@@ -45,26 +45,10 @@
 #include "affine_orb/core/detail/simd.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/matching/detail/popcount.hpp"
+#include "affine_orb/matching/knn_match.hpp"
 
 namespace affine_orb {
 namespace detail {
-
-/// One neighbour of a query descriptor: index into the train descriptors and distance in bits. The
-/// defaults mark an entry that holds no neighbour (distance larger than any real one).
-struct Neighbour {
-  int train = 0;
-  int distance = std::numeric_limits<int>::max();
-};
-
-/// The two nearest train descriptors of one query descriptor, ties broken by the smaller train
-/// index. `count` = min(2, number of train descriptors) says how many of `best`, `second` are real;
-/// the others keep Neighbour's defaults.
-struct KnnMatch {
-  int query = 0;
-  int count = 0;
-  Neighbour best;
-  Neighbour second;
-};
 
 /// The bit-lane vectors of the k = 2 search: GCC/Clang vectors of 64-bit words as wide as an
 /// integer SIMD register, 16 bytes (SSE2 on every x86-64, NEON on AArch64, pairs of plain words on

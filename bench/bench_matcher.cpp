@@ -90,11 +90,9 @@ void run(const char* name, const cv::Mat& query_mat, const cv::Mat& train_mat, i
 int main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 21;
   const std::string data_dir = argc > 2 ? argv[2] : AFFINE_ORB_DATA_DIR;
-  const std::string search = AFFINE_ORB_KNN2_VPOPCNTDQ
-                                 ? std::string("AVX-512 VPOPCNTDQ search")
-                                 : std::string("bit-sliced search, ") +
-                                       (AFFINE_ORB_KNN2_LANES256 && affine_orb::detail::cpu_has_avx2() ? "256" : "128") +
-                                       "-bit lanes";
+  const std::string search = std::string("bit-sliced search, ") +
+                             (AFFINE_ORB_KNN2_LANES256 && affine_orb::detail::cpu_has_avx2() ? "256" : "128") +
+                             "-bit lanes";
   std::printf(
       "knn2: %s; hardware popcount in hamming_distance: %s; extraction kernels: %s; medians of %d interleaved "
       "runs\n\n",

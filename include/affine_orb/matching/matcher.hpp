@@ -120,14 +120,10 @@ inline bool passes_ratio_test(const KnnMatch& m, float ratio) noexcept {
 template <std::size_t Words>
 std::vector<KnnMatch> knn2(const std::vector<std::array<std::uint64_t, Words>>& query,
                            const std::vector<std::array<std::uint64_t, Words>>& train) {
-#if AFFINE_ORB_KNN2_VPOPCNTDQ
-  return detail::knn2_vpopcntdq(query, train);
-#else
 #if AFFINE_ORB_KNN2_LANES256
   if (detail::cpu_has_avx2()) return detail::bitsliced256::knn2_bitsliced<detail::LaneVector256>(query, train);
 #endif
   return detail::bitsliced128::knn2_bitsliced<detail::LaneVector128>(query, train);
-#endif
 }
 
 /// Nearest-neighbour matches of query to train that pass the tests of `options` (ratio, maximum

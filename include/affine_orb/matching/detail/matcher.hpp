@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Internals (namespace detail, not part of the API) of matching/matcher.hpp: the bit-sliced and
-/// VPOPCNTDQ k = 2 searches.
+/// Internals (namespace detail, not part of the API) of matching/matcher.hpp: the bit-sliced k = 2
+/// search.
 ///
 /// How the k = 2 search is fast: the train descriptors are transposed into bit planes, so that one
 /// machine word (or SIMD register) holds the same bit of 64 (128, 256) train descriptors, one per
@@ -13,11 +13,9 @@
 /// which lanes (usually none) can enter the two best; only those are looked at one by one.
 ///
 /// The search runs on 256-bit lanes (AVX2, chosen at run time as the extraction kernels are, see
-/// core/detail/simd.hpp) where the CPU has AVX2, on 128-bit lanes elsewhere. Where the target has
-/// AVX-512 VPOPCNTDQ (AFFINE_ORB_KNN2_VPOPCNTDQ, chosen at compile time) a plain XOR + VPOPCNTQ
-/// search over eight queries per register replaces it. All give the same results.
+/// core/detail/simd.hpp) where the CPU has AVX2, on 128-bit lanes elsewhere. Both give the same
+/// results.
 
-#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -31,15 +29,6 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-
-#if defined(__AVX512F__) && defined(__AVX512VPOPCNTDQ__)
-#include <immintrin.h>
-/// 1 when knn2() uses the AVX-512 VPOPCNTDQ search (the target has it, e.g. -march=native on Ice
-/// Lake or Zen 4 and later), 0 when it uses the bit-sliced search.
-#define AFFINE_ORB_KNN2_VPOPCNTDQ 1
-#else
-#define AFFINE_ORB_KNN2_VPOPCNTDQ 0
-#endif
 
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/detail/simd.hpp"
@@ -165,77 +154,6 @@ namespace bitsliced256 {
 #include "affine_orb/matching/detail/knn2_lanes.inc"
 }  // namespace bitsliced256
 AFFINE_ORB_TARGET_AVX2_END
-#endif
-#if AFFINE_ORB_KNN2_VPOPCNTDQ
-/// knn2() with AVX-512 VPOPCNTDQ: eight queries per 512-bit register, one per 64-bit lane, and two
-/// such groups at a time. Each train descriptor is broadcast word by word, XOR-ed with the queries
-/// and counted with VPOPCNTQ; the two best are kept per lane as neighbour_key()s with unsigned
-/// 64-bit min/max, updated only when some lane beats its current second-best distance.
-template <std::size_t Words>
-std::vector<KnnMatch> knn2_vpopcntdq(const std::vector<std::array<std::uint64_t, Words>>& query,
-                                     const std::vector<std::array<std::uint64_t, Words>>& train) {
-  static_assert(Words > 0, "a descriptor has at least one 64-bit word");
-  const std::size_t nq = query.size();
-  const std::size_t nt = train.size();
-  std::vector<KnnMatch> result = knn2_frame(nq, nt);
-  if (nq == 0 || nt == 0) return result;
-  // Word w of query 8g + l at [(g · Words + w) · 8 + l]; the last group is padded with the last query.
-  const std::size_t groups = (nq + 7) / 8;
-  std::vector<std::uint64_t> lanes(groups * Words * 8);
-  for (std::size_t g = 0; g < groups; ++g) {
-    for (std::size_t w = 0; w < Words; ++w) {
-      for (std::size_t l = 0; l < 8; ++l) lanes[(g * Words + w) * 8 + l] = query[std::min(nq - 1, 8 * g + l)][w];
-    }
-  }
-  // Shifts and min/max use the zero-masked forms with every lane selected: the same instructions,
-  // but GCC 12's unmasked intrinsics trip -Wmaybe-uninitialized on their undefined pass-through.
-  constexpr __mmask8 kAll = 0xff;
-  const __m512i none = _mm512_set1_epi64(-1);
-  for (std::size_t g = 0; g < groups; g += 2) {
-    const std::size_t h = g + 1 < groups ? g + 1 : g;  // the second group (the first again at the end)
-    __m512i qa[Words];
-    __m512i qb[Words];
-    for (std::size_t w = 0; w < Words; ++w) {
-      qa[w] = _mm512_loadu_si512(lanes.data() + (g * Words + w) * 8);
-      qb[w] = _mm512_loadu_si512(lanes.data() + (h * Words + w) * 8);
-    }
-    __m512i best_a = none;
-    __m512i second_a = none;
-    __m512i best_b = none;
-    __m512i second_b = none;
-    __m512i limit_a = _mm512_maskz_srli_epi64(kAll, none, 32);  // second-best distances
-    __m512i limit_b = limit_a;
-    for (std::size_t j = 0; j < nt; ++j) {
-      __m512i da = _mm512_setzero_si512();
-      __m512i db = _mm512_setzero_si512();
-      for (std::size_t w = 0; w < Words; ++w) {
-        const __m512i t = _mm512_set1_epi64(static_cast<long long>(train[j][w]));
-        da = _mm512_add_epi64(da, _mm512_popcnt_epi64(_mm512_xor_si512(qa[w], t)));
-        db = _mm512_add_epi64(db, _mm512_popcnt_epi64(_mm512_xor_si512(qb[w], t)));
-      }
-      if ((_mm512_cmplt_epu64_mask(da, limit_a) | _mm512_cmplt_epu64_mask(db, limit_b)) == 0) continue;
-      const __m512i index = _mm512_set1_epi64(static_cast<long long>(j));
-      const __m512i key_a = _mm512_or_si512(_mm512_maskz_slli_epi64(kAll, da, 32), index);
-      const __m512i key_b = _mm512_or_si512(_mm512_maskz_slli_epi64(kAll, db, 32), index);
-      second_a = _mm512_maskz_min_epu64(kAll, second_a, _mm512_maskz_max_epu64(kAll, best_a, key_a));
-      best_a = _mm512_maskz_min_epu64(kAll, best_a, key_a);
-      second_b = _mm512_maskz_min_epu64(kAll, second_b, _mm512_maskz_max_epu64(kAll, best_b, key_b));
-      best_b = _mm512_maskz_min_epu64(kAll, best_b, key_b);
-      limit_a = _mm512_maskz_srli_epi64(kAll, second_a, 32);
-      limit_b = _mm512_maskz_srli_epi64(kAll, second_b, 32);
-    }
-    std::uint64_t keys[4][8];
-    _mm512_storeu_si512(keys[0], best_a);
-    _mm512_storeu_si512(keys[1], second_a);
-    _mm512_storeu_si512(keys[2], best_b);
-    _mm512_storeu_si512(keys[3], second_b);
-    for (std::size_t l = 0; l < 8; ++l) {
-      if (8 * g + l < nq) set_neighbours(result[8 * g + l], keys[0][l], keys[1][l]);
-      if (8 * h + l < nq) set_neighbours(result[8 * h + l], keys[2][l], keys[3][l]);
-    }
-  }
-  return result;
-}
 #endif
 
 }  // namespace detail

@@ -17,7 +17,8 @@
 /// to the view width (pixel centres: x_c = (x + 0.5)·W_c/W_v − 0.5).
 ///
 /// Each stage has a scalar reference, an SSE2 path (where the target has SSE2) and an AVX2 path
-/// (where the CPU has AVX2, chosen per row: core/detail/simd.hpp) that give the same bytes.
+/// (where the CPU has AVX2, chosen per row: core/detail/simd.hpp) that give the same bytes: the
+/// kernels of render_lanes.inc on RenderLanes128 and RenderLanes256. NEON has its own.
 
 #include <algorithm>
 #include <cmath>
@@ -108,110 +109,6 @@ inline std::pair<int, int> columns_within(std::int64_t base, std::int64_t step, 
   return {static_cast<int>(first), static_cast<int>(last)};
 }
 
-#if defined(__SSE2__)
-/// The bilinear weights [128 − f | f] (16-bit halves of each 32-bit lane) of four positions from
-/// `flipped`, whose lanes hold [~lo | lo], lo the position's low 16 bits: f = (lo + 2^8) >> 9 as in
-/// the file comment, and 128 − f(lo) = f(~lo) = f(65535 − lo). _mm_avg_epu16(v, 255) = (v + 256) >> 1
-/// without overflow.
-inline __m128i fraction_pairs_sse2(__m128i flipped) {
-  static_assert(kFractionBits == 7, "the weights below are in 1/128 px");
-  return _mm_srli_epi16(_mm_avg_epu16(flipped, _mm_set1_epi16(255)), 8);
-}
-
-/// [~lo | lo] (see fraction_pairs_sse2()) of four 32-bit positions.
-inline __m128i flipped_low_halves_sse2(__m128i pos) {
-  return _mm_xor_si128(_mm_shufflehi_epi16(_mm_shufflelo_epi16(pos, 0xA0), 0xA0), _mm_set1_epi32(0xFFFF));
-}
-
-/// [−d | d] in 16 bits: what flipped_low_halves_sse2() of positions advances by when they advance by d.
-inline __m128i flipped_step_sse2(std::int32_t d) {
-  return _mm_set1_epi32(
-      static_cast<std::int32_t>((static_cast<std::uint32_t>(-d) & 0xFFFFu) | (static_cast<std::uint32_t>(d) << 16)));
-}
-
-/// Four interpolated pixels, rounded, in the 32-bit lanes: from the pairs (p, p + 1) of the four
-/// pixels in words 0-3 of `top`, those one row below in `bottom`, and the weights [128 − f | f] of x
-/// (wx) and y (wy). Rows first, R = (128 − f_x)·p + f_x·p' < 2^15 for both rows, then (128 − f_y)·R_top
-/// + f_y·R_bottom: the same integer as the file comment's sum, with 2^13 = 128·64 added as 64 to each R.
-inline __m128i interpolate_four_sse2(__m128i top, __m128i bottom, __m128i wx, __m128i wy) {
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i r_top = _mm_madd_epi16(_mm_unpacklo_epi8(top, zero), wx);
-  const __m128i r_bottom = _mm_madd_epi16(_mm_unpacklo_epi8(bottom, zero), wx);
-  const __m128i rows = _mm_add_epi16(_mm_or_si128(r_top, _mm_slli_epi32(r_bottom, 16)), _mm_set1_epi16(64));
-  return _mm_srli_epi32(_mm_madd_epi16(rows, wy), 14);
-}
-
-/// sample_canvas_row_sse2() on columns [c0, c1), four at a time; kClamp = false where the
-/// positions are known to lie inside the clamping range (their fractions are then stepped in 16
-/// bits rather than taken from the positions).
-template <bool kClamp>
-inline int sample_canvas_columns_sse2(const std::uint8_t* base, std::ptrdiff_t step, const CanvasSampler& s,
-                                      std::int32_t x_row, std::int32_t y_row, int c0, int c1, std::uint8_t* out) {
-  const int end = c0 + std::max(0, c1 - c0) / 4 * 4;
-  if (c0 >= end) return c0;
-  const __m128i x_step4 = _mm_set1_epi32(4 * s.x_step);
-  const __m128i y_step4 = _mm_set1_epi32(4 * s.y_step);
-  const __m128i x_max = _mm_set1_epi32(s.x_max);
-  const __m128i y_max = _mm_set1_epi32(s.y_max);
-  const __m128i x_flip_step = flipped_step_sse2(4 * s.x_step);
-  const __m128i y_flip_step = flipped_step_sse2(4 * s.y_step);
-  const __m128i step16 = _mm_set1_epi32(static_cast<std::int32_t>(step));
-  const __m128i zero = _mm_setzero_si128();
-  auto clamp = [&](__m128i v, __m128i hi) {
-    v = _mm_and_si128(v, _mm_cmpgt_epi32(v, zero));
-    const __m128i above = _mm_cmpgt_epi32(v, hi);
-    return _mm_or_si128(_mm_and_si128(above, hi), _mm_andnot_si128(above, v));
-  };
-  auto load16 = [](const std::uint8_t* p) {
-    std::uint16_t v;
-    std::memcpy(&v, p, sizeof(v));
-    return static_cast<int>(v);
-  };
-  __m128i xs = _mm_setr_epi32(x_row + c0 * s.x_step, x_row + (c0 + 1) * s.x_step, x_row + (c0 + 2) * s.x_step,
-                              x_row + (c0 + 3) * s.x_step);
-  __m128i ys = _mm_setr_epi32(y_row + c0 * s.y_step, y_row + (c0 + 1) * s.y_step, y_row + (c0 + 2) * s.y_step,
-                              y_row + (c0 + 3) * s.y_step);
-  __m128i x_flip = flipped_low_halves_sse2(xs);
-  __m128i y_flip = flipped_low_halves_sse2(ys);
-  for (int c = c0; c < end; c += 4) {
-    const __m128i x = kClamp ? clamp(xs, x_max) : xs;
-    const __m128i yv = kClamp ? clamp(ys, y_max) : ys;
-    xs = _mm_add_epi32(xs, x_step4);
-    ys = _mm_add_epi32(ys, y_step4);
-    if (kClamp) {
-      x_flip = flipped_low_halves_sse2(x);
-      y_flip = flipped_low_halves_sse2(yv);
-    }
-    const __m128i wx = fraction_pairs_sse2(x_flip);
-    const __m128i wy = fraction_pairs_sse2(y_flip);
-    if (!kClamp) {
-      x_flip = _mm_add_epi16(x_flip, x_flip_step);
-      y_flip = _mm_add_epi16(y_flip, y_flip_step);
-    }
-    // Row offset y0·step with one 16x16 multiply-add per lane (y0, step < 2^15, high halves zero).
-    const __m128i off = _mm_add_epi32(_mm_madd_epi16(_mm_srli_epi32(yv, 16), step16), _mm_srai_epi32(x, 16));
-    const std::int64_t off01 = _mm_cvtsi128_si64(off);
-    const std::int64_t off23 = _mm_cvtsi128_si64(_mm_unpackhi_epi64(off, off));
-    const std::uint8_t* p0 = base + static_cast<std::int32_t>(off01);
-    const std::uint8_t* p1 = base + (off01 >> 32);
-    const std::uint8_t* p2 = base + static_cast<std::int32_t>(off23);
-    const std::uint8_t* p3 = base + (off23 >> 32);
-    // Words 0-3: the pairs (p, p + 1) of the four pixels, and one row below (two chains of inserts).
-    __m128i top = _mm_cvtsi32_si128(load16(p0));
-    __m128i bottom = _mm_cvtsi32_si128(load16(p0 + step));
-    top = _mm_insert_epi16(top, load16(p1), 1);
-    bottom = _mm_insert_epi16(bottom, load16(p1 + step), 1);
-    top = _mm_insert_epi16(top, load16(p2), 2);
-    bottom = _mm_insert_epi16(bottom, load16(p2 + step), 2);
-    top = _mm_insert_epi16(top, load16(p3), 3);
-    bottom = _mm_insert_epi16(bottom, load16(p3 + step), 3);
-    const __m128i v = interpolate_four_sse2(top, bottom, wx, wy);
-    const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), zero));
-    std::memcpy(out + (c - c0), &bytes, sizeof(bytes));
-  }
-  return end;
-}
-
 /// The columns of canvas row y in [c0, c1) whose positions need no clamping, [first, last) (empty
 /// unless at least 8 columns).
 inline std::pair<int, int> unclamped_columns(const CanvasSampler& s, int y, int c0, int c1) {
@@ -220,198 +117,6 @@ inline std::pair<int, int> unclamped_columns(const CanvasSampler& s, int y, int 
   const int first = std::max(ax, ay);
   const int last = std::min(bx, by);
   return last - first < 8 ? std::make_pair(c1, c1) : std::make_pair(first, last);
-}
-
-/// sample_canvas_row_scalar() four pixels at a time, identical bytes: the columns whose positions
-/// need no clamping take a path without it.
-inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
-                                   std::uint8_t* out) {
-  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
-  const std::uint8_t* base = image.ptr<std::uint8_t>(0);
-  const std::int32_t x_row = s.x_row(y);
-  const std::int32_t y_row = s.y_row(y);
-  const auto [inner0, inner1] = unclamped_columns(s, y, c0, c1);
-  // [c0, inner0) clamped, [inner0, inner1) not, [inner1, c1) clamped; remainders of 4 scalar.
-  auto run = [&](auto clamped, int a, int b) {
-    const int c =
-        sample_canvas_columns_sse2<decltype(clamped)::value>(base, step, s, x_row, y_row, a, b, out + (a - c0));
-    sample_canvas_row_scalar(image, s, y, c, b, out + (c - c0));
-  };
-  run(std::true_type{}, c0, inner0);
-  run(std::false_type{}, inner0, inner1);
-  run(std::true_type{}, inner1, c1);
-}
-
-#if AFFINE_ORB_AVX2
-AFFINE_ORB_TARGET_AVX2_BEGIN
-/// sample_canvas_row_avx2() on columns [c0, c1), eight at a time, each 128-bit half as in
-/// sample_canvas_columns_sse2(); returns where it stopped. (Reading the pairs with
-/// _mm256_i32gather_epi32 instead of 16-bit loads and inserts measured slower on an AMD EPYC.)
-template <bool kClamp>
-inline int sample_canvas_columns_avx2(const std::uint8_t* base, std::ptrdiff_t step, const CanvasSampler& s,
-                                      std::int32_t x_row, std::int32_t y_row, int c0, int c1, std::uint8_t* out) {
-  const int end = c0 + std::max(0, c1 - c0) / 8 * 8;
-  if (c0 >= end) return c0;
-  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  __m256i xs =
-      _mm256_add_epi32(_mm256_set1_epi32(x_row + c0 * s.x_step), _mm256_mullo_epi32(lane, _mm256_set1_epi32(s.x_step)));
-  __m256i ys =
-      _mm256_add_epi32(_mm256_set1_epi32(y_row + c0 * s.y_step), _mm256_mullo_epi32(lane, _mm256_set1_epi32(s.y_step)));
-  const __m256i x_step8 = _mm256_set1_epi32(8 * s.x_step);
-  const __m256i y_step8 = _mm256_set1_epi32(8 * s.y_step);
-  const __m256i x_max = _mm256_set1_epi32(s.x_max);
-  const __m256i y_max = _mm256_set1_epi32(s.y_max);
-  const __m256i zero = _mm256_setzero_si256();
-  const __m256i c255 = _mm256_set1_epi16(255);
-  const __m256i c64 = _mm256_set1_epi16(64);
-  const __m256i step16 = _mm256_set1_epi32(static_cast<std::int32_t>(step));
-  // As flipped_low_halves_sse2() and flipped_step_sse2().
-  auto flipped = [](__m256i pos) {
-    return _mm256_xor_si256(_mm256_shufflehi_epi16(_mm256_shufflelo_epi16(pos, 0xA0), 0xA0), _mm256_set1_epi32(0xFFFF));
-  };
-  const __m256i x_flip_step = _mm256_broadcastsi128_si256(flipped_step_sse2(8 * s.x_step));
-  const __m256i y_flip_step = _mm256_broadcastsi128_si256(flipped_step_sse2(8 * s.y_step));
-  __m256i x_flip = flipped(xs);
-  __m256i y_flip = flipped(ys);
-  alignas(32) std::int32_t offset[8];
-  auto load16 = [](const std::uint8_t* p) {
-    std::uint16_t v;
-    std::memcpy(&v, p, sizeof(v));
-    return static_cast<int>(v);
-  };
-  // Four chains of inserts: the pairs of pixels o[0..3], `below` bytes further.
-  auto quarter = [&](const std::int32_t* o, std::ptrdiff_t below) {
-    __m128i v = _mm_cvtsi32_si128(load16(base + o[0] + below));
-    v = _mm_insert_epi16(v, load16(base + o[1] + below), 1);
-    v = _mm_insert_epi16(v, load16(base + o[2] + below), 2);
-    return _mm_insert_epi16(v, load16(base + o[3] + below), 3);
-  };
-  for (int c = c0; c < end; c += 8) {
-    const __m256i x = kClamp ? _mm256_min_epi32(_mm256_max_epi32(xs, zero), x_max) : xs;
-    const __m256i yv = kClamp ? _mm256_min_epi32(_mm256_max_epi32(ys, zero), y_max) : ys;
-    xs = _mm256_add_epi32(xs, x_step8);
-    ys = _mm256_add_epi32(ys, y_step8);
-    if (kClamp) {
-      x_flip = flipped(x);
-      y_flip = flipped(yv);
-    }
-    const __m256i wx = _mm256_srli_epi16(_mm256_avg_epu16(x_flip, c255), 8);
-    const __m256i wy = _mm256_srli_epi16(_mm256_avg_epu16(y_flip, c255), 8);
-    if (!kClamp) {
-      x_flip = _mm256_add_epi16(x_flip, x_flip_step);
-      y_flip = _mm256_add_epi16(y_flip, y_flip_step);
-    }
-    const __m256i off =
-        _mm256_add_epi32(_mm256_madd_epi16(_mm256_srli_epi32(yv, 16), step16), _mm256_srai_epi32(x, 16));
-    _mm256_store_si256(reinterpret_cast<__m256i*>(offset), off);
-    // Per half: words 0-3 the pairs (p, p + 1) of four pixels, words 4-7 those one row below.
-    const __m256i pairs =
-        _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_unpacklo_epi64(quarter(offset, 0), quarter(offset, step))),
-                                _mm_unpacklo_epi64(quarter(offset + 4, 0), quarter(offset + 4, step)), 1);
-    // interpolate_four_sse2() on both halves.
-    const __m256i top = _mm256_madd_epi16(_mm256_unpacklo_epi8(pairs, zero), wx);
-    const __m256i bottom = _mm256_madd_epi16(_mm256_unpackhi_epi8(pairs, zero), wx);
-    const __m256i rows = _mm256_add_epi16(_mm256_or_si256(top, _mm256_slli_epi32(bottom, 16)), c64);
-    const __m256i v = _mm256_srli_epi32(_mm256_madd_epi16(rows, wy), 14);
-    const __m256i bytes = _mm256_packus_epi16(_mm256_packs_epi32(v, v), zero);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + (c - c0)),
-                     _mm_unpacklo_epi32(_mm256_castsi256_si128(bytes), _mm256_extracti128_si256(bytes, 1)));
-  }
-  return end;
-}
-
-/// sample_canvas_row_scalar() eight pixels at a time, identical bytes; the last columns of each
-/// stretch four at a time (sample_canvas_columns_sse2()) and one at a time.
-inline void sample_canvas_row_avx2(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
-                                   std::uint8_t* out) {
-  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
-  const std::uint8_t* base = image.ptr<std::uint8_t>(0);
-  const std::int32_t x_row = s.x_row(y);
-  const std::int32_t y_row = s.y_row(y);
-  const auto [inner0, inner1] = unclamped_columns(s, y, c0, c1);
-  auto run = [&](auto clamped, int a, int b) {
-    constexpr bool kClamp = decltype(clamped)::value;
-    int c = sample_canvas_columns_avx2<kClamp>(base, step, s, x_row, y_row, a, b, out + (a - c0));
-    c = sample_canvas_columns_sse2<kClamp>(base, step, s, x_row, y_row, c, b, out + (c - c0));
-    sample_canvas_row_scalar(image, s, y, c, b, out + (c - c0));
-  };
-  run(std::true_type{}, c0, inner0);
-  run(std::false_type{}, inner0, inner1);
-  run(std::true_type{}, inner1, c1);
-}
-AFFINE_ORB_TARGET_AVX2_END
-#endif
-#endif
-
-#if AFFINE_ORB_NEON
-/// sample_canvas_row_scalar() four pixels at a time on NEON, identical bytes: the file comment's
-/// integers in 32-bit lanes (weights and sums below 2^23), the positions clamped as there.
-inline void sample_canvas_row_neon(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
-                                   std::uint8_t* out) {
-  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
-  const std::uint8_t* base = image.ptr<std::uint8_t>(0);
-  const std::int32_t x_row = s.x_row(y);
-  const std::int32_t y_row = s.y_row(y);
-  const int end = c0 + std::max(0, c1 - c0) / 4 * 4;
-  const int32x4_t lane = {0, 1, 2, 3};
-  int32x4_t xs = vmlaq_n_s32(vdupq_n_s32(x_row + c0 * s.x_step), lane, s.x_step);
-  int32x4_t ys = vmlaq_n_s32(vdupq_n_s32(y_row + c0 * s.y_step), lane, s.y_step);
-  const int32x4_t zero = vdupq_n_s32(0);
-  const int32x4_t x_max = vdupq_n_s32(s.x_max);
-  const int32x4_t y_max = vdupq_n_s32(s.y_max);
-  const uint32x4_t low16 = vdupq_n_u32(0xFFFF);
-  const uint32x4_t half = vdupq_n_u32(1u << (15 - kFractionBits));
-  const uint32x4_t one = vdupq_n_u32(1u << kFractionBits);
-  auto fraction = [&](int32x4_t v) {
-    return vshrq_n_u32(vaddq_u32(vandq_u32(vreinterpretq_u32_s32(v), low16), half), 16 - kFractionBits);
-  };
-  for (int c = c0; c < end; c += 4) {
-    const int32x4_t x = vminq_s32(vmaxq_s32(xs, zero), x_max);
-    const int32x4_t yv = vminq_s32(vmaxq_s32(ys, zero), y_max);
-    xs = vaddq_s32(xs, vdupq_n_s32(4 * s.x_step));
-    ys = vaddq_s32(ys, vdupq_n_s32(4 * s.y_step));
-    const uint32x4_t fx = fraction(x);
-    const uint32x4_t fy = fraction(yv);
-    const uint32x4_t gx = vsubq_u32(one, fx);
-    const uint32x4_t gy = vsubq_u32(one, fy);
-    std::int32_t offset[4];
-    vst1q_s32(offset, vmlaq_n_s32(vshrq_n_s32(x, 16), vshrq_n_s32(yv, 16), static_cast<std::int32_t>(step)));
-    std::uint32_t p00[4], p01[4], p10[4], p11[4];
-    for (int i = 0; i < 4; ++i) {
-      const std::uint8_t* p = base + offset[i];
-      p00[i] = p[0];
-      p01[i] = p[1];
-      p10[i] = p[step];
-      p11[i] = p[step + 1];
-    }
-    uint32x4_t sum = vmulq_u32(vld1q_u32(p00), vmulq_u32(gx, gy));
-    sum = vmlaq_u32(sum, vld1q_u32(p01), vmulq_u32(fx, gy));
-    sum = vmlaq_u32(sum, vld1q_u32(p10), vmulq_u32(gx, fy));
-    sum = vmlaq_u32(sum, vld1q_u32(p11), vmulq_u32(fx, fy));
-    const uint16x4_t v = vmovn_u32(vshrq_n_u32(vaddq_u32(sum, vdupq_n_u32(1u << 13)), 14));
-    const std::uint32_t bytes = vget_lane_u32(vreinterpret_u32_u8(vmovn_u16(vcombine_u16(v, v))), 0);
-    std::memcpy(out + (c - c0), &bytes, sizeof(bytes));
-  }
-  sample_canvas_row_scalar(image, s, y, std::max(c0, end), c1, out + (std::max(c0, end) - c0));
-}
-#endif
-
-/// sample_canvas_row_avx2() where the CPU has AVX2, else sample_canvas_row_sse2() where the target
-/// has SSE2, sample_canvas_row_neon() on AArch64, else the scalar reference.
-inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1, std::uint8_t* out) {
-#if defined(__SSE2__)
-#if AFFINE_ORB_AVX2
-  if (cpu_has_avx2()) {
-    sample_canvas_row_avx2(image, s, y, c0, c1, out);
-    return;
-  }
-#endif
-  sample_canvas_row_sse2(image, s, y, c0, c1, out);
-#elif AFFINE_ORB_NEON
-  sample_canvas_row_neon(image, s, y, c0, c1, out);
-#else
-  sample_canvas_row_scalar(image, s, y, c0, c1, out);
-#endif
 }
 
 /// The x resampling of one view (see the file comment): for view column x the weights
@@ -505,163 +210,242 @@ inline void with_rounds(int stride, Fn fn) {
 }
 
 #if defined(__SSE2__)
-/// Rounds four columns' partial dot products (s_i holds column i's four 32-bit partial sums) to
-/// bytes, Q kWeightBits fixed point, and stores them at out[0..3].
-inline void store_four_columns(__m128i s0, __m128i s1, __m128i s2, __m128i s3, std::uint8_t* out) {
-  const __m128i t0 = _mm_add_epi32(_mm_unpacklo_epi32(s0, s1), _mm_unpackhi_epi32(s0, s1));
-  const __m128i t1 = _mm_add_epi32(_mm_unpacklo_epi32(s2, s3), _mm_unpackhi_epi32(s2, s3));
-  const __m128i sum = _mm_add_epi32(_mm_unpacklo_epi64(t0, t1), _mm_unpackhi_epi64(t0, t1));
-  const __m128i v = _mm_srai_epi32(_mm_add_epi32(sum, _mm_set1_epi32(1 << (kWeightBits - 1))), kWeightBits);
-  const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), _mm_setzero_si128()));
-  std::memcpy(out, &bytes, sizeof(bytes));
+/// [−d | d] in 16 bits: what flipped_low_halves() of positions (render_lanes.inc) advances by when
+/// the positions advance by d.
+inline std::int32_t flipped_step(std::int32_t d) {
+  return static_cast<std::int32_t>((static_cast<std::uint32_t>(-d) & 0xFFFFu) | (static_cast<std::uint32_t>(d) << 16));
 }
 
-/// resample_row_sse2() for a compile-time number of 16-tap rounds (0: the resampler's own).
-template <int kRounds>
-inline void resample_row_sse2_rounds(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
-                                     std::uint8_t* out) {
-  const int rounds = kRounds > 0 ? kRounds : r.stride / 16;
-  const __m128i zero = _mm_setzero_si128();
-  const int* first = r.first.data();
-  const std::int16_t* weights = r.weights.data();
-  const std::size_t stride = static_cast<std::size_t>(r.stride);
-  auto dot = [&](int x) {
-    const std::uint8_t* p = row + (first[x] - row_first);
-    const __m128i* w = reinterpret_cast<const __m128i*>(weights + static_cast<std::size_t>(x) * stride);
-    __m128i sum = zero;
-    for (int j = 0; j < rounds; ++j, p += 16, w += 2) {
-      const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
-      sum = _mm_add_epi32(sum, _mm_madd_epi16(_mm_unpacklo_epi8(v, zero), _mm_loadu_si128(w)));
-      sum = _mm_add_epi32(sum, _mm_madd_epi16(_mm_unpackhi_epi8(v, zero), _mm_loadu_si128(w + 1)));
+/// The renderer's operations on four 32-bit lanes (SSE2), for the kernels of render_lanes.inc.
+struct RenderLanes128 {
+  using V = __m128i;
+  static constexpr int kLanes = 4;
+  static V zero() { return _mm_setzero_si128(); }
+  static V set1_32(std::int32_t a) { return _mm_set1_epi32(a); }
+  static V set1_16(std::int16_t a) { return _mm_set1_epi16(a); }
+  /// Lane i: start + i·step.
+  static V positions(std::int32_t start, std::int32_t step) {
+    return _mm_setr_epi32(start, start + step, start + 2 * step, start + 3 * step);
+  }
+  static V add32(V a, V b) { return _mm_add_epi32(a, b); }
+  static V add16(V a, V b) { return _mm_add_epi16(a, b); }
+  static V or_(V a, V b) { return _mm_or_si128(a, b); }
+  static V xor_(V a, V b) { return _mm_xor_si128(a, b); }
+  static V madd16(V a, V b) { return _mm_madd_epi16(a, b); }
+  static V avg_u16(V a, V b) { return _mm_avg_epu16(a, b); }
+  static V srli16(V a, int bits) { return _mm_srli_epi16(a, bits); }
+  static V srli32(V a, int bits) { return _mm_srli_epi32(a, bits); }
+  static V srai32(V a, int bits) { return _mm_srai_epi32(a, bits); }
+  static V slli32(V a, int bits) { return _mm_slli_epi32(a, bits); }
+  /// Each 32-bit lane's low 16 bits copied to its high 16 bits.
+  static V dup_low_halves(V a) { return _mm_shufflehi_epi16(_mm_shufflelo_epi16(a, 0xA0), 0xA0); }
+  /// min(max(v, 0), hi) per 32-bit lane (SSE2 has no 32-bit min and max).
+  static V clamp(V v, V hi) {
+    v = _mm_and_si128(v, _mm_cmpgt_epi32(v, _mm_setzero_si128()));
+    const V above = _mm_cmpgt_epi32(v, hi);
+    return _mm_or_si128(_mm_and_si128(above, hi), _mm_andnot_si128(above, v));
+  }
+  /// Bytes 0-7 (widen_lo8) or 8-15 (widen_hi8) zero-extended to 16 bits.
+  static V widen_lo8(V a) { return _mm_unpacklo_epi8(a, _mm_setzero_si128()); }
+  static V widen_hi8(V a) { return _mm_unpackhi_epi8(a, _mm_setzero_si128()); }
+  static void store(std::int32_t* p, V a) { _mm_store_si128(reinterpret_cast<__m128i*>(p), a); }
+  /// Bytes 0-7: the pairs (p, p + 1) at base + o[0..3]; bytes 8-15: those `step` bytes further
+  /// (two chains of 16-bit loads and inserts).
+  static V load_pairs(const std::uint8_t* base, const std::int32_t* o, std::ptrdiff_t step) {
+    auto load16 = [](const std::uint8_t* p) {
+      std::uint16_t v;
+      std::memcpy(&v, p, sizeof(v));
+      return static_cast<int>(v);
+    };
+    __m128i top = _mm_cvtsi32_si128(load16(base + o[0]));
+    __m128i bottom = _mm_cvtsi32_si128(load16(base + o[0] + step));
+    top = _mm_insert_epi16(top, load16(base + o[1]), 1);
+    bottom = _mm_insert_epi16(bottom, load16(base + o[1] + step), 1);
+    top = _mm_insert_epi16(top, load16(base + o[2]), 2);
+    bottom = _mm_insert_epi16(bottom, load16(base + o[2] + step), 2);
+    top = _mm_insert_epi16(top, load16(base + o[3]), 3);
+    bottom = _mm_insert_epi16(bottom, load16(base + o[3] + step), 3);
+    return _mm_unpacklo_epi64(top, bottom);
+  }
+  /// The 32-bit lanes saturated to bytes, stored at out[0, 4).
+  static void store_bytes(std::uint8_t* out, V v) {
+    const std::int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(v, v), _mm_setzero_si128()));
+    std::memcpy(out, &bytes, sizeof(bytes));
+  }
+  /// Partial sums (four 32-bit lanes) of the dot product of the 16 bytes at p with the 16 weights at w.
+  static V dot16(const std::uint8_t* p, const std::int16_t* w) {
+    const V v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+    return _mm_add_epi32(_mm_madd_epi16(widen_lo8(v), _mm_loadu_si128(reinterpret_cast<const __m128i*>(w))),
+                         _mm_madd_epi16(widen_hi8(v), _mm_loadu_si128(reinterpret_cast<const __m128i*>(w + 8))));
+  }
+  /// Lane i: the sum of the lanes of s[i] (four vectors of partial sums, transposed and added).
+  static V sum_columns(const V* s) {
+    const V t0 = _mm_add_epi32(_mm_unpacklo_epi32(s[0], s[1]), _mm_unpackhi_epi32(s[0], s[1]));
+    const V t1 = _mm_add_epi32(_mm_unpacklo_epi32(s[2], s[3]), _mm_unpackhi_epi32(s[2], s[3]));
+    return _mm_add_epi32(_mm_unpacklo_epi64(t0, t1), _mm_unpackhi_epi64(t0, t1));
+  }
+  /// Lane i: the dot product of the 8 bytes at windows[i] with the 8 weights at w + 8i.
+  static V dot8_columns(const std::uint8_t* const* windows, const std::int16_t* w) {
+    V s[kLanes];
+    for (int i = 0; i < kLanes; ++i) {
+      s[i] = _mm_madd_epi16(widen_lo8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(windows[i]))),
+                            _mm_loadu_si128(reinterpret_cast<const __m128i*>(w + 8 * i)));
     }
-    return sum;
-  };
-  int x = x0;
-  for (; x + 4 <= x1; x += 4) {
-    // Four partial-sum vectors transposed and added: lane i is the dot product of column x + i.
-    const __m128i s0 = dot(x), s1 = dot(x + 1), s2 = dot(x + 2), s3 = dot(x + 3);
-    store_four_columns(s0, s1, s2, s3, out + x);
+    return sum_columns(s);
   }
-  if (x < x1) resample_row_scalar(r, row, row_first, x, x1, out);
+};
+
+namespace render128 {
+#include "affine_orb/views/detail/render_lanes.inc"
+}  // namespace render128
+
+/// sample_canvas_row_scalar() four pixels at a time, identical bytes (render_lanes.inc).
+inline void sample_canvas_row_sse2(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
+                                   std::uint8_t* out) {
+  render128::sample_canvas_row_simd<RenderLanes128>(image, s, y, c0, c1, out);
 }
 
-/// resample_row_sse2() for a stride of 8: the windows of two columns share one vector.
-inline void resample_row_sse2_8(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
-                                std::uint8_t* out) {
-  const __m128i zero = _mm_setzero_si128();
-  const int* first = r.first.data();
-  const std::int16_t* weights = r.weights.data();
-  auto window = [&](int x) { return _mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + (first[x] - row_first))); };
-  auto weight = [&](int x) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(weights + 8 * x)); };
-  int x = x0;
-  for (; x + 4 <= x1; x += 4) {
-    const __m128i ab = _mm_unpacklo_epi64(window(x), window(x + 1));
-    const __m128i cd = _mm_unpacklo_epi64(window(x + 2), window(x + 3));
-    const __m128i s0 = _mm_madd_epi16(_mm_unpacklo_epi8(ab, zero), weight(x));
-    const __m128i s1 = _mm_madd_epi16(_mm_unpackhi_epi8(ab, zero), weight(x + 1));
-    const __m128i s2 = _mm_madd_epi16(_mm_unpacklo_epi8(cd, zero), weight(x + 2));
-    const __m128i s3 = _mm_madd_epi16(_mm_unpackhi_epi8(cd, zero), weight(x + 3));
-    store_four_columns(s0, s1, s2, s3, out + x);
-  }
-  if (x < x1) resample_row_scalar(r, row, row_first, x, x1, out);
-}
-
-/// resample_row_scalar() with 8 or 16 taps per multiply-add round, identical bytes (the padding
-/// weights are zero, so reading `stride` canvas columns adds nothing).
+/// resample_row_scalar() four columns at a time, identical bytes (render_lanes.inc).
 inline void resample_row_sse2(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                               std::uint8_t* out) {
-  if (r.stride == 8) {
-    resample_row_sse2_8(r, row, row_first, x0, x1, out);
-    return;
-  }
-  with_rounds(r.stride,
-              [&](auto rounds) { resample_row_sse2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out); });
+  render128::resample_row_simd<RenderLanes128>(r, row, row_first, x0, x1, out);
 }
+
 #if AFFINE_ORB_AVX2
 AFFINE_ORB_TARGET_AVX2_BEGIN
-/// Rounds eight columns' dot products (lane i of `sum` holds column i's) to bytes, Q kWeightBits
-/// fixed point, and stores them at out[0..7].
-inline void store_eight_columns_avx2(__m256i sum, std::uint8_t* out) {
-  const __m256i v = _mm256_srai_epi32(_mm256_add_epi32(sum, _mm256_set1_epi32(1 << (kWeightBits - 1))), kWeightBits);
-  const __m256i bytes = _mm256_packus_epi16(_mm256_packs_epi32(v, v), _mm256_setzero_si256());
-  _mm_storel_epi64(reinterpret_cast<__m128i*>(out),
-                   _mm_unpacklo_epi32(_mm256_castsi256_si128(bytes), _mm256_extracti128_si256(bytes, 1)));
-}
-
-/// resample_row_avx2() for a compile-time number of 16-tap rounds (0: the resampler's own): one
-/// 16-lane multiply-add per column and round, eight columns at a time.
-template <int kRounds>
-inline void resample_row_avx2_rounds(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
-                                     std::uint8_t* out) {
-  const int rounds = kRounds > 0 ? kRounds : r.stride / 16;
-  const int* first = r.first.data();
-  const std::int16_t* weights = r.weights.data();
-  const std::size_t stride = static_cast<std::size_t>(r.stride);
-  auto dot = [&](int x) {
-    const std::uint8_t* p = row + (first[x] - row_first);
-    const std::int16_t* w = weights + static_cast<std::size_t>(x) * stride;
-    __m256i sum = _mm256_setzero_si256();
-    for (int j = 0; j < rounds; ++j, p += 16, w += 16) {
-      const __m256i v = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));
-      sum = _mm256_add_epi32(sum, _mm256_madd_epi16(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w))));
-    }
-    return sum;
-  };
-  int x = x0;
-  for (; x + 8 <= x1; x += 8) {
-    // Horizontal adds: lane i of each half holds the half-sums of columns x + i and x + 4 + i.
-    const __m256i a =
-        _mm256_hadd_epi32(_mm256_hadd_epi32(dot(x), dot(x + 1)), _mm256_hadd_epi32(dot(x + 2), dot(x + 3)));
-    const __m256i b =
-        _mm256_hadd_epi32(_mm256_hadd_epi32(dot(x + 4), dot(x + 5)), _mm256_hadd_epi32(dot(x + 6), dot(x + 7)));
-    store_eight_columns_avx2(
-        _mm256_add_epi32(_mm256_permute2x128_si256(a, b, 0x20), _mm256_permute2x128_si256(a, b, 0x31)), out + x);
+/// RenderLanes128's operations on eight 32-bit lanes (AVX2): each 128-bit half as there, except
+/// dot16() (16 taps in one multiply-add) and dot8_columns() (two columns' windows in one vector).
+struct RenderLanes256 {
+  using V = __m256i;
+  static constexpr int kLanes = 8;
+  static V zero() { return _mm256_setzero_si256(); }
+  static V set1_32(std::int32_t a) { return _mm256_set1_epi32(a); }
+  static V set1_16(std::int16_t a) { return _mm256_set1_epi16(a); }
+  static V positions(std::int32_t start, std::int32_t step) {
+    return _mm256_add_epi32(_mm256_set1_epi32(start),
+                            _mm256_mullo_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(step)));
   }
-  if (x < x1) resample_row_sse2(r, row, row_first, x, x1, out);
-}
-
-/// resample_row_avx2() for a stride of 8: the windows of two neighbouring columns share one vector.
-inline void resample_row_avx2_8(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
-                                std::uint8_t* out) {
-  const int* first = r.first.data();
-  const std::int16_t* weights = r.weights.data();
-  // Columns x and x + 1: the low half holds x's window times its weights, the high half x + 1's.
-  auto dot2 = [&](int x) {
-    const __m128i windows =
-        _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + (first[x] - row_first))),
-                           _mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + (first[x + 1] - row_first))));
-    return _mm256_madd_epi16(_mm256_cvtepu8_epi16(windows),
-                             _mm256_loadu_si256(reinterpret_cast<const __m256i*>(weights + 8 * x)));
-  };
-  int x = x0;
-  for (; x + 8 <= x1; x += 8) {
-    // Lane i of the low half: column x + 2i; of the high half: column x + 2i + 1.
-    const __m256i sum =
-        _mm256_hadd_epi32(_mm256_hadd_epi32(dot2(x), dot2(x + 2)), _mm256_hadd_epi32(dot2(x + 4), dot2(x + 6)));
-    const __m256i v = _mm256_srai_epi32(_mm256_add_epi32(sum, _mm256_set1_epi32(1 << (kWeightBits - 1))), kWeightBits);
-    const __m256i words = _mm256_packs_epi32(v, v);
-    const __m128i ordered = _mm_unpacklo_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + x), _mm_packus_epi16(ordered, ordered));
+  static V add32(V a, V b) { return _mm256_add_epi32(a, b); }
+  static V add16(V a, V b) { return _mm256_add_epi16(a, b); }
+  static V or_(V a, V b) { return _mm256_or_si256(a, b); }
+  static V xor_(V a, V b) { return _mm256_xor_si256(a, b); }
+  static V madd16(V a, V b) { return _mm256_madd_epi16(a, b); }
+  static V avg_u16(V a, V b) { return _mm256_avg_epu16(a, b); }
+  static V srli16(V a, int bits) { return _mm256_srli_epi16(a, bits); }
+  static V srli32(V a, int bits) { return _mm256_srli_epi32(a, bits); }
+  static V srai32(V a, int bits) { return _mm256_srai_epi32(a, bits); }
+  static V slli32(V a, int bits) { return _mm256_slli_epi32(a, bits); }
+  static V dup_low_halves(V a) { return _mm256_shufflehi_epi16(_mm256_shufflelo_epi16(a, 0xA0), 0xA0); }
+  static V clamp(V v, V hi) { return _mm256_min_epi32(_mm256_max_epi32(v, _mm256_setzero_si256()), hi); }
+  static V widen_lo8(V a) { return _mm256_unpacklo_epi8(a, _mm256_setzero_si256()); }
+  static V widen_hi8(V a) { return _mm256_unpackhi_epi8(a, _mm256_setzero_si256()); }
+  static void store(std::int32_t* p, V a) { _mm256_store_si256(reinterpret_cast<__m256i*>(p), a); }
+  /// RenderLanes128::load_pairs() of o[0..3] in the low half, of o[4..7] in the high half. (Reading
+  /// the pairs with _mm256_i32gather_epi32 instead measured slower on an AMD EPYC.)
+  static V load_pairs(const std::uint8_t* base, const std::int32_t* o, std::ptrdiff_t step) {
+    return _mm256_inserti128_si256(_mm256_castsi128_si256(RenderLanes128::load_pairs(base, o, step)),
+                                   RenderLanes128::load_pairs(base, o + 4, step), 1);
   }
-  if (x < x1) resample_row_sse2(r, row, row_first, x, x1, out);
+  static void store_bytes(std::uint8_t* out, V v) {
+    const V bytes = _mm256_packus_epi16(_mm256_packs_epi32(v, v), _mm256_setzero_si256());
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(out),
+                     _mm_unpacklo_epi32(_mm256_castsi256_si128(bytes), _mm256_extracti128_si256(bytes, 1)));
+  }
+  static V dot16(const std::uint8_t* p, const std::int16_t* w) {
+    return _mm256_madd_epi16(_mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))),
+                             _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w)));
+  }
+  /// Horizontal adds: lane i of each half of a and b holds the half-sums of columns i and 4 + i.
+  static V sum_columns(const V* s) {
+    const V a = _mm256_hadd_epi32(_mm256_hadd_epi32(s[0], s[1]), _mm256_hadd_epi32(s[2], s[3]));
+    const V b = _mm256_hadd_epi32(_mm256_hadd_epi32(s[4], s[5]), _mm256_hadd_epi32(s[6], s[7]));
+    return _mm256_add_epi32(_mm256_permute2x128_si256(a, b, 0x20), _mm256_permute2x128_si256(a, b, 0x31));
+  }
+  /// Columns 2j and 2j + 1 share one multiply-add (the low half holds 2j's window times its
+  /// weights, the high half 2j + 1's); the adds leave column 2i in lane i, 2i + 1 in lane 4 + i.
+  static V dot8_columns(const std::uint8_t* const* windows, const std::int16_t* w) {
+    auto dot2 = [&](int i) {
+      const __m128i pair = _mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(windows[i])),
+                                              _mm_loadl_epi64(reinterpret_cast<const __m128i*>(windows[i + 1])));
+      return _mm256_madd_epi16(_mm256_cvtepu8_epi16(pair),
+                               _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w + 8 * i)));
+    };
+    const V sum = _mm256_hadd_epi32(_mm256_hadd_epi32(dot2(0), dot2(2)), _mm256_hadd_epi32(dot2(4), dot2(6)));
+    return _mm256_permutevar8x32_epi32(sum, _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7));
+  }
+};
+
+namespace render256 {
+#include "affine_orb/views/detail/render_lanes.inc"
+}  // namespace render256
+
+/// sample_canvas_row_scalar() eight pixels at a time, identical bytes (render_lanes.inc).
+inline void sample_canvas_row_avx2(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
+                                   std::uint8_t* out) {
+  render256::sample_canvas_row_simd<RenderLanes256>(image, s, y, c0, c1, out);
 }
 
-/// resample_row_scalar() with 16 taps per multiply-add (two columns' 8 for a stride of 8), eight
-/// columns at a time, identical bytes; the last columns through resample_row_sse2().
+/// resample_row_scalar() eight columns at a time, identical bytes (render_lanes.inc).
 inline void resample_row_avx2(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
                               std::uint8_t* out) {
-  if (r.stride == 8) {
-    resample_row_avx2_8(r, row, row_first, x0, x1, out);
-    return;
-  }
-  with_rounds(r.stride,
-              [&](auto rounds) { resample_row_avx2_rounds<decltype(rounds)::value>(r, row, row_first, x0, x1, out); });
+  render256::resample_row_simd<RenderLanes256>(r, row, row_first, x0, x1, out);
 }
 AFFINE_ORB_TARGET_AVX2_END
 #endif
 #endif
 
 #if AFFINE_ORB_NEON
+/// sample_canvas_row_scalar() four pixels at a time on NEON, identical bytes: the file comment's
+/// integers in 32-bit lanes (weights and sums below 2^23), the positions clamped as there.
+inline void sample_canvas_row_neon(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1,
+                                   std::uint8_t* out) {
+  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
+  const std::uint8_t* base = image.ptr<std::uint8_t>(0);
+  const std::int32_t x_row = s.x_row(y);
+  const std::int32_t y_row = s.y_row(y);
+  const int end = c0 + std::max(0, c1 - c0) / 4 * 4;
+  const int32x4_t lane = {0, 1, 2, 3};
+  int32x4_t xs = vmlaq_n_s32(vdupq_n_s32(x_row + c0 * s.x_step), lane, s.x_step);
+  int32x4_t ys = vmlaq_n_s32(vdupq_n_s32(y_row + c0 * s.y_step), lane, s.y_step);
+  const int32x4_t zero = vdupq_n_s32(0);
+  const int32x4_t x_max = vdupq_n_s32(s.x_max);
+  const int32x4_t y_max = vdupq_n_s32(s.y_max);
+  const uint32x4_t low16 = vdupq_n_u32(0xFFFF);
+  const uint32x4_t half = vdupq_n_u32(1u << (15 - kFractionBits));
+  const uint32x4_t one = vdupq_n_u32(1u << kFractionBits);
+  auto fraction = [&](int32x4_t v) {
+    return vshrq_n_u32(vaddq_u32(vandq_u32(vreinterpretq_u32_s32(v), low16), half), 16 - kFractionBits);
+  };
+  for (int c = c0; c < end; c += 4) {
+    const int32x4_t x = vminq_s32(vmaxq_s32(xs, zero), x_max);
+    const int32x4_t yv = vminq_s32(vmaxq_s32(ys, zero), y_max);
+    xs = vaddq_s32(xs, vdupq_n_s32(4 * s.x_step));
+    ys = vaddq_s32(ys, vdupq_n_s32(4 * s.y_step));
+    const uint32x4_t fx = fraction(x);
+    const uint32x4_t fy = fraction(yv);
+    const uint32x4_t gx = vsubq_u32(one, fx);
+    const uint32x4_t gy = vsubq_u32(one, fy);
+    std::int32_t offset[4];
+    vst1q_s32(offset, vmlaq_n_s32(vshrq_n_s32(x, 16), vshrq_n_s32(yv, 16), static_cast<std::int32_t>(step)));
+    std::uint32_t p00[4], p01[4], p10[4], p11[4];
+    for (int i = 0; i < 4; ++i) {
+      const std::uint8_t* p = base + offset[i];
+      p00[i] = p[0];
+      p01[i] = p[1];
+      p10[i] = p[step];
+      p11[i] = p[step + 1];
+    }
+    uint32x4_t sum = vmulq_u32(vld1q_u32(p00), vmulq_u32(gx, gy));
+    sum = vmlaq_u32(sum, vld1q_u32(p01), vmulq_u32(fx, gy));
+    sum = vmlaq_u32(sum, vld1q_u32(p10), vmulq_u32(gx, fy));
+    sum = vmlaq_u32(sum, vld1q_u32(p11), vmulq_u32(fx, fy));
+    const uint16x4_t v = vmovn_u32(vshrq_n_u32(vaddq_u32(sum, vdupq_n_u32(1u << 13)), 14));
+    const std::uint32_t bytes = vget_lane_u32(vreinterpret_u32_u8(vmovn_u16(vcombine_u16(v, v))), 0);
+    std::memcpy(out + (c - c0), &bytes, sizeof(bytes));
+  }
+  sample_canvas_row_scalar(image, s, y, std::max(c0, end), c1, out + (std::max(c0, end) - c0));
+}
+
 /// resample_row_scalar() on NEON, identical bytes: each column's dot product over the whole
 /// `stride` (the padding weights are zero) by widening multiply-accumulates, eight taps a step.
 inline void resample_row_neon(const ViewResampler& r, const std::uint8_t* row, int row_first, int x0, int x1,
@@ -680,6 +464,24 @@ inline void resample_row_neon(const ViewResampler& r, const std::uint8_t* row, i
   }
 }
 #endif
+
+/// sample_canvas_row_avx2() where the CPU has AVX2, else sample_canvas_row_sse2() where the target
+/// has SSE2, sample_canvas_row_neon() on AArch64, else the scalar reference.
+inline void sample_canvas_row(const cv::Mat& image, const CanvasSampler& s, int y, int c0, int c1, std::uint8_t* out) {
+#if defined(__SSE2__)
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    sample_canvas_row_avx2(image, s, y, c0, c1, out);
+    return;
+  }
+#endif
+  sample_canvas_row_sse2(image, s, y, c0, c1, out);
+#elif AFFINE_ORB_NEON
+  sample_canvas_row_neon(image, s, y, c0, c1, out);
+#else
+  sample_canvas_row_scalar(image, s, y, c0, c1, out);
+#endif
+}
 
 /// resample_row_avx2() where the CPU has AVX2, else resample_row_sse2() where the target has SSE2,
 /// resample_row_neon() on AArch64, else the scalar reference.

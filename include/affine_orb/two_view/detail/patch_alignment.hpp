@@ -51,17 +51,18 @@ struct PatchAlignment {
   double correlation = 0.0;  ///< normalised cross-correlation of the aligned patches, [-1, 1]
 };
 
-/// Aligns the (2·radius + 1)² patch of image1 centred on `point1` (one sample per pixel) with
-/// image2 sampled through x2 = c + A·u (u the patch offset from point1, pixels of image 1), starting
-/// from c = `start`: translation-only inverse-compositional Lucas–Kanade on mean- and
-/// contrast-normalised patches, until an update is below 0.01 pixels of image 1 or `iterations`
-/// updates. nullopt when a sample would fall outside either image, the patch is too weakly textured in
-/// one direction (the smaller eigenvalue of its structure tensor below `min_texture` grey levels²
-/// per sample) or an update is not finite.
-inline std::optional<PatchAlignment> align_patch(const cv::Mat& image1, const cv::Mat& image2,
-                                                 const Eigen::Vector2d& point1, const Eigen::Vector2d& start,
-                                                 const Eigen::Matrix2d& a, int radius, int iterations,
-                                                 double min_texture, PatchAlignmentWork& work) {
+/// Image 1's patch, as align_patch() aligns it: the patch itself is in the PatchAlignmentWork.
+struct PatchTemplate {
+  Eigen::Matrix2d inverse_hessian;  ///< inverse of the structure tensor Σ ∇T ∇Tᵀ of the patch
+  double norm = 0.0;                ///< norm of the mean-free patch
+};
+
+/// Samples the (2·radius + 1)² patch of image1 centred on `point1` into work.templ (mean-free) and
+/// its central-difference gradients into work.gx and work.gy. nullopt when a sample (or a gradient's
+/// neighbour) would fall outside image1, or when the patch is too weakly textured (see
+/// align_patch()) or flat.
+inline std::optional<PatchTemplate> patch_template(const cv::Mat& image1, const Eigen::Vector2d& point1, int radius,
+                                                   double min_texture, PatchAlignmentWork& work) {
   const int side = 2 * radius + 1;
   const int bside = side + 2;
   const std::size_t n = static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
@@ -89,7 +90,8 @@ inline std::optional<PatchAlignment> align_patch(const cv::Mat& image1, const cv
       work.templ[k] = work.bordered[b] - mean;
       // Central differences, per pixel of image 1.
       work.gx[k] = 0.5 * (work.bordered[b + 1] - work.bordered[b - 1]);
-      work.gy[k] = 0.5 * (work.bordered[b + static_cast<std::size_t>(bside)] - work.bordered[b - static_cast<std::size_t>(bside)]);
+      work.gy[k] = 0.5 * (work.bordered[b + static_cast<std::size_t>(bside)] -
+                          work.bordered[b - static_cast<std::size_t>(bside)]);
       hessian(0, 0) += work.gx[k] * work.gx[k];
       hessian(0, 1) += work.gx[k] * work.gy[k];
       hessian(1, 1) += work.gy[k] * work.gy[k];
@@ -100,45 +102,79 @@ inline std::optional<PatchAlignment> align_patch(const cv::Mat& image1, const cv
   const double trace = hessian.trace(), det = hessian.determinant();
   const double smaller = 0.5 * (trace - std::sqrt(std::max(0.0, trace * trace - 4.0 * det)));
   if (!(smaller >= min_texture * static_cast<double>(n)) || !(energy > 0.0)) return std::nullopt;
-  const Eigen::Matrix2d inverse = hessian.inverse();
-  const double templ_norm = std::sqrt(energy);
+  return PatchTemplate{hessian.inverse(), std::sqrt(energy)};
+}
 
-  Eigen::Vector2d c = start;
+/// Image 2's patch at one alignment: its samples are in work.warped, mean-free.
+struct WarpedPatch {
+  double norm = 0.0;   ///< norm of the mean-free samples
+  double cross = 0.0;  ///< their dot product with the mean-free template
+};
+
+/// Samples image2 at x2 = c + A·(i − r, j − r) for the patch's grid (r = radius) into work.warped,
+/// mean-free. nullopt when a sample would fall outside image2 or all samples are equal.
+inline std::optional<WarpedPatch> warp_patch(const cv::Mat& image2, const Eigen::Vector2d& c, const Eigen::Matrix2d& a,
+                                             int radius, PatchAlignmentWork& work) {
+  const int side = 2 * radius + 1;
+  const std::size_t n = static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
+  if (!samplable(image2, c, a, radius)) return std::nullopt;
   work.warped.resize(n);
+  double wmean = 0.0;
+  for (int j = 0; j < side; ++j) {
+    // x2 = c + A·(i − r, j − r), stepped along the row.
+    Eigen::Vector2d x2 = c + a * Eigen::Vector2d(-radius, j - radius);
+    for (int i = 0; i < side; ++i, x2 += a.col(0)) {
+      const double v = sample_bilinear(image2, x2.x(), x2.y());
+      work.warped[static_cast<std::size_t>(j * side + i)] = v;
+      wmean += v;
+    }
+  }
+  wmean /= static_cast<double>(n);
+  double wenergy = 0.0, cross = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    work.warped[k] -= wmean;
+    wenergy += work.warped[k] * work.warped[k];
+    cross += work.warped[k] * work.templ[k];
+  }
+  if (!(wenergy > 0.0)) return std::nullopt;
+  return WarpedPatch{std::sqrt(wenergy), cross};
+}
+
+/// The inverse-compositional update (pixels of image 1): image 2's patch scaled by `gain` to the
+/// template's contrast, minus the template, projected on the template's gradients.
+inline Eigen::Vector2d alignment_step(const PatchAlignmentWork& work, double gain,
+                                      const Eigen::Matrix2d& inverse_hessian) {
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  for (std::size_t k = 0; k < work.templ.size(); ++k) {
+    const double e = gain * work.warped[k] - work.templ[k];
+    b.x() += work.gx[k] * e;
+    b.y() += work.gy[k] * e;
+  }
+  return inverse_hessian * b;
+}
+
+/// Aligns the (2·radius + 1)² patch of image1 centred on `point1` (one sample per pixel) with
+/// image2 sampled through x2 = c + A·u (u the patch offset from point1, pixels of image 1), starting
+/// from c = `start`: translation-only inverse-compositional Lucas–Kanade on mean- and
+/// contrast-normalised patches, until an update is below 0.01 pixels of image 1 or `iterations`
+/// updates. nullopt when a sample would fall outside either image, the patch is too weakly textured in
+/// one direction (the smaller eigenvalue of its structure tensor below `min_texture` grey levels²
+/// per sample) or an update is not finite.
+inline std::optional<PatchAlignment> align_patch(const cv::Mat& image1, const cv::Mat& image2,
+                                                 const Eigen::Vector2d& point1, const Eigen::Vector2d& start,
+                                                 const Eigen::Matrix2d& a, int radius, int iterations,
+                                                 double min_texture, PatchAlignmentWork& work) {
+  const std::optional<PatchTemplate> templ = patch_template(image1, point1, radius, min_texture, work);
+  if (!templ) return std::nullopt;
+  Eigen::Vector2d c = start;
   double correlation = 0.0;
   bool converged = false;
   for (int it = 0;; ++it) {
-    if (!samplable(image2, c, a, radius)) return std::nullopt;
-    double wmean = 0.0;
-    for (int j = 0; j < side; ++j) {
-      // x2 = c + A·(i − r, j − r), stepped along the row.
-      Eigen::Vector2d x2 = c + a * Eigen::Vector2d(-radius, j - radius);
-      for (int i = 0; i < side; ++i, x2 += a.col(0)) {
-        const double v = sample_bilinear(image2, x2.x(), x2.y());
-        work.warped[static_cast<std::size_t>(j * side + i)] = v;
-        wmean += v;
-      }
-    }
-    wmean /= static_cast<double>(n);
-    double wenergy = 0.0, cross = 0.0;
-    for (std::size_t k = 0; k < n; ++k) {
-      work.warped[k] -= wmean;
-      wenergy += work.warped[k] * work.warped[k];
-      cross += work.warped[k] * work.templ[k];
-    }
-    if (!(wenergy > 0.0)) return std::nullopt;
-    const double wnorm = std::sqrt(wenergy);
-    correlation = cross / (wnorm * templ_norm);
+    const std::optional<WarpedPatch> warped = warp_patch(image2, c, a, radius, work);
+    if (!warped) return std::nullopt;
+    correlation = warped->cross / (warped->norm * templ->norm);
     if (converged || it == iterations) break;
-    // Image 2's patch scaled to the template's contrast, then the inverse-compositional step.
-    const double gain = templ_norm / wnorm;
-    Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    for (std::size_t k = 0; k < n; ++k) {
-      const double e = gain * work.warped[k] - work.templ[k];
-      b.x() += work.gx[k] * e;
-      b.y() += work.gy[k] * e;
-    }
-    const Eigen::Vector2d delta = inverse * b;
+    const Eigen::Vector2d delta = alignment_step(work, templ->norm / warped->norm, templ->inverse_hessian);
     if (!delta.allFinite()) return std::nullopt;
     c -= a * delta;
     converged = delta.norm() < 0.01;  // one more pass measures the correlation at the final c

@@ -270,32 +270,16 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
   const FundamentalEstimator fundamental_estimator(points1, points2, options.fundamental_scoring(), scales);
   const InverseScaleSquares inverse_scales(scales, points1.size());
 
-  ModelSelectionResult result;
   const std::size_t n = points1.size();
-  result.homography_inliers.assign(n, 0);
-  result.fundamental_inliers.assign(n, 0);
   constexpr int kDrawSize = FundamentalEstimator::kSampleSize;
-  if (n < static_cast<std::size_t>(kDrawSize)) return result;
-
-  std::vector<Eigen::Vector2d> pixels(n);
-  const double sigma_squared = options.sigma * options.sigma;
-  for (const std::vector<cv::Point2f>* points : {&points1, &points2}) {
-    for (std::size_t i = 0; i < n; ++i) pixels[i] = Eigen::Vector2d((*points)[i].x, (*points)[i].y);
-    if (!(detail::spread_across_line(pixels) > sigma_squared)) return result;
-  }
+  if (n < static_cast<std::size_t>(kDrawSize) || detail::within_a_line(points1, points2, options.sigma))
+    return detail::reported_models<ModelSelectionResult>({}, {}, n);
 
   RansacResult<Eigen::Matrix3d> f = ransac(fundamental_estimator, options.ransac, kDrawSize);
-  RansacOptions h_options = options.ransac;
-  if (f.success && options.rule == SelectionRule::kScoreRatio) {
-    // H can only be chosen with S_H > θ/(1 − θ) · S_F; each correspondence adds at most 2T to S_H,
-    // so such an H is supported by at least that score / 2T correspondences. Once an H with that
-    // support would have been sampled (at the RANSAC confidence), searching on cannot change the
-    // decision.
-    const double theta = options.score_ratio.threshold;
-    const double needed_support = theta / (1.0 - theta) * f.score / (2.0 * options.score_constant);
-    h_options.termination_inlier_ratio =
-        std::max(h_options.termination_inlier_ratio, std::min(1.0, needed_support / static_cast<double>(n)));
-  }
+  const RansacOptions h_options =
+      f.success && options.rule == SelectionRule::kScoreRatio
+          ? detail::stop_once_decided(options.ransac, options.score_ratio.threshold, f.score, options.score_constant, n)
+          : options.ransac;
   RansacResult<HomographyModel> h = ransac(homography_estimator, h_options, kDrawSize);
   detail::ParallaxCompletion completion;
   if (h.success && options.rule == SelectionRule::kPlaneParallax) {
@@ -305,64 +289,29 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
       f = detail::keep_better_fundamental(fundamental_estimator, completion.fundamental, options.ransac, std::move(f));
   }
 
-  result.homography_iterations = h.iterations;
-  result.fundamental_iterations = f.iterations;
-  if (h.success) {
-    result.homography_found = true;
-    result.homography = h.model.h;
-    result.homography_score = h.score;
-    result.homography_inliers = std::move(h.inliers);
-    result.homography_inlier_count = h.inlier_count;
-  }
-  if (f.success) {
-    result.fundamental_found = true;
-    result.fundamental = f.model;
-    result.fundamental_score = f.score;
-    result.fundamental_inliers = std::move(f.inliers);
-    result.fundamental_inlier_count = f.inlier_count;
-  }
+  ModelSelectionResult result = detail::reported_models<ModelSelectionResult>(std::move(h), std::move(f), n);
   if (result.homography_found && options.rule == SelectionRule::kGric) {
     result.homography_gric =
-        detail::gric(detail::homography_gric_residuals(result.homography, points1, points2, inverse_scales),
-                     options.gric.sigma, 2, 8);
+        detail::homography_gric(result.homography, points1, points2, inverse_scales, options.gric.sigma);
   }
   if (result.fundamental_found && options.rule == SelectionRule::kGric) {
     result.fundamental_gric =
-        detail::gric(detail::fundamental_gric_residuals(result.fundamental, points1, points2, inverse_scales),
-                     options.gric.sigma, 3, 7);
+        detail::fundamental_gric(result.fundamental, points1, points2, inverse_scales, options.gric.sigma);
   }
   if (result.homography_found && options.rule == SelectionRule::kPlaneParallax) {
     result.parallax_inlier_count = completion.inlier_count;
     result.parallax_expected_count =
         detail::parallax_expected_count(result.homography, points1, points2, inverse_scales, result.homography_inliers,
                                         options.fundamental_chi2 * options.sigma * options.sigma);
-    // The two correspondences of the sample that fixed e' agree with it by construction.
-    const int beyond_sample = std::max(0, result.parallax_inlier_count - detail::ParallaxEstimator::kSampleSize);
     result.parallax_significance =
-        (beyond_sample - result.parallax_expected_count) / std::sqrt(std::max(1.0, result.parallax_expected_count));
+        detail::parallax_significance(result.parallax_inlier_count, result.parallax_expected_count);
   }
   const double total = result.homography_score + result.fundamental_score;
   if (!(total > 0.0)) return result;
   result.homography_ratio = result.homography_score / total;
   result.success = true;
-  bool homography = false;
-  switch (options.rule) {
-    case SelectionRule::kScoreRatio:
-      homography = result.homography_ratio > options.score_ratio.threshold;
-      break;
-    case SelectionRule::kGric:
-      homography =
-          result.homography_found && (!result.fundamental_found || result.homography_gric < result.fundamental_gric);
-      break;
-    case SelectionRule::kInlierRatio:
-      homography = result.homography_found &&
-                   result.homography_inlier_count > options.inlier_ratio.threshold * result.fundamental_inlier_count;
-      break;
-    case SelectionRule::kPlaneParallax:
-      homography = result.homography_found && result.parallax_significance <= options.plane_parallax.significance;
-      break;
-  }
-  result.model = homography ? GeometricModel::kHomography : GeometricModel::kFundamental;
+  result.model =
+      detail::chooses_homography(result, options) ? GeometricModel::kHomography : GeometricModel::kFundamental;
   return result;
 }
 

@@ -46,6 +46,34 @@ inline double spread_across_line(const std::vector<Eigen::Vector2d>& points) {
   return half_trace - std::sqrt(half_difference * half_difference + xy * xy);
 }
 
+/// True when the points of either image lie within σ (pixels) of one line: the variance across
+/// their best-fitting line is at most σ² (all identical, all collinear). Such data cannot tell the
+/// models apart.
+inline bool within_a_line(const std::vector<cv::Point2f>& points1, const std::vector<cv::Point2f>& points2,
+                          double sigma) {
+  std::vector<Eigen::Vector2d> pixels(points1.size());
+  const double sigma_squared = sigma * sigma;
+  for (const std::vector<cv::Point2f>* points : {&points1, &points2}) {
+    for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = Eigen::Vector2d((*points)[i].x, (*points)[i].y);
+    if (!(spread_across_line(pixels) > sigma_squared)) return true;
+  }
+  return false;
+}
+
+/// `options` for H's search under SelectionRule::kScoreRatio (threshold θ) once F scored `f_score`
+/// on n correspondences: H can only be chosen with S_H > θ/(1 − θ) · S_F; each correspondence adds
+/// at most 2T (T = score_constant) to S_H, so such an H is supported by at least that score / 2T
+/// correspondences. Once an H with that support would have been sampled (at the RANSAC
+/// confidence), searching on cannot change the decision: the termination inlier ratio is raised to
+/// that support's share.
+inline RansacOptions stop_once_decided(RansacOptions options, double theta, double f_score, double score_constant,
+                                       std::size_t n) {
+  const double needed_support = theta / (1.0 - theta) * f_score / (2.0 * score_constant);
+  options.termination_inlier_ratio =
+      std::max(options.termination_inlier_ratio, std::min(1.0, needed_support / static_cast<double>(n)));
+  return options;
+}
+
 /// Torr's GRIC of one model (SelectionRule::kGric) from the squared residuals e² (pixels²).
 inline double gric(const std::vector<double>& squared_residuals, double sigma, int manifold_dimension, int parameters) {
   constexpr double kDataDimension = 4.0;  // r: two 2-D points
@@ -92,6 +120,19 @@ inline std::vector<double> fundamental_gric_residuals(const Eigen::Matrix3d& f, 
     out[i] = norm > 0.0 ? algebraic * algebraic / norm : std::numeric_limits<double>::infinity();
   }
   return out;
+}
+
+/// GRIC of the homography h and of the fundamental matrix f on all correspondences (GRIC's σ in
+/// pixels; see gric() and the residual functions above).
+inline double homography_gric(const Eigen::Matrix3d& h, const std::vector<cv::Point2f>& points1,
+                              const std::vector<cv::Point2f>& points2, const InverseScaleSquares& scales,
+                              double sigma) {
+  return gric(homography_gric_residuals(h, points1, points2, scales), sigma, 2, 8);
+}
+inline double fundamental_gric(const Eigen::Matrix3d& f, const std::vector<cv::Point2f>& points1,
+                               const std::vector<cv::Point2f>& points2, const InverseScaleSquares& scales,
+                               double sigma) {
+  return gric(fundamental_gric_residuals(f, points1, points2, scales), sigma, 3, 7);
 }
 
 /// RANSAC estimator (ransac.hpp interface) of the epipole e' of image 2 given a homography H, on
@@ -234,6 +275,61 @@ inline double parallax_expected_count(const Eigen::Matrix3d& h, const std::vecto
     sum += std::isfinite(r) && r > t ? kTwoOverPi * std::asin(t / r) : 1.0;
   }
   return sum;
+}
+
+/// SelectionRule::kPlaneParallax's z-score: the homography outliers a plane-and-parallax completion
+/// explains beyond the two of the sample that fixed e' (which agree with it by construction), less
+/// the number expected by chance, over √max(1, expected).
+inline double parallax_significance(int inlier_count, double expected_count) {
+  const int beyond_sample = std::max(0, inlier_count - ParallaxEstimator::kSampleSize);
+  return (beyond_sample - expected_count) / std::sqrt(std::max(1.0, expected_count));
+}
+
+/// select_model()'s report of its two searches as its ModelSelectionResult (a template, so that this
+/// file does not include its front): each model found with its score, inliers and their count, and
+/// both iteration counts; a model not found keeps the result's defaults and n inlier flags of 0.
+template <class Result>
+Result reported_models(RansacResult<HomographyModel> h, RansacResult<Eigen::Matrix3d> f, std::size_t n) {
+  Result result;
+  result.homography_inliers.assign(n, 0);
+  result.fundamental_inliers.assign(n, 0);
+  result.homography_iterations = h.iterations;
+  result.fundamental_iterations = f.iterations;
+  if (h.success) {
+    result.homography_found = true;
+    result.homography = h.model.h;
+    result.homography_score = h.score;
+    result.homography_inliers = std::move(h.inliers);
+    result.homography_inlier_count = h.inlier_count;
+  }
+  if (f.success) {
+    result.fundamental_found = true;
+    result.fundamental = f.model;
+    result.fundamental_score = f.score;
+    result.fundamental_inliers = std::move(f.inliers);
+    result.fundamental_inlier_count = f.inlier_count;
+  }
+  return result;
+}
+
+/// Whether options.rule chooses the homography, from the models' statistics in `result`:
+/// select_model()'s last step, on its ModelSelectionResult and ModelSelectionOptions (whose fields
+/// this reads; a template, so that this file does not include its front).
+template <class Result, class Options>
+bool chooses_homography(const Result& result, const Options& options) {
+  using Rule = decltype(options.rule);
+  switch (options.rule) {
+    case Rule::kScoreRatio:
+      return result.homography_ratio > options.score_ratio.threshold;
+    case Rule::kGric:
+      return result.homography_found && (!result.fundamental_found || result.homography_gric < result.fundamental_gric);
+    case Rule::kInlierRatio:
+      return result.homography_found &&
+             result.homography_inlier_count > options.inlier_ratio.threshold * result.fundamental_inlier_count;
+    case Rule::kPlaneParallax:
+      return result.homography_found && result.parallax_significance <= options.plane_parallax.significance;
+  }
+  return false;
 }
 
 }  // namespace detail

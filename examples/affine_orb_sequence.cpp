@@ -11,6 +11,7 @@
 // experiment. --plot runs K = 1…5 for plain features (max tilt 1) and for affine features (the
 // given max tilt), prints the table and draws frame loss rate and keyframes against K.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -354,6 +355,204 @@ void print_summary_text(const Summary& s, bool rotation) {
   }
 }
 
+/// The command line, checked.
+struct Settings {
+  std::string dir;
+  std::string format;
+  int step = 1;
+  bool step_given = false;
+  int frame_limit = 0;
+  std::string calib;
+  std::string poses;
+  bool json = false;
+  std::string plot;
+  affine_orb::ExtractorOptions extractor;
+  affine_orb::KeyframeTrackerOptions tracker;
+};
+
+Settings parse_settings(ex::Args& args) {
+  Settings s;
+  s.format = args.value("--format", "auto");
+  const std::string step_text = args.value("--step", "");
+  s.step_given = !step_text.empty();
+  s.step = step_text.empty() ? 1 : ex::Args::parse_integer("--step", step_text);
+  s.extractor.views.max_tilt = args.real("--max-tilt", s.extractor.views.max_tilt);
+  s.extractor.features = args.integer("--features", 1000);
+  s.extractor.threads = args.integer("--threads", 2);
+  s.frame_limit = args.integer("--frames", 0);
+  s.calib = args.value("--calib", "");
+  s.poses = args.value("--poses", "");
+  s.tracker.min_inliers = args.integer("--min-inliers", s.tracker.min_inliers);
+  s.tracker.keyframe_inlier_ratio = args.real("--keyframe-ratio", s.tracker.keyframe_inlier_ratio);
+  s.tracker.max_lost_frames = args.integer("--max-lost", s.tracker.max_lost_frames);
+  s.json = args.flag("--json");
+  s.plot = args.value("--plot", "");
+  const std::vector<std::string> positional = args.positional();
+  if (positional.size() != 1) throw std::invalid_argument("expected one sequence directory");
+  if (s.step < 1) throw std::invalid_argument("--step must be >= 1, got " + std::to_string(s.step));
+  if (s.frame_limit < 0) throw std::invalid_argument("--frames must be >= 0");
+  if (!s.plot.empty() && s.step_given) throw std::invalid_argument("--plot runs K = 1..5 itself; drop --step");
+  if (!s.plot.empty() && !(s.extractor.views.max_tilt > 1.0)) {
+    throw std::invalid_argument("--plot compares max tilt 1 with --max-tilt: give a tilt > 1");
+  }
+  s.extractor.check();
+  s.tracker.check();
+  s.dir = positional[0];
+  return s;
+}
+
+/// The sequence (its first --frames frames) and the camera that rotations are recovered with.
+struct Input {
+  ex::Sequence sequence;
+  std::optional<affine_orb::PinholeCamera> camera;
+  bool rotation = false;  // a camera and ground-truth poses: rotations are checked
+  int count = 0;
+};
+
+Input read_input(const Settings& settings) {
+  Input in;
+  if (!settings.poses.empty()) {
+    if (settings.format != "kitti" && settings.format != "auto") {
+      throw std::invalid_argument("--poses is for the KITTI layout");
+    }
+    in.sequence = ex::read_kitti(settings.dir, settings.poses);
+  } else {
+    in.sequence = ex::read_sequence(settings.dir, settings.format);
+  }
+  std::vector<ex::SequenceFrame>& frames = in.sequence.frames;
+  if (settings.frame_limit > 0 && static_cast<std::size_t>(settings.frame_limit) < frames.size()) {
+    frames.resize(static_cast<std::size_t>(settings.frame_limit));
+  }
+  in.camera = settings.calib.empty() ? in.sequence.camera
+                                     : std::optional<affine_orb::PinholeCamera>(ex::read_calibration(settings.calib));
+  const bool has_poses =
+      std::any_of(frames.begin(), frames.end(), [](const ex::SequenceFrame& f) { return f.pose.has_value(); });
+  in.rotation = in.camera.has_value() && has_poses;
+  in.count = static_cast<int>(frames.size());
+  return in;
+}
+
+/// --plot: K = 1..5 with plain features (max tilt 1), then with the affine ones; each frame is
+/// extracted once per tilt.
+std::array<std::vector<Summary>, 2> plot_runs(const Settings& settings, const Input& in) {
+  std::array<std::vector<Summary>, 2> summaries;  // plain, affine
+  for (const double tilt : {1.0, settings.extractor.views.max_tilt}) {
+    affine_orb::ExtractorOptions o = settings.extractor;
+    o.views.max_tilt = tilt;
+    affine_orb::Extractor<affine_orb::Rbrief> extractor(o);
+    const double first = warm_up(extractor, in.sequence);
+    std::vector<Extracted> cache;
+    for (const ex::SequenceFrame& frame : in.sequence.frames) cache.push_back(extract(extractor, frame));
+    for (int k = 1; k <= 5; ++k) {
+      Run run = track(in.sequence, kept_indices(in.count, k), k, tilt, settings.tracker, in.camera,
+                      [&](int i) { return cache[static_cast<std::size_t>(i)]; });
+      run.summary.views = static_cast<int>(extractor.views().size());
+      run.summary.ms_first_extract = first;
+      summaries[tilt == 1.0 ? 0 : 1].push_back(run.summary);
+    }
+  }
+  return summaries;
+}
+
+void print_plot_json(const Settings& settings, const Input& in, const std::array<std::vector<Summary>, 2>& summaries) {
+  std::printf(
+      "{\"sequence\": %s, \"format\": %s, \"frames\": %d, \"features\": %d, \"threads\": %d, "
+      "\"plot\": %s, \"runs\": [",
+      json_string(settings.dir).c_str(), json_string(in.sequence.format).c_str(), in.count, settings.extractor.features,
+      settings.extractor.threads, json_string(settings.plot).c_str());
+  bool first = true;
+  for (const std::vector<Summary>& set : summaries) {
+    for (const Summary& s : set) {
+      std::printf("%s%s", first ? "" : ", ", summary_json(s, in.rotation).c_str());
+      first = false;
+    }
+  }
+  std::printf("]}\n");
+}
+
+void print_plot_table(const Settings& settings, const Input& in, const std::array<std::vector<Summary>, 2>& summaries) {
+  std::printf("%s: %s, %d frames, %d features, %d thread(s)\n", settings.dir.c_str(), in.sequence.format.c_str(),
+              in.count, settings.extractor.features, settings.extractor.threads);
+  std::printf(
+      "| features | K | frames | lost | loss rate | keyframes | rot. err. median / mean (deg) | "
+      "rotations recovered | ms/frame (extract) |\n|---|---|---|---|---|---|---|---|---|\n");
+  for (const std::vector<Summary>& set : summaries) {
+    for (const Summary& s : set) {
+      char tilt[64];
+      std::snprintf(tilt, sizeof(tilt), "affine (tilt %.2f, %d views)", s.max_tilt, s.views);
+      if (s.max_tilt == 1.0) std::snprintf(tilt, sizeof(tilt), "plain");
+      char error[64] = "n/a";
+      if (in.rotation && s.compared > 0) {
+        std::snprintf(error, sizeof(error), "%.3f / %.3f", s.rotation_error_median, s.rotation_error_mean);
+      }
+      std::printf("| %s | %d | %d | %d | %.1f %% | %d | %s | %d / %d | %.1f |\n", tilt, s.step, s.frames, s.lost,
+                  100.0 * s.loss_rate, s.keyframes, error, s.compared, s.truth_pairs, s.ms_extract_mean);
+    }
+  }
+  std::printf("plot: %s\n", settings.plot.c_str());
+}
+
+/// --plot: runs, draws and prints.
+void plot(const Settings& settings, const Input& in) {
+  const std::array<std::vector<Summary>, 2> summaries = plot_runs(settings, in);
+  draw_plot(settings.plot,
+            settings.dir + " (" + std::to_string(in.count) + " frames, " + std::to_string(settings.extractor.features) +
+                " features)",
+            summaries[0], summaries[1]);
+  if (settings.json) {
+    print_plot_json(settings, in, summaries);
+  } else {
+    print_plot_table(settings, in, summaries);
+  }
+}
+
+void print_run_text(const Settings& settings, const Input& in, const Run& run, std::size_t views) {
+  const bool rotation = in.rotation;
+  std::printf("%s: %s, %d frames, step %d -> %zu frames; max tilt %.2f (%zu views), %d features, %d thread(s)%s\n",
+              settings.dir.c_str(), in.sequence.format.c_str(), in.count, settings.step, run.frames.size(),
+              settings.extractor.views.max_tilt, views, settings.extractor.features, settings.extractor.threads,
+              rotation ? "" : (in.camera ? "; no poses: no rotation check" : "; no intrinsics: no rotation check"));
+  std::printf("%6s %10s %5s %6s %5s %-11s %5s %6s %-16s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match", "inl",
+              "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
+  for (const FrameRecord& r : run.frames) {
+    const affine_orb::TrackedFrame& t = r.tracked;
+    std::string state = t.lost ? "LOST" : "tracked";
+    if (t.keyframe) state += t.initialised ? "+KF(init)" : "+KF";
+    const std::string truth = r.truth_angle ? json_number(r.truth_angle, "%.3f") : "-";
+    const std::string error = r.rotation_error ? json_number(r.rotation_error, "%.3f") : "-";
+    std::printf("%6d %10.3f %5d %6d %5d %-11s %5.2f %6.3f %-16s %8d %8s %8s %7.1f %7.1f\n", r.sequence_index,
+                r.timestamp, t.features, r.matches, t.inliers, affine_orb::model_name(t.model), t.homography_ratio,
+                t.inlier_ratio, state.c_str(), t.previous_inliers, truth.c_str(), error.c_str(), r.ms_extract,
+                r.ms_track);
+  }
+  print_summary_text(run.summary, rotation);
+}
+
+/// One run at --step, printed frame by frame.
+void run_once(const Settings& settings, const Input& in) {
+  affine_orb::Extractor<affine_orb::Rbrief> extractor(settings.extractor);
+  const double first = warm_up(extractor, in.sequence);
+  Run run = track(in.sequence, kept_indices(in.count, settings.step), settings.step, settings.extractor.views.max_tilt,
+                  settings.tracker, in.camera,
+                  [&](int i) { return extract(extractor, in.sequence.frames[static_cast<std::size_t>(i)]); });
+  const std::size_t views = extractor.views().size();
+  run.summary.views = static_cast<int>(views);
+  run.summary.ms_first_extract = first;
+  if (!settings.json) {
+    print_run_text(settings, in, run, views);
+    return;
+  }
+  std::printf(
+      "{\"sequence\": %s, \"format\": %s, \"features\": %d, \"threads\": %d, \"views\": %zu, "
+      "\"summary\": %s, \"frames\": [",
+      json_string(settings.dir).c_str(), json_string(in.sequence.format).c_str(), settings.extractor.features,
+      settings.extractor.threads, views, summary_json(run.summary, in.rotation).c_str());
+  for (std::size_t i = 0; i < run.frames.size(); ++i) {
+    std::printf("%s%s", i ? ", " : "", frame_json(run.frames[i]).c_str());
+  }
+  std::printf("]}\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -363,147 +562,13 @@ int main(int argc, char** argv) {
       std::fputs(kUsage, stdout);
       return 0;
     }
-    const std::string format = args.value("--format", "auto");
-    const std::string step_text = args.value("--step", "");
-    const int step = step_text.empty() ? 1 : ex::Args::parse_integer("--step", step_text);
-    affine_orb::ExtractorOptions extractor_options;
-    extractor_options.views.max_tilt = args.real("--max-tilt", extractor_options.views.max_tilt);
-    extractor_options.features = args.integer("--features", 1000);
-    extractor_options.threads = args.integer("--threads", 2);
-    const int frame_limit = args.integer("--frames", 0);
-    const std::string calib = args.value("--calib", "");
-    const std::string poses = args.value("--poses", "");
-    affine_orb::KeyframeTrackerOptions options;
-    options.min_inliers = args.integer("--min-inliers", options.min_inliers);
-    options.keyframe_inlier_ratio = args.real("--keyframe-ratio", options.keyframe_inlier_ratio);
-    options.max_lost_frames = args.integer("--max-lost", options.max_lost_frames);
-    const bool json = args.flag("--json");
-    const std::string plot = args.value("--plot", "");
-    const std::vector<std::string> positional = args.positional();
-    if (positional.size() != 1) throw std::invalid_argument("expected one sequence directory");
-    if (step < 1) throw std::invalid_argument("--step must be >= 1, got " + std::to_string(step));
-    if (frame_limit < 0) throw std::invalid_argument("--frames must be >= 0");
-    if (!plot.empty() && !step_text.empty()) throw std::invalid_argument("--plot runs K = 1..5 itself; drop --step");
-    if (!plot.empty() && !(extractor_options.views.max_tilt > 1.0)) {
-      throw std::invalid_argument("--plot compares max tilt 1 with --max-tilt: give a tilt > 1");
-    }
-    extractor_options.check();
-    options.check();
-
-    const std::string dir = positional[0];
-    ex::Sequence sequence;
-    if (!poses.empty()) {
-      if (format != "kitti" && format != "auto") throw std::invalid_argument("--poses is for the KITTI layout");
-      sequence = ex::read_kitti(dir, poses);
+    const Settings settings = parse_settings(args);
+    const Input in = read_input(settings);
+    if (settings.plot.empty()) {
+      run_once(settings, in);
     } else {
-      sequence = ex::read_sequence(dir, format);
+      plot(settings, in);
     }
-    if (frame_limit > 0 && static_cast<std::size_t>(frame_limit) < sequence.frames.size()) {
-      sequence.frames.resize(static_cast<std::size_t>(frame_limit));
-    }
-    const std::optional<affine_orb::PinholeCamera> camera =
-        calib.empty() ? sequence.camera : std::optional<affine_orb::PinholeCamera>(ex::read_calibration(calib));
-    const bool has_poses = std::any_of(sequence.frames.begin(), sequence.frames.end(),
-                                       [](const ex::SequenceFrame& f) { return f.pose.has_value(); });
-    const bool rotation = camera.has_value() && has_poses;
-    const int count = static_cast<int>(sequence.frames.size());
-
-    if (!plot.empty()) {
-      std::vector<Summary> plain, affine;
-      for (const double tilt : {1.0, extractor_options.views.max_tilt}) {
-        affine_orb::ExtractorOptions o = extractor_options;
-        o.views.max_tilt = tilt;
-        affine_orb::Extractor<affine_orb::Rbrief> extractor(o);
-        const double first = warm_up(extractor, sequence);
-        std::vector<Extracted> cache;
-        for (const ex::SequenceFrame& frame : sequence.frames) cache.push_back(extract(extractor, frame));
-        for (int k = 1; k <= 5; ++k) {
-          Run run = track(sequence, kept_indices(count, k), k, tilt, options, camera,
-                          [&](int i) { return cache[static_cast<std::size_t>(i)]; });
-          run.summary.views = static_cast<int>(extractor.views().size());
-          run.summary.ms_first_extract = first;
-          (tilt == 1.0 ? plain : affine).push_back(run.summary);
-        }
-      }
-      draw_plot(
-          plot,
-          dir + " (" + std::to_string(count) + " frames, " + std::to_string(extractor_options.features) + " features)",
-          plain, affine);
-      if (json) {
-        std::printf(
-            "{\"sequence\": %s, \"format\": %s, \"frames\": %d, \"features\": %d, \"threads\": %d, "
-            "\"plot\": %s, \"runs\": [",
-            json_string(dir).c_str(), json_string(sequence.format).c_str(), count, extractor_options.features,
-            extractor_options.threads, json_string(plot).c_str());
-        bool first = true;
-        for (const std::vector<Summary>* set : {&plain, &affine}) {
-          for (const Summary& s : *set) {
-            std::printf("%s%s", first ? "" : ", ", summary_json(s, rotation).c_str());
-            first = false;
-          }
-        }
-        std::printf("]}\n");
-      } else {
-        std::printf("%s: %s, %d frames, %d features, %d thread(s)\n", dir.c_str(), sequence.format.c_str(), count,
-                    extractor_options.features, extractor_options.threads);
-        std::printf(
-            "| features | K | frames | lost | loss rate | keyframes | rot. err. median / mean (deg) | "
-            "rotations recovered | ms/frame (extract) |\n|---|---|---|---|---|---|---|---|---|\n");
-        for (const std::vector<Summary>* set : {&plain, &affine}) {
-          for (const Summary& s : *set) {
-            char tilt[64];
-            std::snprintf(tilt, sizeof(tilt), "affine (tilt %.2f, %d views)", s.max_tilt, s.views);
-            if (s.max_tilt == 1.0) std::snprintf(tilt, sizeof(tilt), "plain");
-            char error[64] = "n/a";
-            if (rotation && s.compared > 0) {
-              std::snprintf(error, sizeof(error), "%.3f / %.3f", s.rotation_error_median, s.rotation_error_mean);
-            }
-            std::printf("| %s | %d | %d | %d | %.1f %% | %d | %s | %d / %d | %.1f |\n", tilt, s.step, s.frames, s.lost,
-                        100.0 * s.loss_rate, s.keyframes, error, s.compared, s.truth_pairs, s.ms_extract_mean);
-          }
-        }
-        std::printf("plot: %s\n", plot.c_str());
-      }
-      return 0;
-    }
-
-    affine_orb::Extractor<affine_orb::Rbrief> extractor(extractor_options);
-    const double first = warm_up(extractor, sequence);
-    Run run = track(sequence, kept_indices(count, step), step, extractor_options.views.max_tilt, options, camera,
-                    [&](int i) { return extract(extractor, sequence.frames[static_cast<std::size_t>(i)]); });
-    const std::size_t views = extractor.views().size();
-    run.summary.views = static_cast<int>(views);
-    run.summary.ms_first_extract = first;
-    if (json) {
-      std::printf(
-          "{\"sequence\": %s, \"format\": %s, \"features\": %d, \"threads\": %d, \"views\": %zu, "
-          "\"summary\": %s, \"frames\": [",
-          json_string(dir).c_str(), json_string(sequence.format).c_str(), extractor_options.features,
-          extractor_options.threads, views, summary_json(run.summary, rotation).c_str());
-      for (std::size_t i = 0; i < run.frames.size(); ++i) {
-        std::printf("%s%s", i ? ", " : "", frame_json(run.frames[i]).c_str());
-      }
-      std::printf("]}\n");
-      return 0;
-    }
-    std::printf("%s: %s, %d frames, step %d -> %zu frames; max tilt %.2f (%zu views), %d features, %d thread(s)%s\n",
-                dir.c_str(), sequence.format.c_str(), count, step, run.frames.size(), extractor_options.views.max_tilt,
-                views, extractor_options.features, extractor_options.threads,
-                rotation ? "" : (camera ? "; no poses: no rotation check" : "; no intrinsics: no rotation check"));
-    std::printf("%6s %10s %5s %6s %5s %-11s %5s %6s %-16s %8s %8s %8s %7s %7s\n", "frame", "time", "feat", "match",
-                "inl", "model", "R_H", "ratio", "state", "prev_inl", "rot_gt", "rot_err", "ms_ext", "ms_trk");
-    for (const FrameRecord& r : run.frames) {
-      const affine_orb::TrackedFrame& t = r.tracked;
-      std::string state = t.lost ? "LOST" : "tracked";
-      if (t.keyframe) state += t.initialised ? "+KF(init)" : "+KF";
-      const std::string truth = r.truth_angle ? json_number(r.truth_angle, "%.3f") : "-";
-      const std::string error = r.rotation_error ? json_number(r.rotation_error, "%.3f") : "-";
-      std::printf("%6d %10.3f %5d %6d %5d %-11s %5.2f %6.3f %-16s %8d %8s %8s %7.1f %7.1f\n", r.sequence_index,
-                  r.timestamp, t.features, r.matches, t.inliers, affine_orb::model_name(t.model), t.homography_ratio,
-                  t.inlier_ratio, state.c_str(), t.previous_inliers, truth.c_str(), error.c_str(), r.ms_extract,
-                  r.ms_track);
-    }
-    print_summary_text(run.summary, rotation);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "affine_orb_sequence: %s\n%s", e.what(), kUsage);

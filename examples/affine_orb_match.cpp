@@ -18,6 +18,7 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -129,119 +130,286 @@ affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
   return options;
 }
 
+/// The two images' features and their matches, with the Outcome fields the matching fills.
+template <class Descriptor>
+struct Matched {
+  affine_orb::Features<Descriptor::kBits> features1, features2;
+  std::vector<affine_orb::Match> matches;
+  Outcome outcome;
+};
+
+/// Every view at once (Extractor::extract), matched once, then select_model().
+template <class Descriptor>
+Matched<Descriptor> match_one_shot(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan) {
+  using affine_orb::examples::ms_since;
+  Matched<Descriptor> m;
+  Outcome& o = m.outcome;
+  affine_orb::Extractor<Descriptor> extractor(plan.extractor);
+  auto start = std::chrono::steady_clock::now();
+  extractor.extract(image1);
+  o.ms_first_extract = ms_since(start);
+  start = std::chrono::steady_clock::now();
+  m.features1 = extractor.extract(image1);
+  o.ms_extract1 = ms_since(start);
+  start = std::chrono::steady_clock::now();
+  m.features2 = extractor.extract(image2);
+  o.ms_extract2 = ms_since(start);
+  o.views = extractor.views().size();
+  start = std::chrono::steady_clock::now();
+  m.matches = affine_orb::match_features(m.features1, m.features2);
+  o.ms_match = ms_since(start);
+  const affine_orb::MatchedPoints pairs =
+      affine_orb::matched_points(m.features1.keypoints, m.features2.keypoints, m.matches);
+  start = std::chrono::steady_clock::now();
+  if (pairs.points1.size() >= 8) o.selection = affine_orb::select_model(pairs.points1, pairs.points2);
+  o.ms_model = ms_since(start);
+  return m;
+}
+
+/// Views on demand (TwoViewMatcher); the first call sizes the matcher, the second is reported.
+template <class Descriptor>
+Matched<Descriptor> match_on_demand(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan) {
+  Matched<Descriptor> m;
+  Outcome& o = m.outcome;
+  affine_orb::TwoViewMatcher<Descriptor> matcher(two_view_options(plan));
+  const auto start = std::chrono::steady_clock::now();
+  matcher.match(image1, image2);
+  o.ms_first_extract = affine_orb::examples::ms_since(start);
+  auto r = matcher.match(image1, image2);
+  m.features1 = std::move(r.features1);
+  m.features2 = std::move(r.features2);
+  m.matches = std::move(r.matches);
+  o.selection = std::move(r.model);
+  o.stage = r.stage;
+  o.verified = r.verified;
+  o.stage_tilt = r.stages.back().max_tilt;
+  o.stages = static_cast<int>(matcher.options().stages.size());
+  for (const affine_orb::TwoViewStageReport& s : r.stages) {
+    o.ms_extract1 += s.extract_ms;
+    o.ms_match += s.match_ms;
+    o.ms_model += s.verify_ms;
+  }
+  std::set<int> views(m.features1.views.begin(), m.features1.views.end());
+  views.insert(m.features2.views.begin(), m.features2.views.end());
+  o.views = views.size();
+  return m;
+}
+
+/// Per match, whether the ground truth maps its image-1 point within 3 px of its image-2 point; the
+/// count of those and of the distinct 2x2-pixel cells of image 1 they fall in.
+struct Correctness {
+  std::vector<char> correct;
+  std::size_t count = 0, distinct = 0;
+};
+
+Correctness check_matches(const cv::Matx33d& truth, const affine_orb::MatchedPoints& pairs) {
+  Correctness c;
+  c.correct.assign(pairs.points1.size(), 0);
+  std::set<std::pair<int, int>> cells;
+  for (std::size_t k = 0; k < pairs.points1.size(); ++k) {
+    const cv::Vec3d q = truth * cv::Vec3d(pairs.points1[k].x, pairs.points1[k].y, 1.0);
+    c.correct[k] = std::hypot(q[0] / q[2] - pairs.points2[k].x, q[1] / q[2] - pairs.points2[k].y) < 3.0;
+    if (c.correct[k])
+      cells.insert(
+          {static_cast<int>(std::floor(pairs.points1[k].x / 2)), static_cast<int>(std::floor(pairs.points1[k].y / 2))});
+  }
+  c.count = static_cast<std::size_t>(std::count(c.correct.begin(), c.correct.end(), 1));
+  c.distinct = cells.size();
+  return c;
+}
+
+void save_matches(const std::string& path, const affine_orb::MatchedPoints& pairs) {
+  std::ofstream file(path);
+  if (!file) throw std::runtime_error("cannot write " + path);
+  // 9 significant digits: every float written exactly, so that a judge recomputing correctness
+  // from the file counts what the program counted.
+  file << std::setprecision(std::numeric_limits<float>::max_digits10);
+  for (std::size_t k = 0; k < pairs.points1.size(); ++k)
+    file << pairs.points1[k].x << ' ' << pairs.points1[k].y << ' ' << pairs.points2[k].x << ' ' << pairs.points2[k].y
+         << '\n';
+}
+
+/// The images side by side with match k's line green where good[k], red elsewhere.
+void draw_matches(const std::string& path, const cv::Mat& image1, const cv::Mat& image2,
+                  const affine_orb::MatchedPoints& pairs, const std::vector<bool>& good) {
+  const int height = std::max(image1.rows, image2.rows);
+  cv::Mat canvas(height, image1.cols + image2.cols, CV_8UC3, cv::Scalar::all(0));
+  cv::cvtColor(image1, canvas(cv::Rect(0, 0, image1.cols, image1.rows)), cv::COLOR_GRAY2BGR);
+  cv::cvtColor(image2, canvas(cv::Rect(image1.cols, 0, image2.cols, image2.rows)), cv::COLOR_GRAY2BGR);
+  for (std::size_t k = 0; k < pairs.points1.size(); ++k) {
+    const cv::Scalar colour = good[k] ? cv::Scalar(0, 200, 0) : cv::Scalar(0, 0, 230);
+    const cv::Point2f q = pairs.points2[k] + cv::Point2f(static_cast<float>(image1.cols), 0.0f);
+    cv::line(canvas, pairs.points1[k], q, colour, 1, cv::LINE_AA);
+    cv::circle(canvas, pairs.points1[k], 3, colour, 1, cv::LINE_AA);
+    cv::circle(canvas, q, 3, colour, 1, cv::LINE_AA);
+  }
+  if (!cv::imwrite(path, canvas)) throw std::runtime_error("cannot write " + path);
+}
+
+/// The paper's image correction with the chosen homography; when F was chosen but a homography was
+/// estimated too (a scene with parallax off a dominant plane), the picture is still made from that
+/// homography and the output says so. Returns Outcome::rectified_from.
+std::string write_rectified(const std::string& path, const cv::Mat& image1, const cv::Mat& image2,
+                            const affine_orb::ModelSelectionResult& selection) {
+  if (!selection.homography_found) {
+    std::fprintf(stderr, "affine_orb_match: no homography was estimated, %s not written\n", path.c_str());
+    return "";
+  }
+  const affine_orb::CorrectedImage corrected =
+      affine_orb::warp_to_first_image(image2, selection.homography, image1.size());
+  cv::Mat side;
+  cv::hconcat(image1, corrected.image, side);
+  if (!cv::imwrite(path, side)) throw std::runtime_error("cannot write " + path);
+  return selection.model == affine_orb::GeometricModel::kHomography ? "chosen homography" : "estimated homography";
+}
+
 template <class Descriptor>
 Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, const cv::Matx33d* truth,
-            const std::string& out, const std::string& rectified, const std::string& save_matches) {
-  using affine_orb::examples::ms_since;
-  Outcome o;
-  affine_orb::Features<Descriptor::kBits> f1, f2;
-  std::vector<affine_orb::Match> matches;
-  if (plan.one_shot) {
-    affine_orb::Extractor<Descriptor> extractor(plan.extractor);
-    auto start = std::chrono::steady_clock::now();
-    extractor.extract(image1);
-    o.ms_first_extract = ms_since(start);
-    start = std::chrono::steady_clock::now();
-    f1 = extractor.extract(image1);
-    o.ms_extract1 = ms_since(start);
-    start = std::chrono::steady_clock::now();
-    f2 = extractor.extract(image2);
-    o.ms_extract2 = ms_since(start);
-    o.views = extractor.views().size();
-    start = std::chrono::steady_clock::now();
-    matches = affine_orb::match_features(f1, f2);
-    o.ms_match = ms_since(start);
-    const affine_orb::MatchedPoints pairs = affine_orb::matched_points(f1.keypoints, f2.keypoints, matches);
-    start = std::chrono::steady_clock::now();
-    if (pairs.points1.size() >= 8) o.selection = affine_orb::select_model(pairs.points1, pairs.points2);
-    o.ms_model = ms_since(start);
-  } else {
-    affine_orb::TwoViewMatcher<Descriptor> matcher(two_view_options(plan));
-    auto start = std::chrono::steady_clock::now();
-    matcher.match(image1, image2);
-    o.ms_first_extract = ms_since(start);
-    auto r = matcher.match(image1, image2);
-    f1 = std::move(r.features1);
-    f2 = std::move(r.features2);
-    matches = std::move(r.matches);
-    o.selection = std::move(r.model);
-    o.stage = r.stage;
-    o.verified = r.verified;
-    o.stage_tilt = r.stages.back().max_tilt;
-    o.stages = static_cast<int>(matcher.options().stages.size());
-    for (const affine_orb::TwoViewStageReport& s : r.stages) {
-      o.ms_extract1 += s.extract_ms;
-      o.ms_match += s.match_ms;
-      o.ms_model += s.verify_ms;
-    }
-    std::set<int> views(f1.views.begin(), f1.views.end());
-    views.insert(f2.views.begin(), f2.views.end());
-    o.views = views.size();
-  }
-  o.keypoints1 = f1.size();
-  o.keypoints2 = f2.size();
-  o.matches = matches.size();
-  const affine_orb::MatchedPoints pairs = affine_orb::matched_points(f1.keypoints, f2.keypoints, matches);
+            const std::string& out, const std::string& rectified, const std::string& save_matches_path) {
+  Matched<Descriptor> m = plan.one_shot ? match_one_shot<Descriptor>(image1, image2, plan)
+                                        : match_on_demand<Descriptor>(image1, image2, plan);
+  Outcome& o = m.outcome;
+  o.keypoints1 = m.features1.size();
+  o.keypoints2 = m.features2.size();
+  o.matches = m.matches.size();
+  const affine_orb::MatchedPoints pairs =
+      affine_orb::matched_points(m.features1.keypoints, m.features2.keypoints, m.matches);
   const std::vector<std::uint8_t> inlier_mask = o.selection.chosen_inliers();
   o.inliers = o.selection.chosen_inlier_count();
-
-  std::vector<char> correct(matches.size(), 0);
+  Correctness correctness;
   if (truth) {
     o.ground_truth = true;
-    std::set<std::pair<int, int>> cells;
-    for (std::size_t k = 0; k < matches.size(); ++k) {
-      const cv::Vec3d q = *truth * cv::Vec3d(pairs.points1[k].x, pairs.points1[k].y, 1.0);
-      correct[k] = std::hypot(q[0] / q[2] - pairs.points2[k].x, q[1] / q[2] - pairs.points2[k].y) < 3.0;
-      if (correct[k])
-        cells.insert({static_cast<int>(std::floor(pairs.points1[k].x / 2)),
-                      static_cast<int>(std::floor(pairs.points1[k].y / 2))});
-    }
-    o.correct = static_cast<std::size_t>(std::count(correct.begin(), correct.end(), 1));
-    o.distinct = cells.size();
+    correctness = check_matches(*truth, pairs);
+    o.correct = correctness.count;
+    o.distinct = correctness.distinct;
   }
-
-  if (!save_matches.empty()) {
-    std::ofstream file(save_matches);
-    if (!file) throw std::runtime_error("cannot write " + save_matches);
-    // 9 significant digits: every float written exactly, so that a judge recomputing correctness
-    // from the file counts what the program counted.
-    file << std::setprecision(std::numeric_limits<float>::max_digits10);
-    for (std::size_t k = 0; k < matches.size(); ++k)
-      file << pairs.points1[k].x << ' ' << pairs.points1[k].y << ' ' << pairs.points2[k].x << ' ' << pairs.points2[k].y
-           << '\n';
-  }
+  if (!save_matches_path.empty()) save_matches(save_matches_path, pairs);
   if (!out.empty()) {
-    const int height = std::max(image1.rows, image2.rows);
-    cv::Mat canvas(height, image1.cols + image2.cols, CV_8UC3, cv::Scalar::all(0));
-    cv::cvtColor(image1, canvas(cv::Rect(0, 0, image1.cols, image1.rows)), cv::COLOR_GRAY2BGR);
-    cv::cvtColor(image2, canvas(cv::Rect(image1.cols, 0, image2.cols, image2.rows)), cv::COLOR_GRAY2BGR);
-    for (std::size_t k = 0; k < matches.size(); ++k) {
-      const bool good = truth ? correct[k] != 0 : (k < inlier_mask.size() && inlier_mask[k] != 0);
-      const cv::Scalar colour = good ? cv::Scalar(0, 200, 0) : cv::Scalar(0, 0, 230);
-      const cv::Point2f q = pairs.points2[k] + cv::Point2f(static_cast<float>(image1.cols), 0.0f);
-      cv::line(canvas, pairs.points1[k], q, colour, 1, cv::LINE_AA);
-      cv::circle(canvas, pairs.points1[k], 3, colour, 1, cv::LINE_AA);
-      cv::circle(canvas, q, 3, colour, 1, cv::LINE_AA);
-    }
-    if (!cv::imwrite(out, canvas)) throw std::runtime_error("cannot write " + out);
+    std::vector<bool> good(m.matches.size());
+    for (std::size_t k = 0; k < good.size(); ++k)
+      good[k] = truth ? correctness.correct[k] != 0 : (k < inlier_mask.size() && inlier_mask[k] != 0);
+    draw_matches(out, image1, image2, pairs, good);
   }
-  if (!rectified.empty()) {
-    // The paper's image correction with the chosen homography; when F was chosen but a homography
-    // was estimated too (a scene with parallax off a dominant plane), the picture is still made
-    // from that homography and the output says so.
-    if (o.selection.homography_found) {
-      const affine_orb::CorrectedImage corrected =
-          affine_orb::warp_to_first_image(image2, o.selection.homography, image1.size());
-      cv::Mat side;
-      cv::hconcat(image1, corrected.image, side);
-      if (!cv::imwrite(rectified, side)) throw std::runtime_error("cannot write " + rectified);
-      o.rectified_from =
-          o.selection.model == affine_orb::GeometricModel::kHomography ? "chosen homography" : "estimated homography";
-    } else {
-      std::fprintf(stderr, "affine_orb_match: no homography was estimated, %s not written\n", rectified.c_str());
-    }
-  }
+  if (!rectified.empty()) o.rectified_from = write_rectified(rectified, image1, image2, o.selection);
   return o;
+}
+
+/// The command line.
+struct Settings {
+  Plan plan;
+  std::string descriptor;
+  std::string homography;
+  std::string out;
+  std::string rectified;
+  std::string save_matches;
+  bool json = false;
+  std::vector<std::string> images;
+};
+
+/// The settings, or nullopt after printing the usage for --help.
+std::optional<Settings> parse_settings(affine_orb::examples::Args& args) {
+  Settings s;
+  s.plan.one_shot = args.flag("--one-shot");
+  s.plan.all_stages = args.flag("--all-stages");
+  s.plan.min_inliers = args.integer("--min-inliers", s.plan.min_inliers);
+  affine_orb::ExtractorOptions& options = s.plan.extractor;
+  // Views on demand: the matcher's extractor (2000 image keypoints, the strongest corners). One
+  // shot: 1000 from each image and as many from its views (the additive budget), 2000 in all.
+  options = affine_orb::TwoViewOptions::default_extractor();
+  if (s.plan.one_shot) options.features = 1000;
+  options.threads = 2;
+  if (affine_orb::examples::parse_common(args, options)) {
+    std::fputs(usage().c_str(), stdout);
+    return std::nullopt;
+  }
+  s.descriptor = args.value("--descriptor", "rbrief");
+  s.homography = args.value("--homography", "");
+  s.out = args.value("--out", "");
+  s.rectified = args.value("--rectified", "");
+  s.save_matches = args.value("--save-matches", "");
+  s.json = args.flag("--json");
+  s.images = args.positional();
+  if (s.images.empty()) {
+    s.images = {std::string(kDefaultDir) + "graf1.png", std::string(kDefaultDir) + "graf3.png"};
+    if (s.homography.empty()) s.homography = std::string(kDefaultDir) + "H1to3p.xml";
+    // With no arguments: the pictures a first-time user wants to look at.
+    if (s.out.empty()) s.out = "matches.png";
+    if (s.rectified.empty()) s.rectified = "rectified.png";
+  }
+  if (s.images.size() != 2) throw std::invalid_argument("expected two images (or none for the default pair)");
+  return s;
+}
+
+void print_json(const Settings& s, const Outcome& o) {
+  const affine_orb::ExtractorOptions& options = s.plan.extractor;
+  const double precision = o.matches ? static_cast<double>(o.correct) / static_cast<double>(o.matches) : 0.0;
+  std::printf(
+      "{\"image1\": \"%s\", \"image2\": \"%s\", \"descriptor\": \"%s\", \"max_tilt\": %.4f, \"threads\": %d, "
+      "\"keypoints1\": %zu, \"keypoints2\": %zu, \"views\": %zu, \"matches\": %zu, ",
+      s.images[0].c_str(), s.images[1].c_str(), s.descriptor.c_str(), options.views.max_tilt, options.threads,
+      o.keypoints1, o.keypoints2, o.views, o.matches);
+  if (s.plan.one_shot) {
+    std::printf("\"stage\": null, \"verified\": null, ");
+  } else {
+    std::printf("\"stage\": %d, \"stage_max_tilt\": %.4f, \"verified\": %s, ", o.stage, o.stage_tilt,
+                o.verified ? "true" : "false");
+  }
+  if (o.ground_truth) {
+    std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct, precision);
+  } else {
+    std::printf("\"correct\": null, \"distinct_correct\": null, \"precision\": null, ");
+  }
+  std::printf(
+      "\"model\": \"%s\", \"parallax_significance\": %.3f, \"parallax_significance_threshold\": %.2f, "
+      "\"homography_ratio\": %.4f, \"inliers\": %zu, ",
+      affine_orb::model_name(o.selection.model), o.selection.parallax_significance,
+      affine_orb::ModelSelectionOptions{}.plane_parallax.significance, o.selection.homography_ratio, o.inliers);
+  if (o.rectified_from.empty()) {
+    std::printf("\"rectified\": null, \"rectified_from\": null, ");
+  } else {
+    std::printf("\"rectified\": \"%s\", \"rectified_from\": \"%s\", ", s.rectified.c_str(), o.rectified_from.c_str());
+  }
+  std::printf(
+      "\"ms_first_extract\": %.2f, \"ms_extract1\": %.2f, \"ms_extract2\": %.2f, \"ms_match\": %.2f, "
+      "\"ms_model\": %.2f}\n",
+      o.ms_first_extract, o.ms_extract1, o.ms_extract2, o.ms_match, o.ms_model);
+}
+
+void print_text(const Settings& s, const Outcome& o) {
+  const double precision = o.matches ? static_cast<double>(o.correct) / static_cast<double>(o.matches) : 0.0;
+  const double threshold = affine_orb::ModelSelectionOptions{}.plane_parallax.significance;
+  std::printf("%s <-> %s (%s, %zu views, %d thread(s))\n", s.images[0].c_str(), s.images[1].c_str(),
+              s.descriptor.c_str(), o.views, s.plan.extractor.threads);
+  if (!s.plan.one_shot && o.verified) {
+    std::printf("verified at stage %d of %d (%s)\n", o.stage, o.stages,
+                o.stage == 0 ? "the images' own keypoints"
+                             : ("views up to tilt " + std::to_string(o.stage_tilt).substr(0, 4)).c_str());
+  } else if (!s.plan.one_shot) {
+    std::printf(
+        "not verified after stage %d of %d (views up to tilt %.2f): fewer than %d inliers of the chosen model\n",
+        o.stage, o.stages, o.stage_tilt, s.plan.min_inliers);
+  }
+  std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
+  if (o.ground_truth)
+    std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
+  std::printf("\nmodel %s (parallax off the plane: z = %.1f, H when <= %.1f), %zu inliers\n",
+              affine_orb::model_name(o.selection.model), o.selection.parallax_significance, threshold, o.inliers);
+  if (s.plan.one_shot) {
+    std::printf("time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
+                o.ms_extract1, o.ms_extract2, o.ms_first_extract, o.ms_match, o.ms_model);
+  } else {
+    std::printf(
+        "time: extract %.1f ms (both images, every stage run), match %.1f ms, model %.1f ms (the matcher's "
+        "first call: %.1f ms in all)\n",
+        o.ms_extract1, o.ms_match, o.ms_model, o.ms_first_extract);
+  }
+  if (!s.out.empty()) std::printf("matches drawn to %s\n", s.out.c_str());
+  if (o.rectified_from == "chosen homography") {
+    std::printf("image 2 rectified into image 1's frame: %s\n", s.rectified.c_str());
+  } else if (!o.rectified_from.empty()) {
+    std::printf("image 2 rectified with the estimated homography although F was chosen (z = %.1f > %.1f): %s\n",
+                o.selection.parallax_significance, threshold, s.rectified.c_str());
+  }
 }
 
 }  // namespace
@@ -249,120 +417,26 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
 int main(int argc, char** argv) {
   try {
     affine_orb::examples::Args args(argc, argv);
-    Plan plan;
-    plan.one_shot = args.flag("--one-shot");
-    plan.all_stages = args.flag("--all-stages");
-    plan.min_inliers = args.integer("--min-inliers", plan.min_inliers);
-    affine_orb::ExtractorOptions& options = plan.extractor;
-    // Views on demand: the matcher's extractor (2000 image keypoints, the strongest corners). One
-    // shot: 1000 from each image and as many from its views (the additive budget), 2000 in all.
-    options = affine_orb::TwoViewOptions::default_extractor();
-    if (plan.one_shot) options.features = 1000;
-    options.threads = 2;
-    if (affine_orb::examples::parse_common(args, options)) {
-      std::fputs(usage().c_str(), stdout);
-      return 0;
-    }
-    const std::string descriptor = args.value("--descriptor", "rbrief");
-    std::string homography = args.value("--homography", "");
-    std::string out = args.value("--out", "");
-    std::string rectified = args.value("--rectified", "");
-    const std::string save_matches = args.value("--save-matches", "");
-    const bool json = args.flag("--json");
-    std::vector<std::string> images = args.positional();
-    if (images.empty()) {
-      images = {std::string(kDefaultDir) + "graf1.png", std::string(kDefaultDir) + "graf3.png"};
-      if (homography.empty()) homography = std::string(kDefaultDir) + "H1to3p.xml";
-      // With no arguments: the pictures a first-time user wants to look at.
-      if (out.empty()) out = "matches.png";
-      if (rectified.empty()) rectified = "rectified.png";
-    }
-    if (images.size() != 2) throw std::invalid_argument("expected two images (or none for the default pair)");
-    const cv::Mat image1 = read_gray(images[0]);
-    const cv::Mat image2 = read_gray(images[1]);
+    const std::optional<Settings> settings = parse_settings(args);
+    if (!settings) return 0;
+    const Settings& s = *settings;
+    const cv::Mat image1 = read_gray(s.images[0]);
+    const cv::Mat image2 = read_gray(s.images[1]);
     cv::Matx33d truth;
-    if (!homography.empty()) truth = affine_orb::examples::read_homography(homography);
-    const cv::Matx33d* truth_ptr = homography.empty() ? nullptr : &truth;
-
+    if (!s.homography.empty()) truth = affine_orb::examples::read_homography(s.homography);
+    const cv::Matx33d* truth_ptr = s.homography.empty() ? nullptr : &truth;
     Outcome o;
-    if (descriptor == "rbrief") {
-      o = run<affine_orb::Rbrief>(image1, image2, plan, truth_ptr, out, rectified, save_matches);
-    } else if (descriptor == "brisk") {
-      o = run<affine_orb::Brisk>(image1, image2, plan, truth_ptr, out, rectified, save_matches);
+    if (s.descriptor == "rbrief") {
+      o = run<affine_orb::Rbrief>(image1, image2, s.plan, truth_ptr, s.out, s.rectified, s.save_matches);
+    } else if (s.descriptor == "brisk") {
+      o = run<affine_orb::Brisk>(image1, image2, s.plan, truth_ptr, s.out, s.rectified, s.save_matches);
     } else {
-      throw std::invalid_argument("--descriptor must be rbrief or brisk, got " + descriptor);
+      throw std::invalid_argument("--descriptor must be rbrief or brisk, got " + s.descriptor);
     }
-    const double precision = o.matches ? static_cast<double>(o.correct) / static_cast<double>(o.matches) : 0.0;
-    if (json) {
-      std::printf(
-          "{\"image1\": \"%s\", \"image2\": \"%s\", \"descriptor\": \"%s\", \"max_tilt\": %.4f, \"threads\": %d, "
-          "\"keypoints1\": %zu, \"keypoints2\": %zu, \"views\": %zu, \"matches\": %zu, ",
-          images[0].c_str(), images[1].c_str(), descriptor.c_str(), options.views.max_tilt, options.threads,
-          o.keypoints1, o.keypoints2, o.views, o.matches);
-      if (plan.one_shot) {
-        std::printf("\"stage\": null, \"verified\": null, ");
-      } else {
-        std::printf("\"stage\": %d, \"stage_max_tilt\": %.4f, \"verified\": %s, ", o.stage, o.stage_tilt,
-                    o.verified ? "true" : "false");
-      }
-      if (o.ground_truth) {
-        std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct,
-                    precision);
-      } else {
-        std::printf("\"correct\": null, \"distinct_correct\": null, \"precision\": null, ");
-      }
-      std::printf(
-          "\"model\": \"%s\", \"parallax_significance\": %.3f, \"parallax_significance_threshold\": %.2f, "
-          "\"homography_ratio\": %.4f, \"inliers\": %zu, ",
-          affine_orb::model_name(o.selection.model), o.selection.parallax_significance,
-          affine_orb::ModelSelectionOptions{}.plane_parallax.significance, o.selection.homography_ratio, o.inliers);
-      if (o.rectified_from.empty()) {
-        std::printf("\"rectified\": null, \"rectified_from\": null, ");
-      } else {
-        std::printf("\"rectified\": \"%s\", \"rectified_from\": \"%s\", ", rectified.c_str(), o.rectified_from.c_str());
-      }
-      std::printf(
-          "\"ms_first_extract\": %.2f, \"ms_extract1\": %.2f, \"ms_extract2\": %.2f, \"ms_match\": %.2f, "
-          "\"ms_model\": %.2f}\n",
-          o.ms_first_extract, o.ms_extract1, o.ms_extract2, o.ms_match, o.ms_model);
+    if (s.json) {
+      print_json(s, o);
     } else {
-      std::printf("%s <-> %s (%s, %zu views, %d thread(s))\n", images[0].c_str(), images[1].c_str(), descriptor.c_str(),
-                  o.views, options.threads);
-      if (!plan.one_shot) {
-        if (o.verified) {
-          std::printf("verified at stage %d of %d (%s)\n", o.stage, o.stages,
-                      o.stage == 0 ? "the images' own keypoints"
-                                   : ("views up to tilt " + std::to_string(o.stage_tilt).substr(0, 4)).c_str());
-        } else {
-          std::printf(
-              "not verified after stage %d of %d (views up to tilt %.2f): fewer than %d inliers of the chosen model\n",
-              o.stage, o.stages, o.stage_tilt, plan.min_inliers);
-        }
-      }
-      std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
-      if (o.ground_truth)
-        std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
-      std::printf("\nmodel %s (parallax off the plane: z = %.1f, H when <= %.1f), %zu inliers\n",
-                  affine_orb::model_name(o.selection.model), o.selection.parallax_significance,
-                  affine_orb::ModelSelectionOptions{}.plane_parallax.significance, o.inliers);
-      if (plan.one_shot) {
-        std::printf(
-            "time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
-            o.ms_extract1, o.ms_extract2, o.ms_first_extract, o.ms_match, o.ms_model);
-      } else {
-        std::printf(
-            "time: extract %.1f ms (both images, every stage run), match %.1f ms, model %.1f ms (the matcher's "
-            "first call: %.1f ms in all)\n",
-            o.ms_extract1, o.ms_match, o.ms_model, o.ms_first_extract);
-      }
-      if (!out.empty()) std::printf("matches drawn to %s\n", out.c_str());
-      if (o.rectified_from == "chosen homography") {
-        std::printf("image 2 rectified into image 1's frame: %s\n", rectified.c_str());
-      } else if (!o.rectified_from.empty()) {
-        std::printf("image 2 rectified with the estimated homography although F was chosen (z = %.1f > %.1f): %s\n",
-                    o.selection.parallax_significance, affine_orb::ModelSelectionOptions{}.plane_parallax.significance,
-                    rectified.c_str());
-      }
+      print_text(s, o);
     }
     return 0;
   } catch (const std::exception& e) {

@@ -50,7 +50,7 @@ inline const char* model_name(GeometricModel model) {
 }
 
 /// How select_model() chooses between the two estimates. bench/bench_model_selection measures
-/// every rule on its labelled real and synthetic pairs (README, "Choosing H or F").
+/// every rule on its labelled real and synthetic pairs (docs/model_selection.md).
 enum class SelectionRule {
   /// Paper eq. 22 (ORB-SLAM's initializer): H when R_H = S_H / (S_H + S_F) >
   /// ScoreRatioOptions::threshold.
@@ -84,7 +84,7 @@ enum class SelectionRule {
   /// correspondences (DEGENSAC's estimate of F: 8-point samples from a scene dominated by a plane
   /// rarely hold enough points off it).
   /// The default: the only rule right on every class of bench/bench_model_selection's labelled
-  /// pairs (README, "Choosing H or F").
+  /// pairs (docs/model_selection.md).
   kPlaneParallax,
 };
 
@@ -129,9 +129,9 @@ struct InlierRatioOptions {
 /// SelectionRule::kPlaneParallax's parameter.
 struct PlaneParallaxOptions {
   /// H when the parallax support exceeds its chance expectation by at most this many standard
-  /// deviations (a z-score, unitless; see SelectionRule::kPlaneParallax). 3.8 is measured by
-  /// bench/bench_model_selection: its planar and pure-rotation pairs reach 3.65, its real 3-D pairs
-  /// (KITTI 00 and 06) start at 3.9 (README, "Choosing H or F").
+  /// deviations (a z-score, unitless; see SelectionRule::kPlaneParallax). The default 3.8 lies
+  /// between the scores of bench/bench_model_selection's planar and pure-rotation pairs and those
+  /// of its real 3-D pairs (KITTI 00 and 06; the margin: docs/model_selection.md).
   double significance = 3.8;
   /// Throws std::invalid_argument unless significance is finite.
   void check() const {

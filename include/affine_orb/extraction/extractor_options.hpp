@@ -96,7 +96,7 @@ struct ExtractorOptions {
   /// The simulated views; max_tilt = 1 gives a plain ORB-style extractor (one view, the image).
   AffineViewOptions views;
   /// How `features` relates to the views' keypoints; kAdditive is the choice measured in
-  /// bench/eval_viewpoint (README, "Affine views that only add").
+  /// bench/eval_viewpoint (docs/extraction.md, "Affine views that only add").
   ViewBudget view_budget = ViewBudget::kAdditive;
   /// ViewBudget::kAdditive: keypoints the tilted views add, as a fraction of `features` (the output
   /// has features + round(view_features · features) keypoints when there are enough corners).
@@ -140,12 +140,11 @@ struct ExtractorOptions {
   /// the option off but for KeyPoint::pt. The mask applies to the integer position, so a keypoint
   /// may lie up to half a level pixel beyond the mask's edge; descriptors computed again from the
   /// returned keypoints (cv::Feature2D::compute of opencv_feature2d.hpp) sample the rounded
-  /// sub-pixel positions and may differ from the extraction's. Measured by bench/eval_two_view
-  /// --placement on 68 pairs with ground truth: the median residual of correct matches falls from
-  /// 1.11 to 0.84 px, plain matching of 2000 keypoints solves 36 pairs instead of 32 and the
-  /// one-shot 18 views 39 instead of 36, but the two-view matcher with views on demand solves 38
-  /// instead of 39; the SLAM uses are not measured. Off by default for those two reasons (the
-  /// matcher, and the mask and compute() above); the ORB-SLAM adapters keep it off.
+  /// sub-pixel positions and may differ from the extraction's. It lowers the residual of correct
+  /// matches and lets plain matching solve more pairs, while the two-view matcher solves as many
+  /// (other ones); the SLAM uses are not measured (bench/eval_two_view --placement,
+  /// docs/two_view.md, "Reading"). Off by default for those reasons and the mask and compute()
+  /// above; the ORB-SLAM adapters keep it off.
   bool subpixel = false;
   /// With several views: a view's pixels exist only while it is processed (one view's buffers per
   /// thread), so each (view, level) whose final share depends on the other views (every

@@ -53,16 +53,16 @@ struct GuidedRefinementOptions {
   /// the guided matches by local optimisation (evaluate_model() from the current homography, then
   /// optimise_locally()) under `sigma`. The result's matches, inliers and homography are the last
   /// round's. A round whose matches give no homography of 4 or more inliers ends the refinement
-  /// with the previous round's. In [0, 10]. 2 (a wide gate, then a tight one) solves 39 of the 68
-  /// pairs of bench/eval_two_view against 36 without, no subset fewer, with 1.15x plain 2000's time
-  /// on the pairs that solves; its matches hold about 60 % more distinct correct ones.
+  /// with the previous round's. In [0, 10]. Default 2 (a wide gate, then a tight one): it solves
+  /// more pairs of bench/eval_two_view than no refinement, no subset fewer, with more distinct
+  /// correct matches, for little time (docs/two_view.md, "Reading").
   int iterations = 2;
   /// The gated matching of each round; its gate_radius is the first round's.
   GuidedMatchOptions matching;
   /// The gate of the rounds after the first, pixels of image 2: once a round has refined the
   /// homography its predictions are good to about a pixel, and a wide gate only adds wrong
-  /// partners near the true ones (bench/eval_two_view: with 10 px in every round the judge,
-  /// cv::findHomography on all matches, lost pairs whose own refined homography was within 2 px).
+  /// partners near the true ones (with the first round's gate in every round bench/eval_two_view's
+  /// judge, cv::findHomography on all matches, loses pairs the matcher itself fits well).
   /// 4 px: the inlier bound σ·√5.991 ≈ 2.4 px at σ = 1 plus a keypoint's ~1 px noise, the search
   /// region of guided matching in Hartley & Zisserman (Multiple View Geometry, 2nd ed., Alg. 4.6).
   /// In (0, 1000].
@@ -132,11 +132,10 @@ struct TwoViewOptions {
   /// it, as its extrapolation to the far corners disagrees. The test judges the stage's RANSAC
   /// model, before the guided rounds: those match within a gate around the model's own predictions
   /// and fill both halves with matches that confirm it, right or wrong (graf 1→4: 44 px apart
-  /// before them, 2.8 px after, on a model 26 px off). F models are not tested. 10 px (e ≈ the
-  /// judge's 5 px), against no test on the 68 pairs of bench/eval_two_view: stops on a pair left
-  /// unsolved 18 → 13, verified pairs whose own homography is over 5 px off 19 → 15, own
-  /// homographies within 5 px 39 → 40, pairs solved 39 both (5 px: the same), 1.26x the time over
-  /// all pairs (the escalations) and 1.09x on the pairs plain extraction solves (graf 1→4).
+  /// before them, 2.8 px after, on a model 26 px off). F models are not tested. Default 10 px
+  /// (e ≈ the judge's 5 px): against no test, bench/eval_two_view stops on fewer unsolved pairs
+  /// and verifies fewer imprecise homographies, solving as many pairs, for the time of the
+  /// escalations it causes (docs/two_view.md, "Reading").
   double max_half_disagreement = 10.0;
   /// Guided matching and local optimisation of a homography that has min_inliers inliers making up
   /// min_inlier_ratio of the matches, after the precision test and before the stopping rule counts
@@ -146,15 +145,12 @@ struct TwoViewOptions {
   /// inliers making up min_inlier_ratio of the matches, after the guided rounds: image 2's point of
   /// every match is aligned with image 1's patch under the homography, the homography is
   /// re-estimated on the aligned points by local optimisation (GuidedRefinementOptions' σ and
-  /// passes), and TwoViewResult::points2 holds them. Off by default: on the 47 pairs of
-  /// bench/eval_two_view whose own homographies are within 10 px either way, the judge's corner
-  /// error (cv::findHomography on the correspondences) falls on 36 and rises on 9, by 0.84 px per
-  /// pair at the median, but the matcher's own homography barely moves (26 better, 17 worse, median
-  /// change −0.06 px); the pairs the judge solves stay within those on its 5 px line (38 against
-  /// 39; with ExtractorOptions::subpixel, 40 against 39), and the alignment (about 20 µs a match)
-  /// makes the pairs plain extraction solves cost 1.60x plain's instead of 1.17x. On where the
-  /// correspondences themselves must be precise (mosaics, calibration): on a known warp the aligned
-  /// points lie 0.05 px from the truth (test_refinement).
+  /// passes), and TwoViewResult::points2 holds them. Off by default: on bench/eval_two_view it
+  /// lowers the judge's corner error (cv::findHomography on the correspondences) on most pairs but
+  /// barely moves the matcher's own homography or the pairs solved, and the alignment makes the
+  /// pairs plain extraction solves markedly slower (docs/two_view.md, "Reading"). On where the
+  /// correspondences themselves must be precise (mosaics, calibration; test_refinement checks the
+  /// aligned points on a known warp).
   bool refine = false;
   /// The alignment of `refine`.
   CorrespondenceRefinementOptions refinement;
@@ -213,11 +209,10 @@ struct TwoViewOptions {
 /// adding 0.5 N each (N the image budget, ExtractorOptions::features); none for max_tilt 1. With
 /// the default series and max_tilt 4√2: the default stages, then 4 and 4√2, as MODS escalates to
 /// tilts near 9 (Mishkin, Matas, Perdoch, CVIU 2015) and ASIFT simulates with maxTilt 5. Stages
-/// past 2√2 run only while a pair is not verified: on the 68 pairs of bench/eval_two_view ("stages
-/// to 5.66") they solve Homogr LePoint3 (on the judge's 5 px line) and verify EVD adam at 1.6 px,
-/// which the default stages leave unverified, for 1.5x the default's time over all pairs (each
-/// pair they do not verify runs two more stages); a plane at tilt 8 is verified at stage 3
-/// (test_two_view). Set `options.extractor.views` first, then
+/// past 2√2 run only while a pair is not verified: on bench/eval_two_view ("stages to 5.66") they
+/// solve and verify pairs the default stages leave unverified, for more time over all pairs (each
+/// pair they do not verify runs two more stages; docs/two_view.md, "Reading"); a plane at tilt 8
+/// is verified at stage 3 (test_two_view). Set `options.extractor.views` first, then
 /// `options.stages = stages_up_to(options.extractor.views)`. Throws std::invalid_argument for
 /// invalid view options.
 inline std::vector<ViewStage> stages_up_to(const AffineViewOptions& views) {

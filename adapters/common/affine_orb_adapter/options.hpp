@@ -107,7 +107,7 @@ struct AdapterOptions {
   /// Largest simulated tilt t (views t = √2^k <= max_tilt, SPEC §1); 1 = plain ORB extraction.
   /// A value between two tilts keeps the tilts below it: write 1.42 for √2, 2.83 for 2√2.
   /// In [1, 16]. Default 1 (views off): inside ORB-SLAM2 the views cost more tracking time than
-  /// they bring (adapters/README.md, "Measurements", measured with ../shared/slam/run.sh).
+  /// they bring (docs/slam.md, "What the options do inside ORB-SLAM").
   double max_tilt = 1.0;
   AdapterDescriptor descriptor = AdapterDescriptor::kRbrief;
   /// Worker threads for the views of one frame (ExtractorOptions::threads), in [1, 256]; results

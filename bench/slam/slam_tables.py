@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""slam_tables.py -- the ORB-SLAM tables of adapters/README.md, from runs made with
+"""slam_tables.py -- the ORB-SLAM tables of docs/slam.md, from runs made with
 ../shared/slam/run.sh (rendered sequences) and bench/slam/kitti_runs.sh (KITTI 00).
 
   slam_tables.py relocalisation RUNS SEQS CONF...   revisit_sweep* sequences, RGB-D

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Image correction ("restoration", paper Sec. on model selection, SPEC §5): when the homography
+/// Image correction ("restoration", paper Sec. on model selection, docs/algorithm.md §5): when the homography
 /// was chosen, image 2 is warped into image 1's frame so that the two can be compared pixel by
 /// pixel.
 

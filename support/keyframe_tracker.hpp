@@ -1,8 +1,8 @@
 #pragma once
 /// \file
-/// KeyframeTracker: frame loss and keyframes of an image sequence (paper Sec. 4, eq. 22; SPEC §7),
+/// KeyframeTracker: frame loss and keyframes of an image sequence (paper Sec. 4, eq. 22; docs/algorithm.md §7),
 /// measured with two-view geometry only: each frame's features are matched to the last keyframe's
-/// and verified by homography-versus-fundamental model selection (SPEC §5). No map, no bundle
+/// and verified by homography-versus-fundamental model selection (docs/algorithm.md §5). No map, no bundle
 /// adjustment: this is the front end's view of "tracking", the part the features decide.
 ///
 /// Per frame, in order:
@@ -66,7 +66,7 @@ struct KeyframeTrackerOptions {
   int max_lost_frames = 3;
   /// Model selection of frame-to-keyframe and frame-to-previous-frame matches.
   ModelSelectionOptions model_selection;
-  /// Matching of two frames' features (SPEC §4).
+  /// Matching of two frames' features (docs/algorithm.md §4).
   AffineMatchOptions matching;
   /// Relative pose recovery (frame to previous frame, with a camera).
   RelativePoseOptions pose;
@@ -102,7 +102,7 @@ struct TrackedFrame {
   int inliers = 0;
   /// The model select_model() chose (kNone: fewer than 8 matches, degenerate, or no keyframe).
   GeometricModel model = GeometricModel::kNone;
-  /// R_H of select_model() (paper eq. 22 of SPEC §5).
+  /// R_H of select_model() (paper eq. 22, docs/algorithm.md §5).
   double homography_ratio = 0.0;
   /// inliers / (features of the reference keyframe); 0 without a keyframe.
   double inlier_ratio = 0.0;

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Drop-in replacement of ORB-SLAM3's ORBextractor backed by affine_orb (SPEC §6; adapters/README.md
+/// Drop-in replacement of ORB-SLAM3's ORBextractor backed by affine_orb (docs/algorithm.md §6; adapters/README.md
 /// says how to swap it in). Replace the fork's include/ORBextractor.h and src/ORBextractor.cc by
 /// this file and ORBextractor.cc, add affine_orb's `include/` and `adapters/common/` directories to
 /// the include path, rebuild; nothing else in the fork changes.

@@ -1,5 +1,5 @@
 #pragma once
-// Conformance suite shared by the ORB-SLAM2 and ORB-SLAM3 adapters: every SPEC §6 fact, checked by
+// Conformance suite shared by the ORB-SLAM2 and ORB-SLAM3 adapters: every docs/algorithm.md §6 fact, checked by
 // driving the adapter the way ORB-SLAM's Frame, Tracking, ORBmatcher, MapPoint and stereo matching
 // do, on real frames (KITTI 06, Oxford), with the affine views off and on.
 //
@@ -166,7 +166,7 @@ inline int distance_bitwise(const cv::Mat& a, const cv::Mat& b) {
   return dist;
 }
 
-// Every SPEC §6 output fact for one call on `image`; `fork`: the image's keypoints are the fork's
+// Every docs/algorithm.md §6 output fact for one call on `image`; `fork`: the image's keypoints are the fork's
 // (the default), whose pyramid is cv::resize's and whose sizes are truncated.
 inline void check_output(const Output& out, const cv::Mat& image, const std::vector<float>& factors, bool fork = true) {
   const std::size_t n = out.keypoints.size();

@@ -5,9 +5,9 @@
 ///
 /// AdapterCore runs affine_orb::Extractor (the image's keypoints, plus the tilted views' with the
 /// views on, see AdapterCore) and turns its output into what ORB-SLAM's Frame, Tracking,
-/// ORBmatcher, MapPoint and stereo matching rely on (SPEC §6):
+/// ORBmatcher, MapPoint and stereo matching rely on (docs/algorithm.md §6):
 /// - `octave` o means σ = s^o: a keypoint found on level l of a view of tilt t has the scale
-///   s^l·√t (SPEC §1), so o = round(l + log √t / log s), clamped to [0, nlevels); `size` = 31·s^o;
+///   s^l·√t (docs/algorithm.md §1), so o = round(l + log √t / log s), clamped to [0, nlevels); `size` = 31·s^o;
 /// - keypoints grouped by octave, level 0 first (within an octave: the image's keypoints, then the
 ///   views', each in the extractor's order), descriptor row i belonging to keypoint i, N x 32 CV_8U;
 /// - every keypoint at least kBorderMargin pixels inside mvImagePyramid[o] at round(pt / s^o),

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The Affine-ORB options of the ORB-SLAM2/3 drop-in extractors that ORB-SLAM's constructor
-/// ORBextractor(nfeatures, scaleFactor, nlevels, iniThFAST, minThFAST) cannot carry (SPEC §6).
+/// ORBextractor(nfeatures, scaleFactor, nlevels, iniThFAST, minThFAST) cannot carry (docs/algorithm.md §6).
 ///
 /// Where an extractor's options come from, read once when it is constructed:
 /// 1. the defaults: AdapterOptions{} (compiled in), or the options last given to the adapter's
@@ -65,7 +65,7 @@ enum class AdapterDescriptor {
 
 /// What to do with the keypoints several views put on the same corner (affine_orb::DuplicatePolicy).
 enum class AdapterDuplicates {
-  kMerge,    ///< One keypoint per corner and level, the strongest (SPEC §2: the SLAM default).
+  kMerge,    ///< One keypoint per corner and level, the strongest (docs/algorithm.md §2: the SLAM default).
   kKeepAll,  ///< Every view's keypoint.
 };
 
@@ -104,7 +104,7 @@ struct AdapterOptions {
   /// initialisation, map reset) were tuned on its own extractor's keypoints, and any other selection
   /// moves them (docs/slam.md); kAffineOrb is affine_orb's spreading.
   AdapterKeypoints keypoints = AdapterKeypoints::kFork;
-  /// Largest simulated tilt t (views t = √2^k <= max_tilt, SPEC §1); 1 = plain ORB extraction.
+  /// Largest simulated tilt t (views t = √2^k <= max_tilt, docs/algorithm.md §1); 1 = plain ORB extraction.
   /// A value between two tilts keeps the tilts below it: write 1.42 for √2, 2.83 for 2√2.
   /// In [1, 16]. Default 1 (views off): inside ORB-SLAM2 the views cost more tracking time than
   /// they bring (docs/slam.md, "What the options do inside ORB-SLAM").
@@ -116,7 +116,7 @@ struct AdapterOptions {
   int threads = 1;
   AdapterDuplicates duplicates = AdapterDuplicates::kMerge;
   /// Merge radius in original pixels times the level scale (ExtractorOptions::merge_radius), in
-  /// (0, 64]: 2 px is the SPEC §7 duplicate cell.
+  /// (0, 64]: 2 px is the docs/algorithm.md §7 duplicate cell.
   double merge_radius = 2.0;
   /// Keypoints the tilted views add to ORB-SLAM's nfeatures keypoints of the image, as a fraction
   /// of nfeatures (affine_orb::ExtractorOptions::view_features: view_features · nfeatures when the

@@ -2,7 +2,7 @@
 /// \file
 /// Corner candidates of one image (a pyramid level of the original image or of a simulated view):
 /// FAST-9 with non-maximum suppression, on a grid whose cells fall back to a lower threshold when
-/// they have no corner at the initial one (SPEC §2, ORB-SLAM2's iniThFAST/minThFAST behaviour).
+/// they have no corner at the initial one (docs/algorithm.md §2, ORB-SLAM2's iniThFAST/minThFAST behaviour).
 
 #include <algorithm>
 #include <cmath>

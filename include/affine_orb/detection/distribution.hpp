@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Feature budget and spatial spreading (SPEC §2): how many features each pyramid level gets, and
+/// Feature budget and spatial spreading (docs/algorithm.md §2): how many features each pyramid level gets, and
 /// which candidates of a level are kept so that they cover the image instead of clumping on the
 /// strongest texture.
 

@@ -17,7 +17,7 @@
 
 namespace affine_orb {
 
-/// Scale pyramid parameters. Defaults are ORB-SLAM2's (SPEC §2: factor 1.2, 8 levels).
+/// Scale pyramid parameters. Defaults are ORB-SLAM2's (docs/algorithm.md §2: factor 1.2, 8 levels).
 struct PyramidOptions {
   /// Ratio s between the sizes of consecutive levels, in (1, 4]; level l is s^l times smaller. 1.2
   /// is ORB's and ORB-SLAM2's.

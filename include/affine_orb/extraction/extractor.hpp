@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Extractor<Descriptor>: Affine-ORB feature extraction (paper section 3, SPEC §1–§3). Oriented FAST
+/// Extractor<Descriptor>: Affine-ORB feature extraction (paper section 3, docs/algorithm.md §1–§3). Oriented FAST
 /// keypoints are detected on a scale pyramid of every simulated affine view, spread over the image
 /// under an exact feature budget, described in their view by a descriptor policy (Rbrief, Brisk),
 /// and mapped back to the original image.
@@ -62,7 +62,7 @@ namespace affine_orb {
 ///    (ExtractorOptions::shortlist);
 /// 4. the chosen keypoints are oriented and described in their view, then mapped back: position
 ///    through the inverse view map, orientation by mapping the direction vector, scale s^l·√t
-///    (SPEC §1); a tilted view's keypoint is then snapped to a corner of the original image
+///    (docs/algorithm.md §1); a tilted view's keypoint is then snapped to a corner of the original image
 ///    (RefineOptions);
 /// 5. once every view is done, a budget is split over the shortlisted views (kAdditive:
 ///    view_features · features over the tilted views, in proportion to t^view_weight_exponent;

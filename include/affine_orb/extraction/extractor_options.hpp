@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// ExtractorOptions: what Extractor<Descriptor> extracts (SPEC §2): the budget, the simulated
+/// ExtractorOptions: what Extractor<Descriptor> extracts (docs/algorithm.md §2): the budget, the simulated
 /// views, how the budget is shared between the image and its views, duplicates across views,
 /// spreading, refinement and threads. Every default says which bench chose it.
 
@@ -14,7 +14,7 @@
 
 namespace affine_orb {
 
-/// What to do when several views return the same scene point (SPEC §2).
+/// What to do when several views return the same scene point (docs/algorithm.md §2).
 enum class DuplicatePolicy {
   kKeepAll,  ///< Keep every view's keypoint: best for wide-baseline matching of two images.
   kMerge,    ///< Drop a view's candidates that repeat a keypoint chosen by an earlier view (views in
@@ -24,7 +24,7 @@ enum class DuplicatePolicy {
 /// How each (view, level) keeps its share of the budget among its candidates.
 enum class Spreading {
   kQuadtree,   ///< distribute_quadtree(): spread over the image (ORB-SLAM2's octree distribution);
-               ///< keeps tracking alive in weakly textured parts, the SLAM choice (SPEC §2).
+               ///< keeps tracking alive in weakly textured parts, the SLAM choice (docs/algorithm.md §2).
   kStrongest,  ///< select_strongest(): the strongest corners wherever they are (cv::ORB's choice);
                ///< more repeatable, so more correct matches between two wide-baseline images.
 };
@@ -83,7 +83,7 @@ struct RefineOptions {
   }
 };
 
-/// Extraction parameters (SPEC §2).
+/// Extraction parameters (docs/algorithm.md §2).
 struct ExtractorOptions {
   /// Number of features returned when the image has enough corners (exactly this many, with
   /// carry_shortfalls); ORB-SLAM2's configuration files use 1000 to 2000. Must be in [1, 1000000].
@@ -157,7 +157,7 @@ struct ExtractorOptions {
   /// and the same with kStrongest (bench/eval_viewpoint).
   double shortlist = 1.25;
   /// Radius in original pixels, times the level scale s^l, within which kMerge treats keypoints of
-  /// different views as one (ExtractorOptions::repeat_levels); 2 px is the SPEC §7 duplicate cell
+  /// different views as one (ExtractorOptions::repeat_levels); 2 px is the docs/algorithm.md §7 duplicate cell
   /// size.
   double merge_radius = 2.0;
   /// Selection within each (view, level); kQuadtree for SLAM, kStrongest for matching two images

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Homography-versus-fundamental model selection (paper eqs. 17–22, SPEC §5): both models are
+/// Homography-versus-fundamental model selection (paper eqs. 17–22, docs/algorithm.md §5): both models are
 /// estimated by RANSAC on the same random 8-point sets and scored with the truncated χ² score of
 /// ORB-SLAM's monocular initializer; a SelectionRule then chooses: by default a plane-and-parallax
 /// test of the F hypothesis (after DEGENSAC), or the paper's score ratio (eq. 22), GRIC or COLMAP's
@@ -315,7 +315,7 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
   return result;
 }
 
-/// Estimates H and F from matched points and chooses one (paper eqs. 17–22, SPEC §5).
+/// Estimates H and F from matched points and chooses one (paper eqs. 17–22, docs/algorithm.md §5).
 ///
 /// `points1[i]` (image 1) and `points2[i]` (image 2) are one correspondence, in pixels. Each RANSAC
 /// iteration draws one set of 8 correspondences from options.ransac.seed: F is estimated from all

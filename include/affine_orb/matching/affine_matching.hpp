@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Matching of two affine feature sets (SPEC §4): every simulated view of one image against every
+/// Matching of two affine feature sets (docs/algorithm.md §4): every simulated view of one image against every
 /// view of the other, as ASIFT does, then removal of the duplicate correspondences that several
 /// view pairs find for the same scene point.
 
@@ -35,7 +35,7 @@ struct AffineMatchOptions {
   /// ratio test sees few competitors, which finds more correct matches at a much lower precision.
   bool per_view_pairs = false;
   /// Two correspondences are duplicates when their points are within this distance in image 1 and
-  /// in image 2 (pixels, in [0, 1000]); the one with the smaller Hamming distance is kept. SPEC §4
+  /// in image 2 (pixels, in [0, 1000]); the one with the smaller Hamming distance is kept. docs/algorithm.md §4
   /// says "within a pixel or two": 2.
   double duplicate_radius = 2.0;
 
@@ -141,7 +141,7 @@ inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, c
   return kept;
 }
 
-/// Matches two feature sets from Extractor::extract() (SPEC §4). Match::query indexes `a`,
+/// Matches two feature sets from Extractor::extract() (docs/algorithm.md §4). Match::query indexes `a`,
 /// Match::train indexes `b`.
 /// - Default: one search over all descriptors with the location-aware ratio test
 ///   (AffineMatchOptions::ratio_exclusion_radius), max distance and optional cross-check.

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Brute-force Hamming matching of binary descriptors (SPEC §4): the nearest and second-nearest
+/// Brute-force Hamming matching of binary descriptors (docs/algorithm.md §4): the nearest and second-nearest
 /// train descriptor of every query descriptor, Lowe's ratio test, a maximum distance and an optional
 /// cross-check. The results are exactly those of plain nested loops over all pairs; ties between
 /// equal distances always go to the smaller index.

@@ -27,7 +27,7 @@ namespace affine_orb {
 /// How the set of simulated views is built.
 struct AffineViewOptions {
   /// Largest simulated tilt t = 1/cos θ. 1 turns the views off (only the original image). The
-  /// default 2√2 (θ up to 69°) gives 18 views, the set SPEC §1 expects and cv::AffineFeature builds
+  /// default 2√2 (θ up to 69°) gives 18 views, the set docs/algorithm.md §1 describes and cv::AffineFeature builds
   /// with maxTilt 3; 4√2 (θ up to 80°) gives 43.
   double max_tilt = 2.0 * std::sqrt(2.0);
   /// Ratio a of the geometric tilt series t_k = a^k (eq. 15); ASIFT uses √2.

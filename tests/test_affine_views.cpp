@@ -139,7 +139,7 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
   // pixel apart). Every corner of J (all candidates of a plain extractor with an unbounded budget),
   // mapped back through the known matrix, is a true position: each level-0 keypoint the extractor
   // found in that view of the original photo must lie on one, with J's angle.
-  const cv::Mat photo = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat photo = affine_orb::test::graf(1);
   affine_orb::ExtractorOptions options = affine_options(3000, affine_orb::DuplicatePolicy::kKeepAll);
   options.views.max_tilt = 2.0;
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
@@ -213,7 +213,7 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
 }
 
 TEST_CASE("affine extraction: exact budget, view records, identical output for every thread count") {
-  const cv::Mat image = affine_orb::test::kitti_frame(20);
+  const cv::Mat image = affine_orb::test::panning_frame(2, cv::Size(1226, 370));
   const auto one =
       affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::DuplicatePolicy::kMerge, 1))
           .extract(image);
@@ -257,9 +257,9 @@ TEST_CASE("affine extraction: exact budget, view records, identical output for e
 }
 
 TEST_CASE("with the views on, the image's keypoints and descriptors are exactly those of views off") {
-  for (const char* sequence : {"graf", "boat"}) {
-    CAPTURE(sequence);
-    const cv::Mat image = affine_orb::test::oxford_image(sequence, 1);
+  for (const bool graf : {true, false}) {
+    CAPTURE(graf);
+    const cv::Mat image = graf ? affine_orb::test::graf(1) : affine_orb::test::textured_photo();
     for (const auto spreading : {affine_orb::Spreading::kQuadtree, affine_orb::Spreading::kStrongest}) {
       affine_orb::ExtractorOptions off;
       off.features = 1500;
@@ -321,7 +321,7 @@ TEST_CASE("repeat suppression equals a brute-force reference") {
   // exactly what a naive pass over them keeps: views in index order, the image's keypoints first,
   // each candidate of a view dropped when a survivor of an earlier view of a level within reach
   // lies within the repeat radius.
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(200, 150, 260, 200)).clone();
+  const cv::Mat image = affine_orb::test::graf(1)(cv::Rect(200, 150, 260, 200)).clone();
   for (int reach : {0, 1}) {
     CAPTURE(reach);
     affine_orb::ExtractorOptions options;
@@ -373,7 +373,7 @@ TEST_CASE("repeat suppression equals a brute-force reference") {
 }
 
 TEST_CASE("no two output keypoints repeat each other under the merge; keep-all keeps repeats") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   auto count_repeats = [](const std::vector<LevelledKeypoint>& k, double radius) {
     int repeats = 0;
     for (std::size_t i = 0; i < k.size(); ++i) {
@@ -396,7 +396,7 @@ TEST_CASE("no two output keypoints repeat each other under the merge; keep-all k
 }
 
 TEST_CASE("the mask is honoured for keypoints of tilted views too") {
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(0));
   mask(cv::Rect(image.cols / 4, image.rows / 4, image.cols / 2, image.rows / 2)).setTo(255);
   const auto f = affine_orb::Extractor<affine_orb::Rbrief>(affine_options(1000, affine_orb::DuplicatePolicy::kMerge, 2))
@@ -644,9 +644,9 @@ TEST_CASE("guided matching equals a naive reference over every keypoint of image
 }
 
 TEST_CASE("graf 1->3: affine features give more distinct correct matches than plain ones") {
-  const cv::Mat a = affine_orb::test::oxford_image("graf", 1);
-  const cv::Mat b = affine_orb::test::oxford_image("graf", 3);
-  const cv::Matx33d h = affine_orb::test::oxford_homography("graf", 3);
+  const cv::Mat a = affine_orb::test::graf(1);
+  const cv::Mat b = affine_orb::test::graf(3);
+  const cv::Matx33d h = affine_orb::test::graf_homography_1to3();
   auto distinct_correct = [&](double max_tilt) {
     affine_orb::ExtractorOptions options = affine_options(2000, affine_orb::DuplicatePolicy::kMerge, 2);
     options.views.max_tilt = max_tilt;
@@ -816,11 +816,11 @@ int differing(const affine_orb::Features<256>& a, const affine_orb::Features<256
 }  // namespace
 
 TEST_CASE("views on demand: stage 0 is plain extraction, and the image plus one stage of every view is extract()") {
-  for (const bool kitti : {false, true}) {
-    const cv::Mat image = kitti ? affine_orb::test::kitti_frame(10) : affine_orb::test::oxford_image("graf", 1);
+  for (const bool wide : {false, true}) {
+    const cv::Mat image = wide ? affine_orb::test::panning_frame(1, cv::Size(1226, 370)) : affine_orb::test::graf(1);
     for (const auto spreading : {affine_orb::Spreading::kQuadtree, affine_orb::Spreading::kStrongest}) {
       for (int threads : {1, 2}) {
-        CAPTURE(kitti);
+        CAPTURE(wide);
         CAPTURE(static_cast<int>(spreading));
         CAPTURE(threads);
         affine_orb::ExtractorOptions on;
@@ -847,7 +847,7 @@ TEST_CASE("views on demand: stage 0 is plain extraction, and the image plus one 
 }
 
 TEST_CASE("views on demand: each stage adds the views of its tilts and keeps what earlier stages found") {
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   affine_orb::ExtractorOptions options;
   options.features = 800;
   affine_orb::Extractor<affine_orb::Rbrief> staged(options);
@@ -893,7 +893,7 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
     CHECK(repeats == 0);
   }
   SUBCASE("a new image starts again from stage 0") {
-    const cv::Mat other = affine_orb::test::oxford_image("boat", 2);
+    const cv::Mat other = affine_orb::test::graf(3);
     auto other_stage = staged.extract_image(other);
     CHECK(other_stage.cursor.extracted_tilt() == 1.0);
     CHECK_THROWS_AS(staged.extend(cursor, 4.0, 100), std::invalid_argument);  // the first image's cursor
@@ -903,7 +903,7 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
 }
 
 TEST_CASE("views on demand: misuse is refused with std::invalid_argument") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   affine_orb::Extractor<affine_orb::Rbrief> extractor;
   affine_orb::ViewCursor unused;
   CHECK(unused.extracted_tilt() == 0.0);
@@ -973,7 +973,7 @@ double exact_view_pixel(const cv::Mat& image, const affine_orb::AffineView& view
 }  // namespace
 
 TEST_CASE("the view renderer is within a grey level of the exact definition and 3 of OpenCV's pipeline") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   cv::Mat small;
   cv::resize(image, small, cv::Size(400, 320), 0, 0, cv::INTER_AREA);
   affine_orb::AffineViewOptions options;
@@ -1023,7 +1023,7 @@ TEST_CASE("the view renderer is within a grey level of the exact definition and 
 }
 
 TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' bytes") {
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1)(cv::Rect(40, 30, 300, 200));  // a ROI
+  const cv::Mat image = affine_orb::test::textured_photo()(cv::Rect(40, 30, 300, 200));  // a ROI
   // Tilts √2, 2, 2√2, 4√2: 8, 12, 16 and 30 resampling taps (strides 8, 16, 16, 32).
   for (const auto& view_pose : {std::pair<double, double>(2.0 * std::sqrt(2.0), 0.0),
                                 {2.0 * std::sqrt(2.0), 17.0},
@@ -1077,7 +1077,7 @@ TEST_CASE("every canvas sampler and resampler path gives the scalar references' 
   // The paths of this build and CPU (AVX2 eight at a time, SSE2 or NEON four at a time, clamped or not) against the
   // scalar references, on column ranges of every remainder modulo 8 and on images taller and
   // wider than the canvas.
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(17, 9, 283, 211));  // a ROI
+  const cv::Mat image = affine_orb::test::graf(1)(cv::Rect(17, 9, 283, 211));  // a ROI
   std::mt19937 rng(21);
   int checked = 0;
   for (const auto& view_pose : {std::pair<double, double>(std::sqrt(2.0), 33.3),

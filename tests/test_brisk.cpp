@@ -251,7 +251,7 @@ TEST_CASE("the pattern agrees with the naive pattern, pair by pair") {
 }
 
 TEST_CASE("orientation and descriptor equal a naive implementation on graf img1") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   const Brisk brisk;
   Brisk::LevelData data;
   brisk.prepare(image, data);
@@ -297,7 +297,7 @@ TEST_CASE("a uniform patch has orientation 0 and an all-zero descriptor") {
 }
 
 TEST_CASE("an exact 90 degree rotation rotates the orientation by 90 degrees and keeps the descriptor") {
-  const cv::Mat photo = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat photo = affine_orb::test::graf(1);
   const cv::Mat crop = photo(cv::Rect(150, 120, 420, 380)).clone();
   cv::Mat rotated;
   cv::rotate(crop, rotated, cv::ROTATE_90_CLOCKWISE);  // (x, y) -> (rows − 1 − y, x)
@@ -404,7 +404,7 @@ TEST_CASE("large angles and negative angles select the same rotation step as the
 }
 
 TEST_CASE("a level beyond 8.4 Mpixels (wrapping integral) describes like a crop of it") {
-  const cv::Mat photo = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat photo = affine_orb::test::graf(1);
   cv::Mat big;
   cv::repeat(photo, 5, 4, big);  // 3200 x 3200, 10.2 Mpixels: 255 · pixels overflows 32 bits
   const Brisk brisk;

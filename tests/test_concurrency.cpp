@@ -47,7 +47,7 @@ TEST_CASE("extractor instances in several threads at once equal the serial resul
   // Small crops of real frames keep the run short, also under ThreadSanitizer.
   std::vector<cv::Mat> images;
   for (int i = 0; i < 4; ++i)
-    images.push_back(affine_orb::test::kitti_frame(i * 10)(cv::Rect(300, 40, 400, 300)).clone());
+    images.push_back(affine_orb::test::panning_frame(i * 10, cv::Size(400, 300)));
   const int workers = 4;
   const int rounds = 3;
   std::vector<std::vector<affine_orb::Features<256>>> serial(workers);
@@ -81,7 +81,7 @@ TEST_CASE("extractor instances in several threads at once equal the serial resul
 }
 
 TEST_CASE("a const descriptor policy may be shared by threads that have their own level data") {
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   const affine_orb::Brisk brisk;
   const std::vector<cv::Point2f> points = {{100, 100}, {200, 150}, {300, 300}, {400, 250}, {500, 400}};
   std::vector<affine_orb::BinaryDescriptor<512>> reference;

@@ -73,7 +73,7 @@ TEST_CASE("cells without corners at the initial threshold fall back to the minim
 }
 
 TEST_CASE("candidates in a region equal whole-image corners filtered by region and grid cell") {
-  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(100, 80, 400, 300)).clone();
+  const cv::Mat graf = affine_orb::test::graf(1)(cv::Rect(100, 80, 400, 300)).clone();
   // Low contrast in the right half, so that many cells have no corner at the initial threshold.
   cv::Mat image = graf.clone();
   image(cv::Rect(200, 0, 200, 300)) = graf(cv::Rect(200, 0, 200, 300)) * 0.15 + 100;

@@ -266,7 +266,7 @@ TEST_CASE("select_strongest keeps the target strongest, ties to the lower index"
 }
 
 TEST_CASE("the strongest spreading gives the budget and more matches; the quadtree spreads wider") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   affine_orb::ExtractorOptions options;
   options.features = 1000;
   options.views.max_tilt = 1.0;

@@ -117,17 +117,17 @@ TEST_CASE("FAST score map equals the brute-force segment test on random images")
 }
 
 TEST_CASE("FAST score map equals the brute-force segment test on a real photo") {
-  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(300, 250, 120, 90)).clone();
+  const cv::Mat graf = affine_orb::test::graf(1)(cv::Rect(300, 250, 120, 90)).clone();
   for (int threshold : {7, 20}) {
     CAPTURE(threshold);
     check_score_map(graf, threshold);
   }
-  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(100, 100, 100, 80));
-  check_score_map(boat, 20);  // a non-continuous ROI of a larger image
+  const cv::Mat photo = affine_orb::test::textured_photo()(cv::Rect(100, 100, 100, 80));
+  check_score_map(photo, 20);  // a non-continuous ROI of a larger image
 }
 
 TEST_CASE("non-maximum suppression keeps exactly the local maxima, ties broken in raster order") {
-  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(200, 300, 150, 100)).clone();
+  const cv::Mat graf = affine_orb::test::graf(1)(cv::Rect(200, 300, 150, 100)).clone();
   const cv::Mat noise = random_image(70, 50, 7, 256);
   for (const cv::Mat* image : {&graf, &noise}) {
     for (int threshold : {7, 20}) {
@@ -221,7 +221,7 @@ bool in_spans(const affine_orb::RowSpans& spans, int x, int y) {
 
 TEST_CASE("scoring row spans writes the scalar scores on the spans and nothing else") {
   const cv::Mat noise = random_image(83, 61, 21, 256);
-  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(250, 200, 90, 70));
+  const cv::Mat graf = affine_orb::test::graf(1)(cv::Rect(250, 200, 90, 70));
   for (const cv::Mat* image : {&noise, &graf}) {
     const auto offset = affine_orb::detail::circle_offsets(static_cast<std::ptrdiff_t>(image->step[0]));
     for (std::uint64_t seed = 1; seed <= 6; ++seed) {
@@ -257,7 +257,7 @@ TEST_CASE("scoring row spans writes the scalar scores on the spans and nothing e
 }
 
 TEST_CASE("suppression on row spans keeps the rectangle's maxima that lie on the spans") {
-  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1)(cv::Rect(120, 340, 140, 90)).clone();
+  const cv::Mat graf = affine_orb::test::graf(1)(cv::Rect(120, 340, 140, 90)).clone();
   for (int threshold : {7, 20}) {
     cv::Mat scores;
     affine_orb::fast_score_map(graf, cv::Rect(0, 0, graf.cols, graf.rows), threshold, scores);

@@ -44,8 +44,7 @@ TEST_CASE("detectAndCompute and detect give exactly Extractor::extract's keypoin
       CHECK(f2d->descriptorType() == CV_8U);
       CHECK(f2d->defaultNorm() == cv::NORM_HAMMING);
       CHECK(f2d->getDefaultName() == "Feature2D.AffineORB");
-      for (const char* sequence : {"graf", "boat"}) {
-        const cv::Mat image = affine_orb::test::oxford_image(sequence, 1);
+      for (const cv::Mat& image : {affine_orb::test::graf(1), affine_orb::test::textured_photo()}) {
         cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(255));
         mask(cv::Rect(0, 0, image.cols / 3, image.rows)).setTo(0);
         std::vector<cv::KeyPoint> keypoints;
@@ -76,7 +75,7 @@ TEST_CASE("detectAndCompute and detect give exactly Extractor::extract's keypoin
 }
 
 TEST_CASE("compute on the extractor's own image keypoints reproduces their rows; bad keypoints are removed") {
-  const cv::Mat image = affine_orb::test::oxford_image("bark", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   affine_orb::ExtractorOptions options;
   options.views.max_tilt = 1.0;
   const cv::Ptr<cv::Feature2D> f2d = affine_orb::create_feature2d(options);
@@ -102,8 +101,8 @@ TEST_CASE("compute on the extractor's own image keypoints reproduces their rows;
 }
 
 TEST_CASE("the descriptors feed cv::BFMatcher and cv::drawMatches, and match graf 1 to 3 correctly") {
-  const cv::Mat a = affine_orb::test::oxford_image("graf", 1);
-  const cv::Mat b = affine_orb::test::oxford_image("graf", 3);
+  const cv::Mat a = affine_orb::test::graf(1);
+  const cv::Mat b = affine_orb::test::graf(3);
   const cv::Ptr<cv::Feature2D> f2d = affine_orb::create_feature2d();
   std::vector<cv::KeyPoint> ka, kb;
   cv::Mat da, db;
@@ -113,7 +112,7 @@ TEST_CASE("the descriptors feed cv::BFMatcher and cv::drawMatches, and match gra
   std::vector<cv::DMatch> matches;
   matcher.match(da, db, matches);
   REQUIRE(matches.size() > 100);
-  const cv::Matx33d h = affine_orb::test::oxford_homography("graf", 3);
+  const cv::Matx33d h = affine_orb::test::graf_homography_1to3();
   int correct = 0;
   for (const cv::DMatch& m : matches) {
     const cv::Point2f p = ka[static_cast<std::size_t>(m.queryIdx)].pt;
@@ -148,7 +147,7 @@ TEST_CASE("bad input through the interface gives the library's errors") {
   CHECK(descriptors.empty());
   // Given keypoints with a NaN or infinite angle (fuzz_describe's case): rBRIEF's rotated test
   // points would be undefined, so both descriptors reject them; −infinity is < 0, "not computed".
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(100, 100, 120, 120)).clone();
+  const cv::Mat image = affine_orb::test::graf(1)(cv::Rect(100, 100, 120, 120)).clone();
   for (const auto kind : {affine_orb::DescriptorKind::kRbrief, affine_orb::DescriptorKind::kBrisk}) {
     const cv::Ptr<cv::Feature2D> f = affine_orb::create_feature2d({}, kind);
     for (const float angle : {std::nanf(""), std::numeric_limits<float>::infinity()}) {

@@ -364,9 +364,9 @@ TEST_CASE("general 3-D scene with translation: F chosen, true correspondences on
 }
 
 TEST_CASE("real pair graf 1->3: correspondences from the ground-truth homography, H chosen and accurate") {
-  const cv::Mat img1 = affine_orb::test::oxford_image("graf", 1);
-  const cv::Mat img3 = affine_orb::test::oxford_image("graf", 3);
-  const Eigen::Matrix3d truth = to_eigen(affine_orb::test::oxford_homography("graf", 3));
+  const cv::Mat img1 = affine_orb::test::graf(1);
+  const cv::Mat img3 = affine_orb::test::graf(3);
+  const Eigen::Matrix3d truth = to_eigen(affine_orb::test::graf_homography_1to3());
   const Pair pair = homography_grid(truth, img1.size(), img3.size(), 24, 0.3, 13);
   REQUIRE(pair.scene_count > 300);
   const ModelSelectionResult r = affine_orb::select_model(pair.points1, pair.points2, options_for_noise());
@@ -480,7 +480,7 @@ TEST_CASE("degenerate input and bad options: success = false or std::invalid_arg
 }
 
 TEST_CASE("image correction: warp a real photo by a known H and correct it back") {
-  const cv::Mat img1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat img1 = affine_orb::test::graf(1);
   Eigen::Matrix3d h;  // x2 ~ h x1: a moderate perspective change of the 800x640 photo
   h << 0.92, 0.12, 25.0, -0.06, 0.95, 30.0, 1.2e-4, 6.0e-5, 1.0;
   cv::Matx33d hm;

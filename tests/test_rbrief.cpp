@@ -116,7 +116,7 @@ TEST_CASE("ORB's disc: the published radius-15 rows, and symmetric under transpo
 }
 
 TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every level") {
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   affine_orb::ExtractorOptions options;
   options.features = 1500;
   options.views.max_tilt = 1.0;
@@ -158,7 +158,7 @@ TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every 
 }
 
 TEST_CASE("rBRIEF describe() matches the definition at arbitrary angles") {
-  const cv::Mat image = affine_orb::test::oxford_image("bark", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   affine_orb::Rbrief rbrief;
   affine_orb::Rbrief::LevelData data;
   rbrief.prepare(image, data);
@@ -278,7 +278,7 @@ std::vector<cv::Point2f> random_points(cv::Size size, int count, int margin, std
 }  // namespace
 
 TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on every pixel of the union") {
-  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat photo = affine_orb::test::textured_photo();
   std::mt19937 rng(7);
   affine_orb::RbriefOptions wide_kernel;
   wide_kernel.blur_kernel = 11;
@@ -291,7 +291,7 @@ TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on e
     // Levels of several sizes, including ones smaller than a square and a ROI of a larger image.
     for (const cv::Rect roi : {cv::Rect(0, 0, 640, 480), cv::Rect(13, 7, 301, 203), cv::Rect(100, 100, 90, 40),
                                cv::Rect(5, 5, 20, 33), cv::Rect(50, 60, 7, 9)}) {
-      const cv::Mat level = boat(roi);
+      const cv::Mat level = photo(roi);
       cv::Mat expected;
       cv::GaussianBlur(level, expected, cv::Size(size, size), sigma, sigma,
                        cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
@@ -421,8 +421,8 @@ TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar ref
 }
 
 TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole photos") {
-  const cv::Mat graf = affine_orb::test::oxford_image("graf", 1);
-  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(0, 0, 333, 222));
+  const cv::Mat graf = affine_orb::test::graf(1);
+  const cv::Mat photo = affine_orb::test::textured_photo()(cv::Rect(0, 0, 333, 222));
   for (const auto& kernel_shape : {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}}) {
     const int size = kernel_shape.first;  // not a structured binding: CAPTURE's lambda captures it
     const double sigma = kernel_shape.second;
@@ -433,7 +433,7 @@ TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole
     int sum = 0;
     for (std::uint16_t k : kernel) sum += k;
     CHECK(sum == 256);
-    for (const cv::Mat* image : {&graf, &boat}) {
+    for (const cv::Mat* image : {&graf, &photo}) {
       const cv::Mat copy = image->clone();
       cv::Mat expected;
       cv::GaussianBlur(copy, expected, cv::Size(size, size), sigma, sigma, cv::BORDER_REFLECT_101);
@@ -446,13 +446,14 @@ TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole
   // Squares of every small width (the narrow ones take the scalar path), some at the image edges.
   const std::vector<std::uint16_t> kernel = affine_orb::detail::gaussian_kernel_q8(7, 2.0);
   cv::Mat expected;
-  cv::GaussianBlur(boat, expected, cv::Size(7, 7), 2.0, 2.0, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+  cv::GaussianBlur(photo, expected, cv::Size(7, 7), 2.0, 2.0, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
   affine_orb::detail::GaussianQ8Work work;
-  cv::Mat ours(boat.size(), CV_8UC1, cv::Scalar(0));
+  cv::Mat ours(photo.size(), CV_8UC1, cv::Scalar(0));
   for (int width = 1; width <= 12; ++width) {
-    for (const cv::Point corner : {cv::Point(0, 0), cv::Point(100, 50), cv::Point(boat.cols - width, boat.rows - 9)}) {
+    for (const cv::Point corner :
+         {cv::Point(0, 0), cv::Point(100, 50), cv::Point(photo.cols - width, photo.rows - 9)}) {
       const cv::Rect square(corner, cv::Size(width, 9));
-      affine_orb::detail::smooth_square_q8(boat, square, kernel, work, ours);
+      affine_orb::detail::smooth_square_q8(photo, square, kernel, work, ours);
       CAPTURE(width);
       CHECK(cv::countNonZero(ours(square) != expected(square)) == 0);
     }
@@ -462,7 +463,7 @@ TEST_CASE("the integer Gaussian reproduces cv::GaussianBlur bit for bit on whole
 }
 
 TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianBlur") {
-  const cv::Mat image = affine_orb::test::oxford_image("bark", 1)(cv::Rect(10, 20, 500, 400));
+  const cv::Mat image = affine_orb::test::textured_photo()(cv::Rect(10, 20, 500, 400));
   affine_orb::RbriefOptions small_kernel;
   small_kernel.blur_kernel = 5;
   small_kernel.blur_sigma = 1.3;
@@ -497,7 +498,7 @@ TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianB
 }
 
 TEST_CASE("rBRIEF orientation equals the intensity-centroid angle of the scalar disc") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1)(cv::Rect(30, 40, 600, 500));
+  const cv::Mat image = affine_orb::test::graf(1)(cv::Rect(30, 40, 600, 500));
   std::mt19937 rng(12);
   for (int radius : {3, 8, 15, 22, 64}) {
     affine_orb::RbriefOptions options;

@@ -77,7 +77,7 @@ double mean_error(const std::vector<cv::Point2f>& points, const std::vector<Eige
 }  // namespace
 
 TEST_CASE("aligned points land within a twentieth of a pixel of the truth on a known warp") {
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image1 = affine_orb::test::graf(1);
   const Eigen::Matrix3d h = known_homography();
   const cv::Mat image2 = warped(image1, h);
   const Perturbed p = perturbed_keypoints(image1, h, 1.5);
@@ -100,7 +100,7 @@ TEST_CASE("aligned points land within a twentieth of a pixel of the truth on a k
 }
 
 TEST_CASE("a change of light between the images does not move the aligned points") {
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image1 = affine_orb::test::graf(1);
   const Eigen::Matrix3d h = known_homography();
   cv::Mat image2;
   warped(image1, h).convertTo(image2, CV_8U, 0.6, 40.0);  // less contrast, brighter
@@ -112,7 +112,7 @@ TEST_CASE("a change of light between the images does not move the aligned points
 }
 
 TEST_CASE("flat patches, patches leaving an image and far moves keep their points") {
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image1 = affine_orb::test::graf(1);
   const Eigen::Matrix3d h = known_homography();
   const cv::Mat image2 = warped(image1, h);
   SUBCASE("a flat image pair has nothing to align") {
@@ -177,7 +177,8 @@ TEST_CASE("refine_correspondences refuses bad input") {
   CHECK_THROWS_AS(two_view.check(), std::invalid_argument);
 }
 
-TEST_CASE("TwoViewOptions::refine brings the matcher's homography closer to the ground truth") {
+TEST_CASE("TwoViewOptions::refine brings the matcher's homography closer to the ground truth" *
+          doctest::test_suite("data")) {
   // Oxford pairs with their published homographies; the judge of bench/eval_two_view's corners.
   double sum_off = 0.0, sum_on = 0.0;
   for (const auto& pair : {std::pair<std::string, int>{"graf", 2}, {"boat", 3}, {"bikes", 3}}) {

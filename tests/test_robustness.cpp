@@ -81,7 +81,7 @@ TEST_CASE("wrong pixel types (CV_8UC3, CV_16U, CV_32F, CV_8UC4): std::invalid_ar
 }
 
 TEST_CASE("masks of the wrong size or type: std::invalid_argument") {
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   for_each_extractor([&](auto& extractor) {
     CHECK_THROWS_AS(extractor.extract(image, cv::Mat(10, 10, CV_8UC1, cv::Scalar(1))), std::invalid_argument);
     CHECK_THROWS_AS(extractor.extract(image, cv::Mat(image.cols, image.rows, CV_8UC1, cv::Scalar(1))),
@@ -102,7 +102,7 @@ TEST_CASE("1x1, 10x10, 10x10000 and 10000x10 images: empty result") {
 }
 
 TEST_CASE("image smaller than the descriptor patch: empty result") {
-  const cv::Mat photo = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat photo = affine_orb::test::graf(1);
   for_each_extractor([&](auto& extractor) {
     const int side = 2 * extractor.descriptor().border();
     CHECK(extractor.extract(photo(cv::Rect(300, 300, side, side)).clone()).empty());
@@ -132,7 +132,7 @@ TEST_CASE("pure noise: the full budget, every keypoint inside the image") {
 }
 
 TEST_CASE("non-continuous ROI of a larger image: the same result as its copy") {
-  const cv::Mat big = affine_orb::test::oxford_image("bark", 1);
+  const cv::Mat big = affine_orb::test::textured_photo();
   const cv::Mat roi = big(cv::Rect(37, 41, 400, 300));
   REQUIRE_FALSE(roi.isContinuous());
   for_each_extractor([&](auto& extractor) {

@@ -286,16 +286,14 @@ TEST_CASE("KITTI reader: images in name order, times, poses, calibration in thre
 
 TEST_CASE("homography reader: Oxford numbers and OpenCV XML equal the files; bad files throw") {
   namespace ex = affine_orb::examples;
-  // The Oxford text file against the test's own reader of it.
-  const cv::Matx33d oxford = ex::read_homography(affine_orb::test::data_dir() + "/oxford/graf/H1to3p");
-  const cv::Matx33d reference = affine_orb::test::oxford_homography("graf", 3);
+  // A file in Oxford's text format (tests/data/graf_H1to3p) against the test's own reader of it.
+  const std::string text = affine_orb::test::fixtures_dir() + "/graf_H1to3p";
+  const cv::Matx33d oxford = ex::read_homography(text);
+  const cv::Matx33d reference = affine_orb::test::read_homography_text(text);
   for (int i = 0; i < 9; ++i) CHECK(oxford.val[i] == reference.val[i]);
   // opencv-doc's graf H1to3p.xml is the same matrix in OpenCV's XML storage (to 1e-6 relative).
-  const std::string xml = affine_orb::test::opencv_samples_dir() + "/H1to3p.xml";
-  if (std::filesystem::exists(xml)) {
-    const cv::Matx33d stored = ex::read_homography(xml);
-    for (int i = 0; i < 9; ++i) CHECK(stored.val[i] == doctest::Approx(reference.val[i]).epsilon(1e-5));
-  }
+  const cv::Matx33d stored = ex::read_homography(affine_orb::test::opencv_samples_dir() + "/H1to3p.xml");
+  for (int i = 0; i < 9; ++i) CHECK(stored.val[i] == doctest::Approx(reference.val[i]).epsilon(1e-5));
   CHECK(ex::parse_homography("%YAML:1.0\n---\nH: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
                              "   data: [ 2., 0., 1., 0., 2., 3., 0., 0., 1. ]\n",
                              "h.yml")(1, 2) == 3.0);
@@ -415,7 +413,7 @@ TEST_CASE("folder reader: image files only, natural name order; subsample keeps 
 // --- tracker ---------------------------------------------------------------------------------
 
 TEST_CASE("tracker: a noise frame is lost, tracking recovers after it, inliers and rotations are right") {
-  const cv::Mat photo = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat photo = affine_orb::test::graf(1);
   const RotatingCamera scene = rotating_camera(photo, 12, 0.6);
   constexpr std::size_t kNoiseFrame = 5;
   for (const double max_tilt : {1.0, 2.0 * std::sqrt(2.0)}) {
@@ -475,9 +473,9 @@ TEST_CASE("tracker: a noise frame is lost, tracking recovers after it, inliers a
 }
 
 TEST_CASE("tracker: a scene cut makes the keyframe stale; the last of max_lost_frames lost frames restarts") {
-  const RotatingCamera first = rotating_camera(affine_orb::test::oxford_image("graf", 1), 4, 0.5);
-  const cv::Mat boat = affine_orb::test::oxford_image("boat", 1)(cv::Rect(0, 0, 800, 640)).clone();
-  const RotatingCamera second = rotating_camera(boat, 6, 0.5);
+  const RotatingCamera first = rotating_camera(affine_orb::test::graf(1), 4, 0.5);
+  const cv::Mat other = affine_orb::test::textured_photo()(cv::Rect(0, 0, 800, 640)).clone();
+  const RotatingCamera second = rotating_camera(other, 6, 0.5);
   affine_orb::Extractor<affine_orb::Rbrief> extractor(extractor_options(1.0));
   affine_orb::KeyframeTrackerOptions options;
   options.max_lost_frames = 3;
@@ -513,7 +511,7 @@ TEST_CASE("tracker: a scene cut makes the keyframe stale; the last of max_lost_f
 }
 
 TEST_CASE("tracker: frames without features are lost and cannot become keyframes") {
-  const RotatingCamera scene = rotating_camera(affine_orb::test::oxford_image("graf", 1), 3, 0.5);
+  const RotatingCamera scene = rotating_camera(affine_orb::test::graf(1), 3, 0.5);
   affine_orb::Extractor<affine_orb::Rbrief> extractor(extractor_options(1.0));
   affine_orb::KeyframeTrackerOptions options;
   options.max_lost_frames = 1;
@@ -579,7 +577,8 @@ TEST_CASE("tracker: bad options and inconsistent features throw") {
   CHECK(tracker.frames() == 0);
 }
 
-TEST_CASE("KITTI 06, first 20 frames: every frame tracked, rotations against the ground truth") {
+TEST_CASE("KITTI 06, first 20 frames: every frame tracked, rotations against the ground truth" *
+          doctest::test_suite("data")) {
   // Measured (1000 features, 2 threads, default options): plain features track all 20 frames with
   // 71–194 inliers to the keyframe (the loss threshold is 30) and take 7 keyframes; affine features
   // (max tilt 2√2, 18 views) also track all 20 and take 8. Frame-to-frame rotations are recovered

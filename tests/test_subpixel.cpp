@@ -118,7 +118,7 @@ TEST_CASE("sub-pixel keypoints land nearer the ground truth than integer ones un
 }
 
 TEST_CASE("sub-pixel positions change only the positions, by at most half a level pixel per axis") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   for (const double max_tilt : {1.0, 2.0}) {
     CAPTURE(max_tilt);
     const auto integer = extract(image, false, max_tilt);
@@ -153,7 +153,7 @@ TEST_CASE("sub-pixel positions change only the positions, by at most half a leve
 }
 
 TEST_CASE("without sub-pixel positions every image keypoint lies on a pixel of its level") {
-  const cv::Mat image = affine_orb::test::oxford_image("boat", 1);
+  const cv::Mat image = affine_orb::test::textured_photo();
   const auto f = extract(image, false);
   REQUIRE(f.size() > 1000);
   for (const cv::KeyPoint& k : f.keypoints) {

@@ -86,9 +86,9 @@ affine_orb::TwoViewOptions every_stage(int features) {
 }  // namespace
 
 TEST_CASE("an easy pair is verified by plain keypoints and stops at stage 0") {
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
-  const cv::Mat image2 = affine_orb::test::oxford_image("graf", 2);  // 20° of viewpoint change
-  const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 2);
+  const cv::Mat image1 = affine_orb::test::graf(1);
+  const cv::Mat image2 = affine_orb::test::graf(3);  // 30° of viewpoint change
+  const cv::Matx33d truth = affine_orb::test::graf_homography_1to3();
   affine_orb::TwoViewMatcher<affine_orb::Rbrief> matcher;
   const auto r = matcher.match(image1, image2);
   REQUIRE(r.verified);
@@ -104,8 +104,8 @@ TEST_CASE("an easy pair is verified by plain keypoints and stops at stage 0") {
   CHECK(r.inlier_count == std::count(r.inliers.begin(), r.inliers.end(), 1));
 }
 
-TEST_CASE("a wide-baseline pair escalates to the views and is solved there") {
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+TEST_CASE("a wide-baseline pair escalates to the views and is solved there" * doctest::test_suite("data")) {
+  const cv::Mat image1 = affine_orb::test::graf(1);
   const cv::Mat image2 = affine_orb::test::oxford_image("graf", 5);  // 50°: plain keypoints fail
   const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 5);
   const auto r = affine_orb::match_images(image1, image2);
@@ -120,8 +120,8 @@ TEST_CASE("a wide-baseline pair escalates to the views and is solved there") {
 }
 
 TEST_CASE("stage k's keypoints and descriptors are a superset of stage k-1's") {
-  const cv::Mat image1 = affine_orb::test::oxford_image("boat", 1);
-  const cv::Mat image2 = affine_orb::test::oxford_image("boat", 3);
+  const cv::Mat image1 = affine_orb::test::graf(1);
+  const cv::Mat image2 = affine_orb::test::graf(3);
   const affine_orb::TwoViewOptions options = every_stage(600);
   affine_orb::TwoViewOptions shorter = options;
   shorter.stages.pop_back();
@@ -141,7 +141,7 @@ TEST_CASE("stage k's keypoints and descriptors are a superset of stage k-1's") {
     }
     CHECK(differences == 0);
   }
-  // Each stage adds its budget (boat has corners enough) and reports what it had.
+  // Each stage adds its budget (graf has corners enough) and reports what it had.
   CHECK(full.stages[0].keypoints1 == 600);
   CHECK(full.stages[1].keypoints1 == 600 + static_cast<int>(std::lround(options.stages[0].view_features * 600)));
   CHECK(full.stages[2].keypoints1 == static_cast<int>(full.features1.size()));
@@ -149,7 +149,7 @@ TEST_CASE("stage k's keypoints and descriptors are a superset of stage k-1's") {
 }
 
 TEST_CASE("the escalation stops only on enough inliers making up enough of the matches") {
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   const cv::Matx33d truth = turned_camera(15.0, image.size());
   cv::Mat turned;
   cv::warpPerspective(image, turned, cv::Mat(truth), image.size());
@@ -184,8 +184,8 @@ TEST_CASE("the escalation stops only on enough inliers making up enough of the m
 }
 
 TEST_CASE("two-view matching honours masks and refuses bad input") {
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
-  const cv::Mat image2 = affine_orb::test::oxford_image("graf", 2);
+  const cv::Mat image1 = affine_orb::test::graf(1);
+  const cv::Mat image2 = affine_orb::test::graf(3);
   affine_orb::TwoViewMatcher<affine_orb::Rbrief> matcher(every_stage(500));
   cv::Mat mask1(image1.size(), CV_8UC1, cv::Scalar(255));
   mask1.colRange(0, image1.cols / 2).setTo(0);
@@ -281,7 +281,7 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
   // 9.8 px) gives a homography that holds the stage but fits imprecise correspondences. The
   // guided rounds (gate around its predictions, local optimisation at σ = 1 px) must find more
   // matches that the ground truth confirms and a homography whose corners are closer to it.
-  const cv::Mat image = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image = affine_orb::test::graf(1);
   const cv::Matx33d truth = turned_camera(35.0, image.size());
   cv::Mat turned;
   cv::warpPerspective(image, turned, cv::Mat(truth), image.size());
@@ -324,7 +324,8 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
   CHECK(guided.model.fundamental_inliers.empty());
 }
 
-TEST_CASE("a stage-0 homography with imprecise corners escalates under the default precision test") {
+TEST_CASE("a stage-0 homography with imprecise corners escalates under the default precision test" *
+          doctest::test_suite("data")) {
   // graf 1 -> 4 (40° of viewpoint change): stage 0's RANSAC homography has min_inliers inliers
   // making up min_inlier_ratio of the matches but misses the ground truth's corners by far more
   // than the judge's 5 px. Without the precision test the guided rounds grow it into a model that
@@ -332,7 +333,7 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   // matcher stops there. The default test judges the RANSAC model before those rounds: its two
   // half estimates disagree by more than the bound, stage 0 does not verify, and the views find a
   // homography within 5 px of the ground truth.
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image1 = affine_orb::test::graf(1);
   const cv::Mat image2 = affine_orb::test::oxford_image("graf", 4);
   const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 4);
   const affine_orb::TwoViewOptions defaults;
@@ -448,7 +449,7 @@ TEST_CASE("a plane at tilt 8 is out of the default stages' reach and verified by
   // Tilt 8 (82.8° of latitude) along a direction 30° off the image axes: the default stages, whose
   // views end at tilt 2√2 in both images, find no model (5 inliers); the two stages beyond them, 4
   // and 4√2 as MODS and ASIFT's maxTilt 5, verify the pair at stage 3 with about 180 inliers.
-  const cv::Mat image1 = affine_orb::test::oxford_image("graf", 1);
+  const cv::Mat image1 = affine_orb::test::graf(1);
   const auto [truth, size2] = tilted_plane(8.0, 30.0, 20.0, 1.5, image1.size());
   cv::Mat image2;
   cv::warpPerspective(image1, image2, truth, size2, cv::INTER_AREA);

@@ -53,4 +53,5 @@ cmake -S . -B "$root/aarch64" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
   -DAFFINE_ORB_BUILD_PYTHON=OFF
 cmake --build "$root/aarch64" -j "$jobs" --target $tests
-ctest --test-dir "$root/aarch64" --output-on-failure -j "$jobs" -R "^(${tests// /|})\$"
+# Each program's cases that read the evaluation data run as <program>_data (tests/CMakeLists.txt).
+ctest --test-dir "$root/aarch64" --output-on-failure -j "$jobs" -R "^(${tests// /|})(_data)?\$"

@@ -4,7 +4,7 @@
 #   bash tests/check_data.sh [DATA_DIR]      (default: ../shared/data beside the checkout)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-data=${1:-${AFFINE_ORB_DATA_DIR:-$root/../shared/data}}
+data=${1:-$root/../shared/data}
 if [[ ! -d $data ]]; then
   echo "no evaluation data at $data (docs/data.md says where it comes from)" >&2
   exit 1

@@ -3,7 +3,8 @@
 #   1. installs the Debian 12 packages it needs (when run as root and they are missing);
 #   2. Release build of the library, tests, examples, benchmarks and the Python module; ctest
 #      (which includes the install + find_package(affine_orb)/pkg-config consumer check and the module's
-#      pytest suite);
+#      pytest suite), after tests/check_data.sh has checked the evaluation data, so that the tests
+#      labelled "data" run here instead of being skipped;
 #   3. the Debian packages (tests/package_check.sh): built with cpack, installed with apt-get,
 #      used by a C++ consumer (find_package and pkg-config) and by /usr/bin/python3, removed again
 #      (skipped when not root and sudo needs a password);
@@ -31,6 +32,7 @@ jobs=$(nproc)
 stage() { echo "== $* (at ${SECONDS} s)"; }
 
 stage "Release build and tests"
+bash tests/check_data.sh
 cmake -S . -B "$root/release" -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build "$root/release" -j "$jobs"
 ctest --test-dir "$root/release" --output-on-failure -j "$jobs"

@@ -271,19 +271,8 @@ class Extractor {
   /// grids for the views.
   void process_fork_image(const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
     try {
-      ViewWork& view = view_work_[0];
-      fork_.scales.fit(image.size());
-      image_pyramid_.build_resized(image, fork_.scales.sizes);
-      const detail::ForkFlavour flavour =
-          options_.image_keypoints == ImageKeypoints::kOrbSlam3
-              ? detail::ForkFlavour{35, detail::OctreeTieOrder::kLeftEdge}
-              : detail::ForkFlavour{30, detail::OctreeTieOrder::kCreation};
-      for (int l = 0; l < options_.pyramid.levels; ++l) {
-        LevelWork& level = view.levels[static_cast<std::size_t>(l)];
-        level.clear();
-        detail::extract_fork_level(descriptor_, image_pyramid_.level(l), l, flavour, options_.detector, mask, fork_,
-                                   work.describe_points, work.descriptor_data, level);
-      }
+      detail::extract_fork_image(descriptor_, image, mask, options_, image_pyramid_, fork_, work.describe_points,
+                                 work.descriptor_data, view_work_[0].levels);
       if (!turns_->wait(0)) return;
       if (merging()) enter_kept(0);
       turns_->pass(0);

@@ -333,5 +333,30 @@ void extract_fork_level(const Descriptor& descriptor, const cv::Mat& level, int 
   std::iota(out.kept.begin(), out.kept.end(), 0);
 }
 
+/// The fork's flavour of ExtractorOptions::image_keypoints (kOrbSlam2 or kOrbSlam3).
+inline ForkFlavour fork_flavour(ImageKeypoints keypoints) {
+  return keypoints == ImageKeypoints::kOrbSlam3 ? ForkFlavour{35, OctreeTieOrder::kLeftEdge}
+                                                : ForkFlavour{30, OctreeTieOrder::kCreation};
+}
+
+/// The fork's keypoints of `image` (options.image_keypoints) into `levels`, one record per pyramid
+/// level, on `pyramid`, which it builds as the fork does; `work`, `describe_points` and `data` are
+/// reused buffers.
+template <class Descriptor, int Bits>
+void extract_fork_image(const Descriptor& descriptor, const cv::Mat& image, const cv::Mat& mask,
+                        const ExtractorOptions& options, Pyramid& pyramid, ForkImageWork& work,
+                        std::vector<cv::Point2f>& describe_points, typename Descriptor::LevelData& data,
+                        std::vector<LevelWork<Bits>>& levels) {
+  work.scales.fit(image.size());
+  pyramid.build_resized(image, work.scales.sizes);
+  const ForkFlavour flavour = fork_flavour(options.image_keypoints);
+  for (int l = 0; l < options.pyramid.levels; ++l) {
+    LevelWork<Bits>& level = levels[static_cast<std::size_t>(l)];
+    level.clear();
+    extract_fork_level(descriptor, pyramid.level(l), l, flavour, options.detector, mask, work, describe_points, data,
+                       level);
+  }
+}
+
 }  // namespace detail
 }  // namespace affine_orb

@@ -69,14 +69,6 @@ namespace {
 constexpr int kAffineFeatures = 2000;
 constexpr int kPlainFeatures = 1000;
 
-cv::Mat load(const std::string& path) {
-  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) {
-    std::fprintf(stderr, "cannot read %s\n", path.c_str());
-    std::exit(1);
-  }
-  return image;
-}
 
 // Scales the image so that it covers 640x480, then crops the centre.
 cv::Mat to_640x480(const cv::Mat& image) {
@@ -361,12 +353,12 @@ int main(int argc, char** argv) {
   }
   cv::setNumThreads(1);
   const std::string data = affine_orb::bench::data_dir();
-  const cv::Mat graf = to_640x480(load(data + "/oxford/graf/img1.png"));
-  const cv::Mat kitti = to_640x480(load(data + "/kitti06/image_0/000010.png"));
+  const cv::Mat graf = to_640x480(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png"));
+  const cv::Mat kitti = to_640x480(affine_orb::bench::read_gray_or_exit(data + "/kitti06/image_0/000010.png"));
 
   if (!peak_mode.empty()) {
     cv::Mat image;
-    const cv::Mat photo = load(data + "/oxford/graf/img1.png");
+    const cv::Mat photo = affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png");
     cv::resize(photo, image, peak_size, 0, 0, peak_size.width < photo.cols ? cv::INTER_AREA : cv::INTER_LINEAR);
     if (peak_mode == "baseline") {
       std::printf("peak_kb %ld\n", peak_resident_kb());
@@ -406,8 +398,8 @@ int main(int argc, char** argv) {
   affine_orb::ExtractorOptions options = affine_options(1);
   options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
-  const auto f1 = extractor.extract(load(data + "/oxford/graf/img1.png"));
-  const auto f3 = extractor.extract(load(data + "/oxford/graf/img3.png"));
+  const auto f1 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png"));
+  const auto f3 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img3.png"));
   std::printf("Accuracy, graf 1 -> 3 at full size, %d affine features per image, kKeepAll, ratio 0.8: ", kAffineFeatures);
   std::printf("%d distinct correct matches (< 3 px, 2-px cells)\n",
               distinct_correct(f1, f3, read_homography(data + "/oxford/graf/H1to3p")));

@@ -6,14 +6,28 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 namespace affine_orb::bench {
 
 inline std::string data_dir() { return AFFINE_ORB_DATA_DIR; }
 inline std::string opencv_samples_dir() { return AFFINE_ORB_OPENCV_SAMPLES_DIR; }
+
+/// An image of the evaluation data as CV_8UC1; exits with a message when it cannot be read.
+inline cv::Mat read_gray_or_exit(const std::string& path) {
+  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (image.empty()) {
+    std::fprintf(stderr, "cannot read %s\n", path.c_str());
+    std::exit(1);
+  }
+  return image;
+}
 
 inline double median(std::vector<double> values) {
   if (values.empty()) return 0.0;

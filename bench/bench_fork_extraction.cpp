@@ -37,21 +37,12 @@ struct Workload {
   int features;
 };
 
-cv::Mat read_gray(const std::string& path) {
-  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) {
-    std::fprintf(stderr, "cannot read %s\n", path.c_str());
-    std::exit(1);
-  }
-  return image;
-}
-
 std::vector<cv::Mat> kitti00() {
   std::vector<cv::Mat> frames;
   for (int i = 0; i < 160; i += 10) {
     char name[40];
     std::snprintf(name, sizeof(name), "/kitti00/image_0/%06d.png", i);
-    frames.push_back(read_gray(affine_orb::bench::data_dir() + name));
+    frames.push_back(affine_orb::bench::read_gray_or_exit(affine_orb::bench::data_dir() + name));
   }
   return frames;
 }
@@ -59,7 +50,7 @@ std::vector<cv::Mat> kitti00() {
 std::vector<cv::Mat> oxford() {
   std::vector<cv::Mat> frames;
   for (const char* sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
-    frames.push_back(read_gray(affine_orb::bench::data_dir() + "/oxford/" + sequence + "/img1.png"));
+    frames.push_back(affine_orb::bench::read_gray_or_exit(affine_orb::bench::data_dir() + "/oxford/" + sequence + "/img1.png"));
   }
   return frames;
 }

@@ -172,8 +172,8 @@ TEST_CASE("build_resized: every level is what cv::resize makes of the level befo
     ++cases;
   }
   CHECK(cases > 250);
-  // The pyramid of a real frame at ORB-SLAM's sizes.
-  const cv::Mat image = affine_orb::test::kitti_frame(7);
+  // The pyramid of a real photo at ORB-SLAM's sizes.
+  const cv::Mat image = affine_orb::test::textured_photo();
   std::vector<cv::Size> sizes = {image.size()};
   float factor = 1.0f;
   for (int l = 1; l < 8; ++l) {

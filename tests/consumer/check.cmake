@@ -74,7 +74,10 @@ build_and_run("pkg-config (${flags})" "${WORK_DIR}/consumer_pkg_config"
 file(GLOB old_paths RELATIVE "${PREFIX}/include" "${PREFIX}/include/affine_orb/*.hpp")
 list(REMOVE_ITEM old_paths affine_orb/affine_orb.hpp affine_orb/version.hpp)
 file(READ "${SOURCE_DIR}/moved_paths.cpp" moved_paths_source)
-execute_process(COMMAND "${CXX}" -std=c++17 -O1 "${SOURCE_DIR}/moved_paths.cpp" -o "${WORK_DIR}/moved_paths" ${flags}
+# -Wsystem-headers: installed under /usr (the Debian package) they are system headers, whose
+# warnings GCC hides otherwise.
+execute_process(COMMAND "${CXX}" -std=c++17 -O1 -Wsystem-headers "${SOURCE_DIR}/moved_paths.cpp"
+                        -o "${WORK_DIR}/moved_paths" ${flags}
                 RESULT_VARIABLE rc ERROR_VARIABLE warnings)
 if(rc)
   message(FATAL_ERROR "building tests/consumer/moved_paths.cpp failed:\n${warnings}")

@@ -132,17 +132,14 @@ struct ForkCells {
 /// Whether the pixel at `p` (score s >= 1, in `cell`) is a local maximum as cv::FAST's non-maximum
 /// suppression on the cell's image decides: s strictly above each of its 8 neighbours inside the
 /// cell, those outside counting 0. A neighbour below the threshold counts 0 in cv::FAST but is
-/// below s anyway, so the raw map values serve for every threshold.
+/// below s anyway, so the raw map values serve for every threshold. Used for the pixels on a cell's
+/// edge; interior_maxima() decides the others.
 inline bool fork_local_max(const std::uint8_t* p, std::ptrdiff_t step, int x, int y, const cv::Rect& cell) {
   const int s = *p;
   const bool left = x > cell.x;
   const bool right = x < cell.x + cell.width - 1;
   const bool up = y > cell.y;
   const bool down = y < cell.y + cell.height - 1;
-  if (left && right && up && down) {
-    return s > p[-step - 1] && s > p[-step] && s > p[-step + 1] && s > p[-1] && s > p[1] && s > p[step - 1] &&
-           s > p[step] && s > p[step + 1];
-  }
   if (left && s <= p[-1]) return false;
   if (right && s <= p[1]) return false;
   if (up && ((left && s <= p[-step - 1]) || s <= p[-step] || (right && s <= p[-step + 1]))) return false;

@@ -4,6 +4,8 @@
 /// std::invalid_argument with a message that names the function and the offending value.
 
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -24,6 +26,34 @@ inline void require(bool condition, const char* what) {
 
 /// True for a finite value strictly greater than zero (rejects NaN and infinity).
 inline bool positive_finite(double value) { return std::isfinite(value) && value > 0.0; }
+
+/// An interval of allowed values for require_range(): [lo, hi] with each end open on request.
+/// Infinite ends are allowed; NaN lies in no range.
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();  ///< lower end
+  double hi = std::numeric_limits<double>::infinity();   ///< upper end
+  bool lo_open = false;                                  ///< excludes lo
+  bool hi_open = false;                                  ///< excludes hi
+
+  bool contains(double v) const { return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi); }
+};
+
+/// (0, inf): a positive finite value.
+inline constexpr Range kPositive{0.0, std::numeric_limits<double>::infinity(), true, true};
+/// [0, inf): a non-negative finite value.
+inline constexpr Range kNonNegative{0.0, std::numeric_limits<double>::infinity(), false, true};
+
+/// Throws std::invalid_argument("affine_orb: <what> must be in [lo, hi], got <value>") unless
+/// `value` lies in `range`; `what` names the option ("TwoViewOptions: min_inliers"). The message
+/// is built only on failure.
+inline void require_range(double value, Range range, const char* what) {
+  if (range.contains(value)) return;
+  std::ostringstream message;
+  message.precision(12);
+  message << what << " must be in " << (range.lo_open ? '(' : '[') << range.lo << ", " << range.hi
+          << (range.hi_open ? ')' : ']') << ", got " << value;
+  require(false, message.str());
+}
 
 /// Name of an OpenCV matrix type ("CV_8UC3") for error messages.
 inline std::string type_name(int type) { return cv::typeToString(type); }

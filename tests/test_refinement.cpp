@@ -1,4 +1,4 @@
-// Sub-pixel correspondences under a homography (two_view/refinement.hpp) against known geometry:
+// Sub-pixel correspondences under a homography (two_view/alignment.hpp) against known geometry:
 // image 2 is image 1 warped by a chosen homography, so where each point of image 1 lies in image 2
 // is known exactly; and TwoViewOptions::refine on real Oxford pairs against their ground truth.
 #include <doctest/doctest.h>
@@ -16,7 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "affine_orb/extraction/extractor.hpp"
-#include "affine_orb/two_view/refinement.hpp"
+#include "affine_orb/two_view/alignment.hpp"
 #include "affine_orb/two_view/two_view.hpp"
 #include "test_data.hpp"
 

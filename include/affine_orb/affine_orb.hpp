@@ -22,6 +22,6 @@
 #include "affine_orb/geometry/ransac.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
-#include "affine_orb/two_view/refinement.hpp"
+#include "affine_orb/two_view/alignment.hpp"
 #include "affine_orb/two_view/two_view.hpp"
 #include "affine_orb/version.hpp"

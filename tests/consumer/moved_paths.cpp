@@ -1,5 +1,6 @@
-// Includes every header at its 0.1 path (each warns that it is deprecated and includes the header at
-// its 0.2 path), then extracts features of a noise image and matches them with themselves.
+// Includes every header at its 0.1 path and two_view/refinement.hpp at its 0.2 path (each warns that
+// it is deprecated and includes the header at its new path), then extracts features of a noise image
+// and matches them with themselves.
 #include <affine_orb/affine_matching.hpp>
 #include <affine_orb/affine_views.hpp>
 #include <affine_orb/brisk.hpp>
@@ -21,6 +22,7 @@
 #include <affine_orb/rbrief.hpp>
 #include <affine_orb/relative_pose.hpp>
 #include <affine_orb/two_view.hpp>
+#include <affine_orb/two_view/refinement.hpp>
 
 #include <cstdio>
 

@@ -28,7 +28,7 @@
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/geometry/ransac.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
-#include "affine_orb/two_view/refinement.hpp"
+#include "affine_orb/two_view/alignment.hpp"
 #include "affine_orb/two_view/two_view_options.hpp"
 #include "affine_orb/views/affine_views.hpp"
 

@@ -16,7 +16,7 @@
 #include "affine_orb/extraction/extractor_options.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
-#include "affine_orb/two_view/refinement.hpp"
+#include "affine_orb/two_view/alignment.hpp"
 #include "affine_orb/views/affine_views.hpp"
 
 namespace affine_orb {

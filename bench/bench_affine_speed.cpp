@@ -11,7 +11,7 @@
 // README's), with each method's operator-new calls per frame after warm-up and, when valgrind is on
 // the PATH, its instructions per frame: the program runs itself under callgrind (--profile,
 // collecting only inside the frames after a warm-up frame). Then one accuracy figure: distinct
-// correct matches graf 1 -> 3 (full resolution, 2000 features per image, DuplicatePolicy::kKeepAll, ratio 0.8;
+// correct matches graf 1 -> 3 (full resolution, 2000 features per image, merge_duplicates off, ratio 0.8;
 // correct = ‖H x1 − x2‖ < 3 px; matches whose image-1 points fall in the same 2-px cell count once).
 //
 // Then the peak resident memory of one process per method and image size (graf1 resized to
@@ -396,7 +396,7 @@ int main(int argc, char** argv) {
   if (memory) memory_table();
 
   affine_orb::ExtractorOptions options = affine_options(1);
-  options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
+  options.merge_duplicates.reset();
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
   const auto f1 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png"));
   const auto f3 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img3.png"));

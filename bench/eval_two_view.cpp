@@ -15,9 +15,9 @@
 //
 // Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
 // keypoints, one-shot views), both also with ExtractorOptions::subpixel, the two-view matcher with views on demand (TwoViewMatcher's
-// defaults; with sub-pixel keypoints; with aligned correspondences (TwoViewOptions::refine), with
+// defaults; with sub-pixel keypoints; with aligned correspondences (TwoViewOptions::align_correspondences), with
 // and without sub-pixel keypoints; with stages to tilt 4√2; with the precision test
-// max_half_disagreement at 5 px and off; without the guided refinement, with and without the
+// max_half_disagreement at 5 px and off; without guided matching, with and without the
 // precision test),
 // cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
 // 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
@@ -49,6 +49,7 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -387,19 +388,19 @@ int main(int argc, char** argv) {
   affine_orb::TwoViewOptions many = defaults;
   many.min_inliers = 200;
   // The precision test at another bound, or off (TwoViewOptions::max_half_disagreement).
-  const auto precise = [](affine_orb::TwoViewOptions o, double pixels) {
+  const auto precise = [](affine_orb::TwoViewOptions o, std::optional<double> pixels) {
     o.max_half_disagreement = pixels;
     return o;
   };
   // Image 2's points aligned with image 1's patches under the verified homography
-  // (TwoViewOptions::refine).
+  // (TwoViewOptions::align_correspondences).
   const auto aligned = [](affine_orb::TwoViewOptions o) {
-    o.refine = true;
+    o.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
     return o;
   };
-  // Without the guided refinement of a verified homography (TwoViewOptions::guided).
+  // Without guided matching of a verified homography (TwoViewOptions::guided_matching).
   const auto unguided = [](affine_orb::TwoViewOptions o) {
-    o.guided.iterations = 0;
+    o.guided_matching.reset();
     return o;
   };
   // The default stages and two more to extreme tilts (4 and 4√2, as MODS and ASIFT's maxTilt 5),
@@ -423,9 +424,9 @@ int main(int argc, char** argv) {
       two_view("ours views on demand, sub-pixel, aligned", aligned(subpixel_views)),
       two_view("ours views on demand, stages to 5.66", extreme),
       two_view("ours views on demand, half disagreement 5 px", precise(defaults, 5.0)),
-      two_view("ours views on demand, no precision test", precise(defaults, 0.0)),
+      two_view("ours views on demand, no precision test", precise(defaults, std::nullopt)),
       two_view("ours views on demand, no guided matching", unguided(defaults)),
-      two_view("ours views on demand, no guided matching, no precision test", precise(unguided(defaults), 0.0)),
+      two_view("ours views on demand, no guided matching, no precision test", precise(unguided(defaults), std::nullopt)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),
       peer("cv::SIFT", cv::SIFT::create(), model),

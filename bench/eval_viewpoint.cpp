@@ -297,7 +297,7 @@ std::string summary_table(const std::vector<Row>& rows, const std::vector<Method
 int main(int argc, char** argv) {
   std::string out_dir = ".";
   int features = 1000;
-  double view_features = affine_orb::ExtractorOptions{}.view_features;
+  double view_features = affine_orb::AdditiveBudget{}.view_features;
   affine_orb::ExtractorOptions base;
   int threads = 1;
   std::string only;
@@ -355,14 +355,14 @@ int main(int argc, char** argv) {
   // Matching two images: the strongest corners (Spreading::kStrongest, the choice of
   // affine_orb_match); the quadtree rows show the SLAM spreading.
   auto strongest = [view_features](affine_orb::ExtractorOptions& o) {
-    o.view_features = view_features;
+    std::get<affine_orb::AdditiveBudget>(o.view_budget).view_features = view_features;
     o.spreading = affine_orb::Spreading::kStrongest;
   };
   auto area_split = [](affine_orb::ExtractorOptions& o) {
-    o.view_budget = affine_orb::ViewBudget::kAreaSplit;
+    o.view_budget = affine_orb::AreaSplitBudget{};
     o.spreading = affine_orb::Spreading::kStrongest;
   };
-  auto quadtree = [view_features](affine_orb::ExtractorOptions& o) { o.view_features = view_features; };
+  auto quadtree = [view_features](affine_orb::ExtractorOptions& o) { std::get<affine_orb::AdditiveBudget>(o.view_budget).view_features = view_features; };
   std::vector<Method> methods = {
       ours<affine_orb::Rbrief>(base, "ours plain rBRIEF " + n_image, features, 1.0, threads, strongest),
       ours<affine_orb::Rbrief>(base, "ours plain rBRIEF " + n_total, total, 1.0, threads, strongest),
@@ -370,9 +370,9 @@ int main(int argc, char** argv) {
       ours<affine_orb::Rbrief>(base, "ours affine rBRIEF area split " + n_total, total, max_tilt, threads, area_split),
       ours<affine_orb::Rbrief>(base, "ours affine rBRIEF repeats +-1 level", features, max_tilt, threads,
                                [view_features](affine_orb::ExtractorOptions& o) {
-                                 o.view_features = view_features;
+                                 std::get<affine_orb::AdditiveBudget>(o.view_budget).view_features = view_features;
                                  o.spreading = affine_orb::Spreading::kStrongest;
-                                 o.repeat_levels = 1;
+                                 o.merge_duplicates->repeat_levels = 1;
                                }),
       ours<affine_orb::Brisk>(base, "ours plain BRISK " + n_total, total, 1.0, threads, strongest),
       ours<affine_orb::Brisk>(base, "ours affine BRISK", features, max_tilt, threads, strongest),

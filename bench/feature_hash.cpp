@@ -115,18 +115,18 @@ void hash_extraction(const std::string& name, const ExtractorOptions& options, c
   }
 }
 
-/// Views on demand: extract_image() and extend() up to each default stage of TwoViewOptions.
+/// Views on demand: extract_image() and ViewSession::extend() up to each default stage of TwoViewOptions.
 void hash_stages(const std::vector<Image>& images) {
   const affine_orb::TwoViewOptions two_view;
   Extractor<Rbrief> extractor(two_view.extractor);
   for (const Image& image : images) {
     Hash hash;
-    auto [all, cursor] = extractor.extract_image(image.pixels);
+    auto [all, session] = extractor.extract_image(image.pixels);
     add_features(hash, all);
     std::size_t count = all.size();
     for (const affine_orb::ViewStage& stage : two_view.stages) {
-      const auto more = extractor.extend(
-          cursor, stage.max_tilt, static_cast<int>(std::lround(stage.view_features * two_view.extractor.features)));
+      const auto more =
+          session.extend(stage.max_tilt, static_cast<int>(std::lround(stage.view_features * two_view.extractor.features)));
       add_features(hash, more);
       count += more.size();
     }
@@ -242,15 +242,15 @@ int main(int argc, char** argv) {
   threaded.threads = 2;
   hash_extraction<Rbrief>("affine default, 2 threads", threaded, images);
   ExtractorOptions area = affine;
-  area.view_budget = affine_orb::ViewBudget::kAreaSplit;
+  area.view_budget = affine_orb::AreaSplitBudget{};
   hash_extraction<Rbrief>("affine area split", area, images);
   ExtractorOptions keep_all = affine;
-  keep_all.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
+  keep_all.merge_duplicates.reset();
   keep_all.spreading = affine_orb::Spreading::kStrongest;
   hash_extraction<Rbrief>("affine keep all, strongest", keep_all, images);
-  ExtractorOptions refined = affine;
-  refined.refine.enabled = true;
-  hash_extraction<Rbrief>("affine refined", refined, images);
+  ExtractorOptions snapped = affine;
+  snapped.snap_to_corners = affine_orb::CornerSnapOptions{};
+  hash_extraction<Rbrief>("affine snapped to corners", snapped, images);
 
   ExtractorOptions orbslam2 = plain;
   orbslam2.image_keypoints = affine_orb::ImageKeypoints::kOrbSlam2;

@@ -31,7 +31,7 @@ std::string usage() {
                 "                      --view-features x N more: %d keypoints in all by default\n"
                 "  --view-features F   tilted views' keypoints as a multiple of --features (default %g, 0 = none)\n"
                 "  --max-tilt T        largest simulated tilt (1 = no tilted views; default %.3f = %d tilted views)\n",
-                defaults.features, affine_orb::examples::keypoint_budget(defaults), defaults.view_features,
+                defaults.features, affine_orb::examples::keypoint_budget(defaults), defaults.additive_budget()->view_features,
                 defaults.views.max_tilt, affine_orb::examples::tilted_views(defaults.views));
   return std::string(
              "usage: affine_orb_extract IMAGE [--features N] [--view-features F] [--descriptor rbrief|brisk]\n"
@@ -96,7 +96,8 @@ int main(int argc, char** argv) {
     affine_orb::examples::Args args(argc, argv);
     affine_orb::ExtractorOptions options;
     const bool help = affine_orb::examples::parse_common(args, options);
-    options.view_features = args.real("--view-features", options.view_features);
+    affine_orb::AdditiveBudget& additive = std::get<affine_orb::AdditiveBudget>(options.view_budget);
+    additive.view_features = args.real("--view-features", additive.view_features);
     if (help) {
       std::fputs(usage().c_str(), stdout);
       return 0;

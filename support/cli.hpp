@@ -123,10 +123,11 @@ inline int tilted_views(const AffineViewOptions& options) {
 
 /// The keypoints an extraction with `options` returns from an image with enough corners: `features`
 /// from the image itself, plus round(view_features · features) from the tilted views when there are
-/// any and the budget is additive (ExtractorOptions::view_features).
+/// any and the budget is additive (AdditiveBudget::view_features).
 inline int keypoint_budget(const ExtractorOptions& options) {
-  if (options.view_budget != ViewBudget::kAdditive || tilted_views(options.views) == 0) return options.features;
-  return options.features + static_cast<int>(std::lround(options.view_features * options.features));
+  const AdditiveBudget* additive = options.additive_budget();
+  if (!additive || tilted_views(options.views) == 0) return options.features;
+  return options.features + static_cast<int>(std::lround(additive->view_features * options.features));
 }
 
 /// "2000 keypoints: 1000 from the image + 1000 from 17 tilted views" for keypoints whose view

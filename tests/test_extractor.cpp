@@ -378,12 +378,12 @@ TEST_CASE("the area split's merge keeps exactly what a brute-force merge keeps")
     options.features = 1000000;
     options.pyramid.levels = 3;
     options.detector.score = score;
-    options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
-    options.view_budget = affine_orb::ViewBudget::kAreaSplit;
+    options.merge_duplicates.reset();
+    options.view_budget = affine_orb::AreaSplitBudget{};
     affine_orb::Extractor<affine_orb::Rbrief> keep_all(options);
     const auto all = keep_all.extract(image);
     const std::vector<affine_orb::AffineView> views = keep_all.views();
-    options.duplicates = affine_orb::DuplicatePolicy::kMerge;
+    options.merge_duplicates = affine_orb::MergeOptions{};
     const auto merged = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
     // The level a keypoint was detected at in its view, from its size 31·s^l·√t.
     auto level_of = [&](std::size_t i) {
@@ -400,7 +400,7 @@ TEST_CASE("the area split's merge keeps exactly what a brute-force merge keeps")
       for (std::size_t i = 0; i < all.size(); ++i) {
         if (all.views[i] != view) continue;
         const int level = level_of(i);
-        const double radius = options.merge_radius * std::pow(options.pyramid.scale_factor, level);
+        const double radius = options.merge_duplicates->radius * std::pow(options.pyramid.scale_factor, level);
         bool duplicate = false;
         for (std::size_t k : expected) {
           if (level_of(k) != level) continue;

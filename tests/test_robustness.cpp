@@ -171,8 +171,10 @@ TEST_CASE("zero, negative, NaN and huge options: std::invalid_argument") {
   rejects_options([](auto& o) { o.views.antialias = kInf; });
   rejects_options([](auto& o) { o.threads = 0; });
   rejects_options([](auto& o) { o.threads = 100000; });
-  rejects_options([](auto& o) { o.merge_radius = kNan; });
-  rejects_options([](auto& o) { o.duplicates = static_cast<affine_orb::DuplicatePolicy>(-1); });
+  rejects_options([](auto& o) { o.merge_duplicates->radius = kNan; });
+  rejects_options([](auto& o) { o.merge_duplicates->repeat_levels = 5; });
+  rejects_options([](auto& o) { o.snap_to_corners = affine_orb::CornerSnapOptions{-1}; });
+  rejects_options([](auto& o) { std::get<affine_orb::AdditiveBudget>(o.view_budget).view_features = kInf; });
   affine_orb::RbriefOptions rbrief;
   rbrief.blur_sigma = kNan;
   CHECK_THROWS_AS(affine_orb::Rbrief{rbrief}, std::invalid_argument);

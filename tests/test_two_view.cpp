@@ -217,15 +217,17 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
       [](auto& o) { o.min_inliers = 7; },
       [](auto& o) { o.min_inlier_ratio = 1.5; },
       [](auto& o) { o.max_half_disagreement = -1.0; },
-      [](auto& o) { o.guided.iterations = -1; },
-      [](auto& o) { o.guided.iterations = 11; },
-      [](auto& o) { o.guided.sigma = 0.0; },
-      [](auto& o) { o.guided.refinement_passes = 0; },
-      [](auto& o) { o.guided.matching.gate_radius = 0.0; },
-      [](auto& o) { o.guided.refined_gate_radius = -1.0; },
-      [](auto& o) { o.guided.matching.ratio = 0.0f; },
-      [](auto& o) { o.guided.matching.max_distance = -1; },
-      [](auto& o) { o.extractor.view_budget = affine_orb::ViewBudget::kAreaSplit; },
+      [](auto& o) { o.max_half_disagreement = 0.0; },
+      [](auto& o) { o.guided_matching->rounds = 0; },
+      [](auto& o) { o.guided_matching->rounds = 11; },
+      [](auto& o) { o.refit.sigma = 0.0; },
+      [](auto& o) { o.refit.passes = 0; },
+      [](auto& o) { o.guided_matching->matching.gate_radius = 0.0; },
+      [](auto& o) { o.guided_matching->tight_gate_radius = -1.0; },
+      [](auto& o) { o.guided_matching->matching.ratio = 0.0f; },
+      [](auto& o) { o.guided_matching->matching.max_distance = -1; },
+      [](auto& o) { o.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{1}; },
+      [](auto& o) { o.extractor.view_budget = affine_orb::AreaSplitBudget{}; },
   };
   for (const auto& change : invalid) {
     affine_orb::TwoViewOptions bad;
@@ -297,9 +299,10 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
   options.extractor.features = 1000;
   options.stages.clear();
   options.model.sigma = 4.0;
-  options.guided.iterations = 0;
+  options.guided_matching.reset();
   const auto plain = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
-  options.guided.iterations = 2;
+  options.guided_matching = affine_orb::GuidedMatchingOptions{};
+  REQUIRE(options.guided_matching->rounds == 2);
   const auto guided = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
   REQUIRE(plain.verified);
   REQUIRE(guided.verified);
@@ -337,10 +340,10 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   const cv::Mat image2 = affine_orb::test::oxford_image("graf", 4);
   const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 4);
   const affine_orb::TwoViewOptions defaults;
-  REQUIRE(defaults.max_half_disagreement > 0.0);
-  REQUIRE(defaults.guided.iterations > 0);
+  REQUIRE(defaults.max_half_disagreement.has_value());
+  REQUIRE(defaults.guided_matching.has_value());
   affine_orb::TwoViewOptions untested = defaults;
-  untested.max_half_disagreement = 0.0;
+  untested.max_half_disagreement.reset();
   const auto loose = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(untested).match(image1, image2);
   REQUIRE(loose.verified);
   REQUIRE(loose.stage == 0);
@@ -356,16 +359,16 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   const double after_guided = affine_orb::half_disagreement(matched.points1, loose.points2, loose.inliers,
                                                             loose.model.homography, image1.size());
   CAPTURE(after_guided);
-  CHECK(after_guided <= defaults.max_half_disagreement);
+  CHECK(after_guided <= *defaults.max_half_disagreement);
 
   const auto tested = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(defaults).match(image1, image2);
   REQUIRE(tested.stages.size() >= 2);  // stage 0 did not end the escalation
   REQUIRE(tested.stages[0].half_disagreement.has_value());
-  CHECK(*tested.stages[0].half_disagreement > defaults.max_half_disagreement);
+  CHECK(*tested.stages[0].half_disagreement > *defaults.max_half_disagreement);
   // The same stage 0 as without the test, failed on precision alone; the guided rounds skip it,
   // since stage 1 matches everything again and replaces its result.
   affine_orb::TwoViewOptions unguided = untested;
-  unguided.guided.iterations = 0;
+  unguided.guided_matching.reset();
   unguided.stages.clear();
   const auto bare = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(unguided).match(image1, image2);
   CHECK(tested.stages[0].guided_rounds == 0);

@@ -183,13 +183,16 @@ affine_orb::ExtractorOptions make_options(int features, double max_tilt, int thr
   o.features = features;
   o.views.max_tilt = max_tilt;
   o.threads = threads;
-  o.view_features = view_features;
-  o.view_budget = one_of(view_budget, "view_budget", "additive", affine_orb::ViewBudget::kAdditive, "area_split",
-                         affine_orb::ViewBudget::kAreaSplit);
+  if (one_of(view_budget, "view_budget", "additive", true, "area_split", false)) {
+    affine_orb::AdditiveBudget additive;
+    additive.view_features = view_features;
+    o.view_budget = additive;
+  } else {
+    o.view_budget = affine_orb::AreaSplitBudget{};
+  }
   o.spreading = one_of(spreading, "spreading", "quadtree", affine_orb::Spreading::kQuadtree, "strongest",
                        affine_orb::Spreading::kStrongest);
-  o.duplicates = one_of(duplicates, "duplicates", "merge", affine_orb::DuplicatePolicy::kMerge, "keep",
-                        affine_orb::DuplicatePolicy::kKeepAll);
+  if (!one_of(duplicates, "duplicates", "merge", true, "keep", false)) o.merge_duplicates.reset();
   o.pyramid.levels = levels;
   o.pyramid.scale_factor = scale_factor;
   o.detector.initial_threshold = initial_threshold;
@@ -245,7 +248,7 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
     stage["model"] = affine_orb::model_name(s.model);
     stage["half_disagreement"] = s.half_disagreement ? py::object(py::float_(*s.half_disagreement)) : py::none();
     stage["guided_rounds"] = s.guided_rounds;
-    stage["refined"] = s.refined;
+    stage["aligned"] = s.aligned;
     stage["extract_ms"] = s.extract_ms;
     stage["match_ms"] = s.match_ms;
     stage["verify_ms"] = s.verify_ms;
@@ -296,7 +299,7 @@ PYBIND11_MODULE(affine_orb, m) {
            }),
            py::arg("features") = defaults.features, py::arg("max_tilt") = defaults.views.max_tilt,
            py::arg("descriptor") = "rbrief", py::arg("threads") = defaults.threads,
-           py::arg("view_features") = defaults.view_features, py::arg("view_budget") = "additive",
+           py::arg("view_features") = defaults.additive_budget()->view_features, py::arg("view_budget") = "additive",
            py::arg("spreading") = "quadtree", py::arg("duplicates") = "merge",
            py::arg("levels") = defaults.pyramid.levels, py::arg("scale_factor") = defaults.pyramid.scale_factor,
            py::arg("initial_threshold") = defaults.detector.initial_threshold,
@@ -406,7 +409,7 @@ PYBIND11_MODULE(affine_orb, m) {
       "match_images",
       [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
          const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers, double min_inlier_ratio,
-         int guided_rounds, double max_half_disagreement, bool refine, bool all_stages, const std::string& descriptor,
+         int guided_rounds, std::optional<double> max_half_disagreement, bool align_correspondences, bool all_stages, const std::string& descriptor,
          const std::string& spreading, int threads, const py::handle& mask1, const py::handle& mask2) {
         affine_orb::TwoViewOptions options;
         options.extractor.features = features;
@@ -422,9 +425,13 @@ PYBIND11_MODULE(affine_orb, m) {
         }
         options.min_inliers = min_inliers;
         options.min_inlier_ratio = min_inlier_ratio;
-        options.guided.iterations = guided_rounds;
+        if (guided_rounds == 0) {
+          options.guided_matching.reset();
+        } else {
+          options.guided_matching->rounds = guided_rounds;
+        }
         options.max_half_disagreement = max_half_disagreement;
-        options.refine = refine;
+        if (align_correspondences) options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
         options.all_stages = all_stages;
         options.check();
         py::array_t<std::uint8_t> s1, s2, s3, s4;
@@ -439,8 +446,8 @@ PYBIND11_MODULE(affine_orb, m) {
       py::arg("image1"), py::arg("image2"), py::arg("features") = two_view.extractor.features,
       py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = py::none(),
       py::arg("min_inliers") = two_view.min_inliers, py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
-      py::arg("guided_rounds") = two_view.guided.iterations,
-      py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("refine") = two_view.refine,
+      py::arg("guided_rounds") = two_view.guided_matching->rounds,
+      py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("align_correspondences") = false,
       py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
       py::arg("threads") = two_view.extractor.threads, py::arg("mask1") = py::none(), py::arg("mask2") = py::none(),
       "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
@@ -450,17 +457,18 @@ PYBIND11_MODULE(affine_orb, m) {
       "stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
       "stage of 0.5 per further factor sqrt(2), e.g. (4, 0.5) and (5.66, 0.5) for max_tilt=5.66). A "
       "chosen homography verifies only when homographies fitted to the two halves of its RANSAC inliers map image "
-      "1's corners within max_half_disagreement pixels of each other (0 = no precision test; 10 by default, "
+      "1's corners within max_half_disagreement pixels of each other (None = no precision test; 10 by default, "
       "twice the 5 px a solved pair may be off); a supported one is then refined by guided_rounds rounds of "
-      "matching within a gate around its predictions and re-estimation (0 = off); with refine, image 2's point "
+      "matching within a gate around its predictions and re-estimation (0 = off); with align_correspondences, "
+      "image 2's point "
       "of every match is aligned with image 1's patch under the verified "
       "homography (sub-pixel correspondences) and the homography re-estimated on them. "
       "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
       "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image 2's "
-      "point of the correspondence, aligned with refine, else the train keypoint's position), model (\"homography\", \"fundamental\" "
+      "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model (\"homography\", \"fundamental\" "
       "or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, or None) and stages (one "
       "dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement (pixels, or None when "
-      "not measured), guided_rounds, refined (matches aligned), milliseconds). Invalid options raise "
+      "not measured), guided_rounds, aligned (matches aligned), milliseconds). Invalid options raise "
       "ValueError, wrong types TypeError.");
 }

@@ -1,4 +1,4 @@
-// Includes every header at its 0.1 path and two_view/refinement.hpp at its 0.2 path (each warns that
+// Includes every header at its 0.1 path and the two headers renamed since 0.2 (each warns that
 // it is deprecated and includes the header at its new path), then extracts features of a noise image
 // and matches them with themselves.
 #include <affine_orb/affine_matching.hpp>
@@ -23,6 +23,7 @@
 #include <affine_orb/relative_pose.hpp>
 #include <affine_orb/two_view.hpp>
 #include <affine_orb/two_view/refinement.hpp>
+#include <affine_orb/extraction/view_cursor.hpp>
 
 #include <cstdio>
 

@@ -1,7 +1,7 @@
 // libFuzzer target: the input bytes choose an image size (up to 48x40, so that
 // about a thousand inputs run a second), the pixels and the options, then extraction (rBRIEF or
-// BRISK, plain or affine views, with or without a mask) and matching of the result against itself
-// run. Invalid options must end in std::invalid_argument, valid ones in a result that keeps every
+// BRISK, affine_orb's or a fork's image keypoints, plain or affine views, with or without a mask)
+// and matching of the result against itself run. Invalid options must end in std::invalid_argument, valid ones in a result that keeps every
 // documented invariant; anything else (a crash, a sanitizer report, another exception, a broken
 // invariant) is a finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
@@ -31,11 +31,17 @@ void run(const cv::Mat& image, const cv::Mat& mask, const affine_orb::ExtractorO
   const auto a = extractor.extract(image, mask);
   // The additive budget: features from the image plus round(view_features · features) from the
   // tilted views; the area split: features in all.
-  const long budget = options.view_budget == affine_orb::ViewBudget::kAdditive
-                          ? options.features + std::lround(options.view_features * options.features)
-                          : options.features;
-  require(static_cast<long>(a.size()) <= budget);
-  require(std::count(a.views.begin(), a.views.end(), 0) <= options.features);
+  // A fork's octree keeps one keypoint per node and may end a level above its share, as the fork's
+  // own extractor does, so its image keypoints have no such bound.
+  const affine_orb::AdditiveBudget* additive = options.additive_budget();
+  const long views_budget = additive ? std::lround(additive->view_features * options.features) : 0;
+  const long image_keypoints = std::count(a.views.begin(), a.views.end(), 0);
+  if (options.image_keypoints == affine_orb::ImageKeypoints::kAffineOrb) {
+    require(static_cast<long>(a.size()) <= options.features + views_budget);
+    require(image_keypoints <= options.features);
+  } else {
+    require(static_cast<long>(a.size()) - image_keypoints <= views_budget);
+  }
   require(a.descriptors.size() == a.size() && a.views.size() == a.size());
   for (const cv::KeyPoint& k : a.keypoints) {
     require(std::isfinite(k.pt.x) && std::isfinite(k.pt.y));
@@ -69,12 +75,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.detector.min_threshold = bytes.next() % 64;              // may exceed the initial one
   options.detector.cell_size = bytes.next() % 80;                  // < 4 is invalid
   options.detector.score = (flags & 2) ? affine_orb::ScoreType::kHarris : affine_orb::ScoreType::kFast;
-  options.duplicates = (flags & 4) ? affine_orb::DuplicatePolicy::kKeepAll : affine_orb::DuplicatePolicy::kMerge;
-  if (flags & 32) options.view_budget = affine_orb::ViewBudget::kAreaSplit;
-  options.refine.enabled = (flags & 64) != 0;
-  options.repeat_levels = (flags >> 7) & 1;
+  if (flags & 4) options.merge_duplicates.reset();
+  if (flags & 32) options.view_budget = affine_orb::AreaSplitBudget{};  // invalid with a fork's keypoints
+  if (flags & 64) options.snap_to_corners = affine_orb::CornerSnapOptions{};
+  if (options.merge_duplicates) options.merge_duplicates->repeat_levels = (flags >> 7) & 1;
   const std::uint8_t shortlist = bytes.next();
   options.shortlist = 0.5 + (shortlist % 8) * 0.5;  // 0.5 is invalid
+  // The image's keypoints: affine_orb's, ORB-SLAM2's or ORB-SLAM3's, the last two less often.
+  constexpr affine_orb::ImageKeypoints kImageKeypoints[] = {
+      affine_orb::ImageKeypoints::kAffineOrb, affine_orb::ImageKeypoints::kAffineOrb,
+      affine_orb::ImageKeypoints::kOrbSlam2, affine_orb::ImageKeypoints::kOrbSlam3};
+  options.image_keypoints = kImageKeypoints[(shortlist >> 3) & 3];
   // Two worker threads in one input of 32: glibc frees a finished thread's TLS lazily, so an input
   // that starts threads ends with more mallocs than frees, and libFuzzer then runs its leak check
   // (a scan of the whole heap, several ms). The thread pool is tested in ctest, also under TSan.

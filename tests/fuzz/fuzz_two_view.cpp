@@ -1,8 +1,8 @@
 // libFuzzer target: two-view matching with views on demand (TwoViewMatcher). The input bytes choose
 // two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
-// min_inlier_ratio, all_stages, the precision test (max_half_disagreement), guided refinement
-// (rounds, gate radius, ratio), the aligned correspondences (refine), stages to the extreme
+// min_inlier_ratio, all_stages, the precision test (max_half_disagreement), guided matching
+// (rounds, gate radius, ratio), the aligned correspondences (align_correspondences), stages to the extreme
 // tilts 4 and 4√2, given or from stages_up_to(). Invalid options must end in
 // std::invalid_argument, valid ones in a result that keeps every documented invariant: stage
 // reports, the stopping rule, inlier flags, match indices, keypoints inside their image and mask,
@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
@@ -67,18 +68,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.min_inliers = bytes.next() % 40;               // < 8 is invalid
   options.min_inlier_ratio = (bytes.next() % 12) * 0.1;  // > 1 is invalid
   options.all_stages = (flags & 1) != 0;
-  if (flags & 64) options.max_half_disagreement = (flags & 128) ? -1.0 : 3.0;  // < 0 is invalid
+  // The precision test: the default, off, at 3 px, or at 0 (invalid).
+  constexpr std::optional<double> kHalfDisagreements[] = {10.0, std::nullopt, 3.0, 0.0};
+  options.max_half_disagreement = kHalfDisagreements[(flags >> 6) & 3];
   if (flags & 2) options.extractor.spreading = affine_orb::Spreading::kQuadtree;
-  // Guided refinement: rounds 0 to 3, gate radius 0 (invalid) to 12 px, the ratio 0.5 to 1.25.
+  // Guided matching: off or 1 to 3 rounds, gate radius 0 (invalid) to 12 px, the ratio 0.5 to 1.25.
   const std::uint8_t guided = bytes.next();
-  options.guided.iterations = guided % 4;
-  options.guided.matching.gate_radius = 2.0 * ((guided >> 2) % 7);
-  options.guided.matching.ratio = 0.5f + 0.25f * static_cast<float>(guided >> 5);
+  if (guided % 4 == 0) {
+    options.guided_matching.reset();
+  } else {
+    options.guided_matching->rounds = guided % 4;
+    options.guided_matching->matching.gate_radius = 2.0 * ((guided >> 2) % 7);
+    options.guided_matching->matching.ratio = 0.5f + 0.25f * static_cast<float>(guided >> 5);
+  }
   // RANSAC iterations 1 to 64; the aligned correspondences on or off, max_shift 0 (invalid) or 2 px.
   const std::uint8_t verification = bytes.next();
   options.model.ransac.max_iterations = 1 + verification % 64;
-  options.refine = (verification & 64) != 0;
-  if (verification & 128) options.refinement.max_shift = 0.0;
+  if (verification & 64) options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
+  if ((verification & 64) && (verification & 128)) options.align_correspondences->max_shift = 0.0;
   options.model.ransac.min_iterations =
       std::min(options.model.ransac.min_iterations, options.model.ransac.max_iterations);
 
@@ -119,16 +126,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (r.verified) {
       require(r.inlier_count >= options.min_inliers);
       require(r.inlier_count >= options.min_inlier_ratio * static_cast<double>(r.matches.size()));
-      if (options.max_half_disagreement > 0.0 && r.model.model == affine_orb::GeometricModel::kHomography)
-        require(r.half_disagreement && *r.half_disagreement <= options.max_half_disagreement);
+      if (options.max_half_disagreement && r.model.model == affine_orb::GeometricModel::kHomography)
+        require(r.half_disagreement && *r.half_disagreement <= *options.max_half_disagreement);
     }
     // The precision test is measured only when on and a homography was chosen.
-    if (options.max_half_disagreement <= 0.0 || r.model.model != affine_orb::GeometricModel::kHomography)
+    if (!options.max_half_disagreement || r.model.model != affine_orb::GeometricModel::kHomography)
       require(!r.half_disagreement);
     require(r.inliers.size() == r.matches.size());
     // Guided rounds run only when on and on a homography; their matches carry flags of the
     // refined homography, which the result's H fields describe.
-    for (const affine_orb::TwoViewStageReport& s : r.stages) require(s.guided_rounds <= options.guided.iterations);
+    const int rounds = options.guided_matching ? options.guided_matching->rounds : 0;
+    for (const affine_orb::TwoViewStageReport& s : r.stages) require(s.guided_rounds <= rounds);
     if (r.stages.back().guided_rounds > 0) {
       require(r.model.model == affine_orb::GeometricModel::kHomography);
       require(r.model.homography_inlier_count == r.inlier_count);
@@ -142,13 +150,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     // Image 2's point of each correspondence: the train keypoint's, or aligned within max_shift of it.
     require(r.points2.size() == r.matches.size());
-    require(r.refined_count >= 0 && r.refined_count <= static_cast<int>(r.matches.size()));
-    if (!options.refine) require(r.refined_count == 0);
+    require(r.aligned_count >= 0 && r.aligned_count <= static_cast<int>(r.matches.size()));
+    if (!options.align_correspondences) require(r.aligned_count == 0);
     for (std::size_t i = 0; i < r.matches.size(); ++i) {
       const cv::Point2f q = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)].pt;
       require(std::isfinite(r.points2[i].x) && std::isfinite(r.points2[i].y));
       const double moved = std::hypot(r.points2[i].x - q.x, r.points2[i].y - q.y);
-      require(options.refine ? moved <= options.refinement.max_shift + 1e-3 : moved == 0.0);
+      require(options.align_correspondences ? moved <= options.align_correspondences->max_shift + 1e-3 : moved == 0.0);
     }
     check_features(r.features1, image1, mask1);
     check_features(r.features2, image2, mask2);

@@ -109,16 +109,16 @@ def test_match_images_equals_the_cpp_matcher(pair, min_inliers):
 
 
 @pytest.mark.data
-def test_match_images_refinement_and_precision_test_are_reported():
+def test_match_images_guided_matching_and_precision_test_are_reported():
     """guided_rounds and max_half_disagreement reach the C++ options: graf 1->2 is verified at stage
     0 by a homography refined by the default rounds (none with guided_rounds=0), and the precision
     test, on by default, measures the half disagreement (about a pixel on this easy pair; None with
-    max_half_disagreement=0), whose ground-truth homography the refined model matches at image 1's
+    max_half_disagreement=None), whose ground-truth homography the refined model matches at image 1's
     corners."""
     image1 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img1.png"), cv2.IMREAD_GRAYSCALE)
     image2 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img2.png"), cv2.IMREAD_GRAYSCALE)
     truth = np.loadtxt(os.path.join(DATA, "oxford", "graf", "H1to2p"))
-    plain = affine_orb.match_images(image1, image2, guided_rounds=0, max_half_disagreement=0.0)
+    plain = affine_orb.match_images(image1, image2, guided_rounds=0, max_half_disagreement=None)
     assert plain["verified"] and plain["stages"][0]["guided_rounds"] == 0
     assert plain["stages"][0]["half_disagreement"] is None
     r = affine_orb.match_images(image1, image2, max_half_disagreement=5.0)
@@ -134,8 +134,8 @@ def test_match_images_refinement_and_precision_test_are_reported():
 
 
 @pytest.mark.data
-def test_match_images_refine_aligns_image_2_points():
-    """refine reaches the C++ option: without it points2 are the train keypoints' positions; with it
+def test_match_images_align_correspondences_aligns_image_2_points():
+    """align_correspondences reaches the C++ option: without it points2 are the train keypoints' positions; with it
     the inliers' image-2 points lie closer to where the ground truth maps their image-1 keypoints."""
     image1 = cv2.imread(os.path.join(DATA, "oxford", "boat", "img1.png"), cv2.IMREAD_GRAYSCALE)
     image2 = cv2.imread(os.path.join(DATA, "oxford", "boat", "img3.png"), cv2.IMREAD_GRAYSCALE)
@@ -150,11 +150,11 @@ def test_match_images_refine_aligns_image_2_points():
 
     plain = affine_orb.match_images(image1, image2)
     assert plain["verified"] and plain["points2"].shape == (len(plain["matches"]), 2)
-    assert plain["stages"][-1]["refined"] == 0
+    assert plain["stages"][-1]["aligned"] == 0
     positions = np.array([plain["keypoints2"][m.trainIdx].pt for m in plain["matches"]], np.float32)
     assert np.array_equal(plain["points2"], positions)
-    aligned = affine_orb.match_images(image1, image2, refine=True)
-    assert aligned["verified"] and aligned["stages"][-1]["refined"] > 0
+    aligned = affine_orb.match_images(image1, image2, align_correspondences=True)
+    assert aligned["verified"] and aligned["stages"][-1]["aligned"] > 0
     assert mean_error(aligned) < mean_error(plain)
 
 
@@ -187,8 +187,10 @@ def test_match_images_refuses_bad_input():
         affine_orb.match_images(image, image, guided_rounds=-1)
     with pytest.raises(ValueError):
         affine_orb.match_images(image, image, max_half_disagreement=-1.0)
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image, image, max_half_disagreement=0.0)
     with pytest.raises(TypeError):
-        affine_orb.match_images(image, image, refine="yes")
+        affine_orb.match_images(image, image, align_correspondences="yes")
     r = affine_orb.match_images(image, image)  # a flat image: no keypoints, documented empty result
     assert not r["verified"] and r["matches"] == [] and r["model"] == "none"
     assert r["points2"].shape == (0, 2)

@@ -296,10 +296,9 @@ inline ExtractorOptions base_options(ImageKeypoints fork, const ForkParameters& 
   options.detector.score = ScoreType::kFast;
   options.subpixel = false;
   options.carry_shortfalls = false;
-  options.view_budget = ViewBudget::kAdditive;
-  options.duplicates =
-      affine.duplicates == AdapterDuplicates::kMerge ? DuplicatePolicy::kMerge : DuplicatePolicy::kKeepAll;
-  options.merge_radius = affine.merge_radius;
+  options.view_budget = AdditiveBudget{};
+  options.merge_duplicates.reset();
+  if (affine.duplicates == AdapterDuplicates::kMerge) options.merge_duplicates = MergeOptions{affine.merge_radius, 0};
   options.threads = affine.threads;
   return options;
 }
@@ -309,8 +308,8 @@ inline ExtractorOptions plan_options(ExtractorOptions base, const ExtractionPlan
   base.features = plan.image_features;
   base.views.max_tilt = plan.max_tilt;
   // The extractor's view_features is a fraction of its own image budget.
-  base.view_features = plan.image_features == nfeatures ? plan.view_features
-                                                        : plan.view_features * nfeatures / plan.image_features;
+  std::get<AdditiveBudget>(base.view_budget).view_features =
+      plan.image_features == nfeatures ? plan.view_features : plan.view_features * nfeatures / plan.image_features;
   return base;
 }
 
@@ -333,7 +332,7 @@ struct ExtractorPair {
 /// from them. `who` names the adapter class in error messages; `fork` is the fork's keypoints
 /// (ImageKeypoints::kOrbSlam2 or kOrbSlam3), which AdapterKeypoints::kFork returns.
 ///
-/// An affine_orb::Extractor with ViewBudget::kAdditive does the work: the image is extracted with
+/// An affine_orb::Extractor with AdditiveBudget does the work: the image is extracted with
 /// ORB-SLAM's budget (nfeatures keypoints, geometric over the levels), and those keypoints are the
 /// same with the views on or off, so ORB-SLAM's monocular initialisation, which matches octave-0
 /// keypoints only, keeps all of its candidates. With the views on, the tilted views add about

@@ -63,7 +63,7 @@ enum class AdapterDescriptor {
   kBrisk,   ///< BRISK-512 of which the first 256 bits (bytes 0–31) are output; needs its own vocabulary.
 };
 
-/// What to do with the keypoints several views put on the same corner (affine_orb::DuplicatePolicy).
+/// What to do with the keypoints several views put on the same corner (affine_orb::ExtractorOptions::merge_duplicates).
 enum class AdapterDuplicates {
   kMerge,    ///< One keypoint per corner and level, the strongest (docs/algorithm.md §2: the SLAM default).
   kKeepAll,  ///< Every view's keypoint.
@@ -115,7 +115,7 @@ struct AdapterOptions {
   /// in parallel.
   int threads = 1;
   AdapterDuplicates duplicates = AdapterDuplicates::kMerge;
-  /// Merge radius in original pixels times the level scale (ExtractorOptions::merge_radius), in
+  /// Merge radius in original pixels times the level scale (affine_orb::MergeOptions::radius), in
   /// (0, 64]: 2 px is the docs/algorithm.md §7 duplicate cell.
   double merge_radius = 2.0;
   /// Keypoints the tilted views add to ORB-SLAM's nfeatures keypoints of the image, as a fraction

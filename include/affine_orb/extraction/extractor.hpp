@@ -33,53 +33,27 @@
 #include "affine_orb/extraction/detail/view_regions.hpp"
 #include "affine_orb/extraction/detail/view_schedule.hpp"
 #include "affine_orb/extraction/extractor_options.hpp"
-#include "affine_orb/extraction/view_cursor.hpp"
+#include "affine_orb/extraction/view_session.hpp"
 #include "affine_orb/views/affine_views.hpp"
 
 namespace affine_orb {
 
 /// Extracts keypoints and descriptors from grey images.
 ///
-/// For an image of size W x H and every view v of ExtractorOptions::views (affine_views.hpp), one
-/// view at a time on each thread (its pixels live in that thread's buffers only while it is
-/// processed; the image's pyramid is kept until the next call, see pyramid()):
-/// 1. the view is rendered (render_view()) and a pyramid of PyramidOptions::levels levels is built
-///    on it; for a tilted view, level pixels farther than 8 level pixels from the original image
-///    repeat the nearest computed pixel of their row (only descriptor reads beyond the image, which
-///    are extrapolation anyway, can see them);
-/// 2. on each level, FAST candidates are detected (detect_candidates(), grid cells anchored at the
-///    support border) among the level's valid pixels only: those whose support (a disc of
-///    max(Descriptor::border(), DetectorOptions::support_radius()) level pixels) maps inside the
-///    original image (detail::support_region()); a cell falls back to the minimum threshold when
-///    its valid pixels hold no corner at the initial one. A candidate is kept if the mask pixel
-///    nearest to its original position is non-zero;
-/// 3. in view order (detail::ViewTurns), with DuplicatePolicy::kMerge, a tilted view drops its
-///    candidates that repeat a keypoint chosen by an earlier view (detail::RepeatGrids,
-///    ExtractorOptions::repeat_levels); then each level chooses what it describes: the image with
-///    ViewBudget::kAdditive its final keypoints, exactly as with max_tilt = 1 (`features` of them,
-///    levels geometric, shortfalls carried unless ExtractorOptions::carry_shortfalls is false);
-///    every other view a shortlist
-///    (ExtractorOptions::shortlist);
-/// 4. the chosen keypoints are oriented and described in their view, then mapped back: position
-///    through the inverse view map, orientation by mapping the direction vector, scale s^l·√t
-///    (docs/algorithm.md §1); a tilted view's keypoint is then snapped to a corner of the original image
-///    (RefineOptions);
-/// 5. once every view is done, a budget is split over the shortlisted views (kAdditive:
-///    view_features · features over the tilted views, in proportion to t^view_weight_exponent;
-///    kAreaSplit: `features` over all views, in proportion to their area 1/t) and, within a view,
-///    over levels geometrically (level_budgets()); shortfalls are carried (allocate_with_carry(),
-///    detail::ViewBudgets; ExtractorOptions::carry_shortfalls); each (view, level) keeps its share
-///    of its shortlist by quadtree spreading (distribute_quadtree()) in original coordinates, or
-///    its strongest keypoints (select_strongest()), per ExtractorOptions::spreading.
+/// Every view v of ExtractorOptions::views (affine_views.hpp) is rendered, one at a time per
+/// thread, and gets a pyramid, FAST candidates among its valid pixels (those whose descriptor
+/// support maps inside the image), the mask, the merging of repeats, a selection under the view
+/// budget, orientation and description in the view, and the mapping back to the original image:
+/// the five steps of docs/algorithm.md, "Extractor's steps".
 ///
 /// Output order: by octave (0 first), then by view, then by level, then raster order in the view.
 /// The output does not depend on ExtractorOptions::threads.
 ///
 /// Views on demand: extract_image() is stage 0 (the image alone, exactly extract() with
-/// max_tilt = 1) and returns a ViewCursor; each extend() with it adds the views of further tilts,
-/// so that a caller pays for views only when it needs them (TwoViewMatcher escalates this way).
-/// The stages {extract_image(), extend(cursor, views.max_tilt, round(view_features · features))}
-/// give exactly extract()'s keypoints.
+/// max_tilt = 1) and returns a ViewSession whose extend() adds the views of further tilts, so that
+/// a caller pays for views only when it needs them (TwoViewMatcher escalates this way). The stages
+/// {extract_image(), session.extend(views.max_tilt, round(view_features · features))} give exactly
+/// extract()'s keypoints.
 ///
 /// An Extractor holds a workspace reused across calls (and, with ExtractorOptions::threads > 1, its
 /// worker threads): it can be moved, not copied. Its size is the image's pyramid plus, per thread,
@@ -134,8 +108,9 @@ class Extractor {
     const int n_views = static_cast<int>(view_work_.size());
     if (additive()) {
       budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
-      budgets_.share(tilts_, 1, n_views, static_cast<int>(std::lround(options_.view_features * options_.features)),
-                     options_.view_weight_exponent, options_.pyramid.scale_factor);
+      const AdditiveBudget& budget = *options_.additive_budget();
+      budgets_.share(tilts_, 1, n_views, static_cast<int>(std::lround(budget.view_features * options_.features)),
+                     budget.view_weight_exponent, options_.pyramid.scale_factor);
     } else {
       budgets_.share(tilts_, 0, n_views, options_.features, -1.0, options_.pyramid.scale_factor);
     }
@@ -144,45 +119,26 @@ class Extractor {
   }
 
   /// Views on demand, stage 0: the keypoints of the image alone, exactly extract()'s with
-  /// views.max_tilt = 1 (the image's `features` keypoints), and the cursor for extend(), which
-  /// holds `image` and `mask` (headers, not copies). Same arguments, checks and exceptions as
-  /// extract(); also throws std::invalid_argument unless ExtractorOptions::view_budget is
-  /// ViewBudget::kAdditive.
-  StagedFeatures<kBits> extract_image(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
-    detail::require(additive(), "Extractor::extract_image: views on demand need ViewBudget::kAdditive");
+  /// views.max_tilt = 1 (the image's `features` keypoints), and the ViewSession that adds the next
+  /// stages, which holds `image` and `mask` (headers, not copies). Same arguments, checks and
+  /// exceptions as extract(); also throws std::invalid_argument unless ExtractorOptions::view_budget
+  /// is AdditiveBudget.
+  StagedFeatures<Descriptor> extract_image(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
+    detail::require(additive(), "Extractor::extract_image: views on demand need the AdditiveBudget view_budget");
     begin(image, mask);
     budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
     run_views(image, mask, 0, 1);
-    StagedFeatures<kBits> out;
-    out.features = assemble(0, 1);
-    out.cursor.image_ = image;
-    out.cursor.mask_ = mask;
-    out.cursor.extracted_views_ = 1;
-    out.cursor.extracted_tilt_ = 1.0;
-    out.cursor.owner_ = this;
-    out.cursor.image_serial_ = image_serial_;
-    return out;
+    return StagedFeatures<Descriptor>{assemble(0, 1), ViewSession<Descriptor>(this, image, mask)};
   }
 
-  /// Views on demand, next stage: the keypoints that the tilted views of ExtractorOptions::views
-  /// with tilt in (cursor.extracted_tilt(), up_to_tilt] add to the cursor's image, `features` of
-  /// them in all when there are enough corners (shared over the stage's views in proportion to
-  /// t^view_weight_exponent, then over levels and with shortfalls carried as in extract()). With
-  /// DuplicatePolicy::kMerge a candidate is dropped when it repeats a keypoint of an earlier stage
-  /// or of an earlier view of this stage. Earlier stages' keypoints are not changed: the union of
-  /// the stages so far is a superset of the stages before. Returns only the stage's keypoints
-  /// (Features::views index views()) and advances `cursor`; an empty result, the cursor unchanged,
-  /// when no view is left up to `up_to_tilt` (views beyond views.max_tilt do not exist).
-  ///
-  /// Throws std::invalid_argument for a cursor not returned by this Extractor's last
-  /// extract_image() (or a later extract() or extract_image() call), for up_to_tilt not finite,
-  /// or features outside [0, 1000000].
-  Features<kBits> extend(ViewCursor& cursor, double up_to_tilt, int features) {
-    detail::require(cursor.owner_ == this && cursor.image_serial_ == image_serial_,
-                    "Extractor::extend: the cursor is not from this Extractor's last extract_image()");
-    detail::require(std::isfinite(up_to_tilt), "Extractor::extend: up_to_tilt must be finite");
-    detail::require(features >= 0 && features <= 1000000, "Extractor::extend: features must be in [0, 1000000]");
-    const int first = cursor.extracted_views_;
+ private:
+  friend class ViewSession<Descriptor>;
+
+  /// ViewSession::extend() of `session`, this Extractor's live session.
+  Features<kBits> extend(ViewSession<Descriptor>& session, double up_to_tilt, int features) {
+    detail::require(std::isfinite(up_to_tilt), "ViewSession::extend: up_to_tilt must be finite");
+    detail::require_range(features, {0.0, 1000000.0}, "ViewSession::extend: features");
+    const int first = session.extracted_views_;
     int last = first;
     // The same 0.1 % tolerance as view_parameters(), so that 2.83 includes 2√2.
     while (last < static_cast<int>(view_work_.size()) &&
@@ -192,17 +148,18 @@ class Extractor {
     if (last == first) return {};
     // What the earlier stages finally kept is what this stage must not repeat.
     if (merging()) {
-      repeats_.reset(cursor.image_.size(), options_.pyramid, options_.merge_radius, options_.repeat_levels);
+      repeats_.reset(session.image_.size(), options_.pyramid, options_.merge_duplicates->radius,
+                     options_.merge_duplicates->repeat_levels);
       for (int v = 0; v < first; ++v) enter_kept(v);
     }
-    budgets_.share(tilts_, first, last, features, options_.view_weight_exponent, options_.pyramid.scale_factor);
-    run_views(cursor.image_, cursor.mask_, first, last);
-    cursor.extracted_views_ = last;
-    cursor.extracted_tilt_ = tilts_[static_cast<std::size_t>(last - 1)];
+    budgets_.share(tilts_, first, last, features, options_.additive_budget()->view_weight_exponent,
+                   options_.pyramid.scale_factor);
+    run_views(session.image_, session.mask_, first, last);
+    session.extracted_views_ = last;
+    session.extracted_tilt_ = tilts_[static_cast<std::size_t>(last - 1)];
     return assemble(first, last);
   }
 
- private:
   using SpreadWork = detail::SpreadWork;
   using LevelCandidates = detail::LevelCandidates;
   using ThreadWork = detail::ThreadWork<Descriptor>;
@@ -216,14 +173,14 @@ class Extractor {
 
   // ---- The walk of one image ------------------------------------------------------------------
 
-  /// Checks the arguments, prepares the view set for the image size and empties the repeat grids;
-  /// makes every earlier ViewCursor invalid.
+  /// Checks the arguments, prepares the view set for the image size and empties the repeat grids.
   void begin(const cv::Mat& image, const cv::Mat& mask) {
+    detail::require(!session_.open, "Extractor::extract: a ViewSession of this Extractor is open");
     detail::require_gray8(image, "Extractor::extract");
     detail::require_mask(mask, image.size(), "Extractor::extract");
     prepare_views(image.size());
-    ++image_serial_;
-    if (merging()) repeats_.reset(image.size(), options_.pyramid, options_.merge_radius, options_.repeat_levels);
+    if (merging()) repeats_.reset(image.size(), options_.pyramid, options_.merge_duplicates->radius,
+                     options_.merge_duplicates->repeat_levels);
   }
 
   /// Steps 1–5 for views [first, last), whose budgets are set: every view processed (in parallel,
@@ -366,8 +323,8 @@ class Extractor {
     return view_work_[static_cast<std::size_t>(v)].levels[static_cast<std::size_t>(l)];
   }
 
-  bool additive() const { return options_.view_budget == ViewBudget::kAdditive; }
-  bool merging() const { return options_.duplicates == DuplicatePolicy::kMerge; }
+  bool additive() const { return options_.additive_budget() != nullptr; }
+  bool merging() const { return options_.merge_duplicates.has_value(); }
   bool fork() const { return options_.image_keypoints != ImageKeypoints::kAffineOrb; }
 
   /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
@@ -445,7 +402,7 @@ class Extractor {
     pool_->run(n, fn);
   }
 
-  /// Enters the final keypoints of view v (its kept ones, unrefined positions) in the repeat grids.
+  /// Enters the final keypoints of view v (its kept ones, positions before snapping) in the repeat grids.
   void enter_kept(int v) {
     for (int l = 0; l < options_.pyramid.levels; ++l) {
       const LevelWork& level = level_of(v, l);
@@ -469,12 +426,12 @@ class Extractor {
   std::vector<int> octave_start_;  ///< buffer of assemble()
   cv::Size views_size_;
   std::vector<ViewWork> view_work_;
-  /// The image's pyramid, kept until the next call (pyramid(), RefineOptions).
+  /// The image's pyramid, kept until the next call (pyramid(), CornerSnapOptions).
   Pyramid image_pyramid_;
   /// ImageKeypoints of a fork: the buffers of the image's extraction.
   detail::ForkImageWork fork_;
-  /// Counts the images begun, so that extend() recognises the cursor of the current one.
-  std::uint64_t image_serial_ = 0;
+  /// Whether a ViewSession of this Extractor lives (it then holds the image being staged).
+  detail::SessionFlag session_;
   /// Per worker thread: the buffers views are processed in.
   std::vector<ThreadWork> thread_work_;
   std::unique_ptr<detail::ViewTurns> turns_;

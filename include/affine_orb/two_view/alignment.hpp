@@ -22,8 +22,8 @@
 
 namespace affine_orb {
 
-/// Options of refine_correspondences().
-struct CorrespondenceRefinementOptions {
+/// Options of align_correspondences().
+struct CorrespondenceAlignmentOptions {
   /// Half side of the aligned patch in level pixels of the image-1 keypoint's octave, at most
   /// twice this many original pixels. In [2, 32]. 5 (patch sides 11 to 21 original pixels): on
   /// graf 1 warped by a known homography, with image 2's points moved up to 1.5 px off, the aligned
@@ -49,32 +49,24 @@ struct CorrespondenceRefinementOptions {
 
   /// Throws std::invalid_argument for a value outside its range.
   void check() const {
-    detail::require(patch_radius >= 2 && patch_radius <= 32,
-                    "CorrespondenceRefinementOptions: patch_radius must be in [2, 32], got " +
-                        std::to_string(patch_radius));
-    detail::require(iterations >= 1 && iterations <= 100,
-                    "CorrespondenceRefinementOptions: iterations must be in [1, 100], got " + std::to_string(iterations));
-    detail::require(std::isfinite(max_shift) && max_shift > 0.0 && max_shift <= 16.0,
-                    "CorrespondenceRefinementOptions: max_shift must be in (0, 16], got " + std::to_string(max_shift));
-    detail::require(std::isfinite(min_correlation) && min_correlation >= -1.0 && min_correlation <= 1.0,
-                    "CorrespondenceRefinementOptions: min_correlation must be in [-1, 1], got " +
-                        std::to_string(min_correlation));
-    detail::require(std::isfinite(min_texture) && min_texture >= 0.0 && min_texture <= 1e6,
-                    "CorrespondenceRefinementOptions: min_texture must be in [0, 1e6], got " +
-                        std::to_string(min_texture));
+    detail::require_range(patch_radius, {2.0, 32.0}, "CorrespondenceAlignmentOptions: patch_radius");
+    detail::require_range(iterations, {1.0, 100.0}, "CorrespondenceAlignmentOptions: iterations");
+    detail::require_range(max_shift, {0.0, 16.0, true}, "CorrespondenceAlignmentOptions: max_shift");
+    detail::require_range(min_correlation, {-1.0, 1.0}, "CorrespondenceAlignmentOptions: min_correlation");
+    detail::require_range(min_texture, {0.0, 1e6}, "CorrespondenceAlignmentOptions: min_texture");
   }
 };
 
-/// The outcome of refine_correspondences(), one entry per correspondence.
-struct RefinedCorrespondences {
-  /// Image 2's point of each correspondence, pixels of image 2: the aligned one where `refined`,
+/// The outcome of align_correspondences(), one entry per correspondence.
+struct AlignedCorrespondences {
+  /// Image 2's point of each correspondence, pixels of image 2: the aligned one where `aligned`,
   /// else the point handed in.
   std::vector<cv::Point2f> points2;
-  std::vector<std::uint8_t> refined;  ///< 1 where the alignment was accepted
-  int refined_count = 0;
+  std::vector<std::uint8_t> aligned;  ///< 1 where the alignment was accepted
+  int aligned_count = 0;
 };
 
-/// Refines image 2's side of the correspondences points1[i] ↔ points2[i] (pixels, level-0
+/// Aligns image 2's side of the correspondences points1[i] ↔ points2[i] (pixels, level-0
 /// coordinates) of the grey images image1 and image2 (CV_8UC1) under the homography `homography`
 /// (x2 ~ H x1, pixels): for each, image 1's patch around points1[i] (side 2·r + 1 with r =
 /// patch_radius · scales1[i] original pixels, at most 2·patch_radius) is aligned with image 2
@@ -85,29 +77,29 @@ struct RefinedCorrespondences {
 /// min_correlation keeps points2[i]. Throws std::invalid_argument for images that are not CV_8UC1
 /// or empty, lists of different lengths, a non-finite point or scale, a scale below 1, a
 /// homography that is not finite, or invalid options.
-inline RefinedCorrespondences refine_correspondences(const cv::Mat& image1, const cv::Mat& image2,
+inline AlignedCorrespondences align_correspondences(const cv::Mat& image1, const cv::Mat& image2,
                                                      const std::vector<cv::Point2f>& points1,
                                                      const std::vector<cv::Point2f>& points2,
                                                      const std::vector<float>& scales1,
                                                      const Eigen::Matrix3d& homography,
-                                                     const CorrespondenceRefinementOptions& options = {}) {
+                                                     const CorrespondenceAlignmentOptions& options = {}) {
   options.check();
   detail::require(!image1.empty() && image1.type() == CV_8UC1 && !image2.empty() && image2.type() == CV_8UC1,
-                  "refine_correspondences: both images must be non-empty CV_8UC1");
+                  "align_correspondences: both images must be non-empty CV_8UC1");
   detail::require(points1.size() == points2.size() && points1.size() == scales1.size(),
-                  "refine_correspondences: points1, points2 and scales1 must have one entry per correspondence");
-  detail::require(homography.allFinite(), "refine_correspondences: the homography must be finite");
-  RefinedCorrespondences out;
+                  "align_correspondences: points1, points2 and scales1 must have one entry per correspondence");
+  detail::require(homography.allFinite(), "align_correspondences: the homography must be finite");
+  AlignedCorrespondences out;
   out.points2 = points2;
-  out.refined.assign(points1.size(), 0);
+  out.aligned.assign(points1.size(), 0);
   detail::PatchAlignmentWork work;
   for (std::size_t i = 0; i < points1.size(); ++i) {
     const cv::Point2f& p = points1[i];
     const cv::Point2f& q = points2[i];
     detail::require(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(q.x) && std::isfinite(q.y),
-                    "refine_correspondences: points must be finite");
+                    "align_correspondences: points must be finite");
     detail::require(std::isfinite(scales1[i]) && scales1[i] >= 1.0f,
-                    "refine_correspondences: scales must be finite and >= 1");
+                    "align_correspondences: scales must be finite and >= 1");
     // H's Jacobian at x1: d(π(H x))/dx for the projection π(a, b, c) = (a/c, b/c).
     const Eigen::Vector3d hx = homography * Eigen::Vector3d(p.x, p.y, 1.0);
     if (!(std::abs(hx.z()) > 1e-12)) continue;
@@ -119,16 +111,16 @@ inline RefinedCorrespondences refine_correspondences(const cv::Mat& image1, cons
     const int radius = static_cast<int>(
         std::lround(std::min(2.0 * options.patch_radius, options.patch_radius * static_cast<double>(scales1[i]))));
     const Eigen::Vector2d start(q.x, q.y);
-    const std::optional<detail::PatchAlignment> aligned =
+    const std::optional<detail::PatchAlignment> patch =
         detail::align_patch(image1, image2, Eigen::Vector2d(p.x, p.y), start, jacobian, radius,
                             options.iterations, options.min_texture, work);
-    if (!aligned || aligned->correlation < options.min_correlation ||
-        !((aligned->point2 - start).norm() <= options.max_shift)) {
+    if (!patch || patch->correlation < options.min_correlation ||
+        !((patch->point2 - start).norm() <= options.max_shift)) {
       continue;
     }
-    out.points2[i] = cv::Point2f(static_cast<float>(aligned->point2.x()), static_cast<float>(aligned->point2.y()));
-    out.refined[i] = 1;
-    ++out.refined_count;
+    out.points2[i] = cv::Point2f(static_cast<float>(patch->point2.x()), static_cast<float>(patch->point2.y()));
+    out.aligned[i] = 1;
+    ++out.aligned_count;
   }
   return out;
 }

@@ -68,12 +68,12 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 
 /// Matches two grey images, escalating from plain keypoints to affine views only while the pair is
 /// not verified (TwoViewOptions). Per stage k = 0, 1, ...: both images get the keypoints of the
-/// stage (stage 0: Extractor::extract_image(); then Extractor::extend() with the stage's tilts and
-/// budget), every keypoint so far of image 1 is matched against every keypoint so far of image 2
+/// stage (stage 0: Extractor::extract_image(); then ViewSession::extend() with the stage's tilts
+/// and budget), every keypoint so far of image 1 is matched against every keypoint so far of image 2
 /// (match_features()), and select_model() estimates H and F and chooses one; a chosen homography
 /// is put to the precision test (max_half_disagreement) and, with min_inliers inliers making up
-/// min_inlier_ratio of the matches, refined by guided matching when TwoViewOptions::guided is on,
-/// then by aligned correspondences when TwoViewOptions::refine is on; the escalation stops when the
+/// min_inlier_ratio of the matches, refined by TwoViewOptions::guided_matching, then by
+/// TwoViewOptions::align_correspondences; the escalation stops when the
 /// chosen model has min_inliers inliers and min_inlier_ratio of the matches and, for a homography,
 /// passed the precision test, or when the stages run out. Stage k's keypoints and descriptors are
 /// a superset of stage k − 1's.
@@ -99,47 +99,37 @@ class TwoViewMatcher {
   TwoViewResult<kBits> match(const cv::Mat& image1, const cv::Mat& image2, const cv::Mat& mask1 = cv::Mat(),
                              const cv::Mat& mask2 = cv::Mat()) {
     TwoViewResult<kBits> result;
-    ViewCursor cursor1, cursor2;
     const int n_stages = static_cast<int>(options_.stages.size());
+    Clock::time_point start = Clock::now();
+    StagedFeatures<Descriptor> staged1 = extractor1_.extract_image(image1, mask1);
+    StagedFeatures<Descriptor> staged2 = extractor2_.extract_image(image2, mask2);
+    result.features1 = std::move(staged1.features);
+    result.features2 = std::move(staged2.features);
     for (int k = 0; k <= n_stages; ++k) {
       TwoViewStageReport report;
-      const Clock::time_point start = Clock::now();
-      if (k == 0) {
-        StagedFeatures<kBits> staged1 = extractor1_.extract_image(image1, mask1);
-        StagedFeatures<kBits> staged2 = extractor2_.extract_image(image2, mask2);
-        result.features1 = std::move(staged1.features);
-        result.features2 = std::move(staged2.features);
-        cursor1 = std::move(staged1.cursor);
-        cursor2 = std::move(staged2.cursor);
-      } else {
+      if (k > 0) {
+        start = Clock::now();
         const ViewStage& stage = options_.stages[static_cast<std::size_t>(k - 1)];
         const int budget = static_cast<int>(std::lround(stage.view_features * options_.extractor.features));
-        append(result.features1, extractor1_.extend(cursor1, stage.max_tilt, budget));
-        append(result.features2, extractor2_.extend(cursor2, stage.max_tilt, budget));
+        append(result.features1, staged1.session.extend(stage.max_tilt, budget));
+        append(result.features2, staged2.session.extend(stage.max_tilt, budget));
       }
       const Clock::time_point extracted = Clock::now();
-      result.matches = match_features(result.features1, result.features2, options_.matching);
+      std::vector<Match> matches = match_features(result.features1, result.features2, options_.matching);
       const Clock::time_point matched = Clock::now();
-      verify(result, image1, image2, k == n_stages || options_.all_stages);
-      const Clock::time_point verified = Clock::now();
-
-      report.max_tilt = cursor1.extracted_tilt();
+      StageModel verified = verify(result.features1, result.features2, std::move(matches), image1, image2,
+                                   k == n_stages || options_.all_stages);
+      const Clock::time_point verified_at = Clock::now();
+      result.verified = precise(verified) && supported(verified);
+      take_stage(result, std::move(verified), report);
+      report.max_tilt = staged1.session.extracted_tilt();
       report.keypoints1 = static_cast<int>(result.features1.size());
       report.keypoints2 = static_cast<int>(result.features2.size());
-      report.matches = static_cast<int>(result.matches.size());
-      report.inliers = result.inlier_count;
-      report.homography_inlier_count = result.model.homography_inlier_count;
-      report.fundamental_inlier_count = result.model.fundamental_inlier_count;
-      report.model = result.model.model;
-      report.half_disagreement = result.half_disagreement;
-      report.guided_rounds = guided_rounds_;
-      report.refined = result.refined_count;
       report.extract_ms = milliseconds(start, extracted);
       report.match_ms = milliseconds(extracted, matched);
-      report.verify_ms = milliseconds(matched, verified);
+      report.verify_ms = milliseconds(matched, verified_at);
       result.stages.push_back(report);
       result.stage = k;
-      result.verified = is_verified(result);
       if (result.verified && !options_.all_stages) break;
     }
     return result;
@@ -158,126 +148,148 @@ class TwoViewMatcher {
     all.views.insert(all.views.end(), more.views.begin(), more.views.end());
   }
 
-  /// select_model() on the matched positions; the chosen model's inlier flags and count; for a
-  /// chosen homography under the precision test, the disagreement of its two half estimates; a
-  /// chosen homography with enough support refined by guided matching (TwoViewOptions::guided) and
-  /// then by aligned correspondences (TwoViewOptions::refine). Neither refinement runs on a
-  /// homography that failed the precision test unless the stage is `reported` (the last one, or
-  /// every one with all_stages): the next stage matches everything again and its result replaces
-  /// this one.
-  void verify(TwoViewResult<kBits>& result, const cv::Mat& image1, const cv::Mat& image2, bool reported) {
-    matched_points(result.features1.keypoints, result.features2.keypoints, result.matches, points_);
-    result.model = ModelSelectionResult{};
-    result.inliers.assign(result.matches.size(), 0);
-    result.inlier_count = 0;
-    result.half_disagreement.reset();
-    result.refined_count = 0;
-    guided_rounds_ = 0;
-    if (points_.points1.size() >= 8) {
-      result.model = select_model(points_.points1, points_.points2, options_.model);
-      result.inliers = result.model.chosen_inliers();
-      result.inlier_count = result.model.chosen_inlier_count();
-      const bool homography = result.model.model == GeometricModel::kHomography;
-      if (homography && options_.max_half_disagreement > 0.0) {
-        result.half_disagreement = half_disagreement(points_.points1, points_.points2, result.inliers,
-                                                     result.model.homography, image1.size());
-      }
-      const bool refinable = homography && (reported || precise(result));
-      if (refinable && options_.guided.iterations > 0 && supported(result)) refine_guided(result);
-      if (refinable && options_.refine && supported(result)) refine_positions(result, image1, image2);
+  /// What verify() finds for one stage's matches.
+  struct StageModel {
+    std::vector<Match> matches;  ///< the stage's matches, or the last guided round's
+    MatchedPoints points;        ///< their positions; points2 aligned where alignment accepted them
+    ModelSelectionResult model;
+    std::vector<std::uint8_t> inliers;  ///< of the chosen model, per match
+    int inlier_count = 0;
+    std::optional<double> half_disagreement;
+    int guided_rounds = 0;
+    int aligned_count = 0;
+  };
+
+  /// select_model() on the matches; the chosen model's inlier flags and count; for a chosen
+  /// homography under the precision test, the disagreement of its two half estimates; a chosen
+  /// homography with enough support refined by guided matching and then by aligned
+  /// correspondences. Neither runs on a homography that failed the precision test unless the
+  /// stage is `reported` (the last one, or every one with all_stages): the next stage matches
+  /// everything again and its result replaces this one.
+  StageModel verify(const Features<kBits>& features1, const Features<kBits>& features2, std::vector<Match> matches,
+                    const cv::Mat& image1, const cv::Mat& image2, bool reported) const {
+    StageModel stage;
+    stage.matches = std::move(matches);
+    matched_points(features1.keypoints, features2.keypoints, stage.matches, stage.points);
+    stage.inliers.assign(stage.matches.size(), 0);
+    if (stage.points.points1.size() < 8) return stage;
+    stage.model = select_model(stage.points.points1, stage.points.points2, options_.model);
+    stage.inliers = stage.model.chosen_inliers();
+    stage.inlier_count = stage.model.chosen_inlier_count();
+    const bool homography = stage.model.model == GeometricModel::kHomography;
+    if (homography && options_.max_half_disagreement) {
+      stage.half_disagreement = half_disagreement(stage.points.points1, stage.points.points2, stage.inliers,
+                                                  stage.model.homography, image1.size());
     }
-    result.points2 = points_.points2;
+    const bool refinable = homography && (reported || precise(stage));
+    if (refinable && options_.guided_matching && supported(stage)) match_guided_rounds(features1, features2, stage);
+    if (refinable && options_.align_correspondences && supported(stage)) align(features1, image1, image2, stage);
+    return stage;
   }
 
-  /// TwoViewOptions::refine on the chosen homography of `result`: points_.points2 becomes the
-  /// aligned points, and the homography, its score, inlier flags and count the local optimisation's
-  /// on them (kept as they were when it finds no homography).
-  void refine_positions(TwoViewResult<kBits>& result, const cv::Mat& image1, const cv::Mat& image2) {
-    scales_.resize(result.matches.size());
-    for (std::size_t i = 0; i < result.matches.size(); ++i) {
-      const cv::KeyPoint& k = result.features1.keypoints[static_cast<std::size_t>(result.matches[i].query)];
-      scales_[i] = std::max(1.0f, k.size / Descriptor::kPatchSize);
+  /// `result`'s matches, model, inliers and positions become `stage`'s, and `report` counts them.
+  static void take_stage(TwoViewResult<kBits>& result, StageModel stage, TwoViewStageReport& report) {
+    result.matches = std::move(stage.matches);
+    result.points2 = std::move(stage.points.points2);
+    result.model = std::move(stage.model);
+    result.inliers = std::move(stage.inliers);
+    result.inlier_count = stage.inlier_count;
+    result.half_disagreement = stage.half_disagreement;
+    result.aligned_count = stage.aligned_count;
+    report.matches = static_cast<int>(result.matches.size());
+    report.inliers = result.inlier_count;
+    report.homography_inlier_count = result.model.homography_inlier_count;
+    report.fundamental_inlier_count = result.model.fundamental_inlier_count;
+    report.model = result.model.model;
+    report.half_disagreement = result.half_disagreement;
+    report.guided_rounds = stage.guided_rounds;
+    report.aligned = stage.aligned_count;
+  }
+
+  /// TwoViewOptions::align_correspondences on the chosen homography of `stage`: its points2
+  /// become the aligned points, and the homography, its score, inlier flags and count the local
+  /// optimisation's on them (kept as they were when it finds no homography).
+  void align(const Features<kBits>& features1, const cv::Mat& image1, const cv::Mat& image2, StageModel& stage) const {
+    std::vector<float> scales(stage.matches.size());
+    for (std::size_t i = 0; i < stage.matches.size(); ++i) {
+      const cv::KeyPoint& k = features1.keypoints[static_cast<std::size_t>(stage.matches[i].query)];
+      scales[i] = std::max(1.0f, k.size / Descriptor::kPatchSize);
     }
-    RefinedCorrespondences refined = refine_correspondences(image1, image2, points_.points1, points_.points2, scales_,
-                                                            result.model.homography, options_.refinement);
-    result.refined_count = refined.refined_count;
-    points_.points2 = std::move(refined.points2);
-    const std::optional<HomographyModel> current = HomographyModel::from_pixels(result.model.homography);
+    AlignedCorrespondences aligned = align_correspondences(image1, image2, stage.points.points1, stage.points.points2,
+                                                           scales, stage.model.homography,
+                                                           *options_.align_correspondences);
+    stage.aligned_count = aligned.aligned_count;
+    stage.points.points2 = std::move(aligned.points2);
+    const std::optional<HomographyModel> current = HomographyModel::from_pixels(stage.model.homography);
     if (!current) return;
-    const RansacResult<HomographyModel> fitted = refit(*current);
-    if (fitted.success) take_homography(result, fitted);
+    const RansacResult<HomographyModel> fitted = refit(stage.points, *current);
+    if (fitted.success) take_homography(stage, fitted);
   }
 
-  /// The local optimisation of `start` on the correspondences in points_, at the guided σ
-  /// (GuidedRefinementOptions::sigma, refinement_passes): the re-estimation of the guided rounds
-  /// and of the aligned correspondences.
-  RansacResult<HomographyModel> refit(const HomographyModel& start) const {
-    const TruncatedChi2Score scoring{options_.guided.sigma, options_.model.homography_chi2, options_.model.score_constant};
-    const HomographyEstimator estimator(points_.points1, points_.points2, scoring);
-    return optimise_locally(estimator, evaluate_model(estimator, start), options_.guided.refinement_passes);
+  /// The local optimisation of `start` on `points` (TwoViewOptions::refit).
+  RansacResult<HomographyModel> refit(const MatchedPoints& points, const HomographyModel& start) const {
+    const TruncatedChi2Score scoring{options_.refit.sigma, options_.model.homography_chi2, options_.model.score_constant};
+    const HomographyEstimator estimator(points.points1, points.points2, scoring);
+    return optimise_locally(estimator, evaluate_model(estimator, start), options_.refit.passes);
   }
 
-  /// `result`'s chosen homography, its score, inlier flags and count become `fitted`'s, on
-  /// `result.matches`; fundamental_inliers is emptied (its flags indexed other matches).
-  static void take_homography(TwoViewResult<kBits>& result, const RansacResult<HomographyModel>& fitted) {
-    result.inliers = fitted.inliers;
-    result.inlier_count = fitted.inlier_count;
-    result.model.homography = fitted.model.h;
-    result.model.homography_score = fitted.score;
-    result.model.homography_inliers = fitted.inliers;
-    result.model.homography_inlier_count = fitted.inlier_count;
-    result.model.fundamental_inliers.clear();
+  /// `stage`'s chosen homography, its score, inlier flags and count become `fitted`'s, on
+  /// `stage.matches`; fundamental_inliers is emptied (its flags indexed other matches).
+  static void take_homography(StageModel& stage, const RansacResult<HomographyModel>& fitted) {
+    stage.inliers = fitted.inliers;
+    stage.inlier_count = fitted.inlier_count;
+    stage.model.homography = fitted.model.h;
+    stage.model.homography_score = fitted.score;
+    stage.model.homography_inliers = fitted.inliers;
+    stage.model.homography_inlier_count = fitted.inlier_count;
+    stage.model.fundamental_inliers.clear();
   }
 
-  /// The guided rounds of TwoViewOptions::guided on the chosen homography of `result`: `result`'s
-  /// matches, inliers and homography fields become the last successful round's (points_ holds its
-  /// matched positions).
-  void refine_guided(TwoViewResult<kBits>& result) {
-    const GuidedRefinementOptions& guided = options_.guided;
-    std::optional<HomographyModel> current = HomographyModel::from_pixels(result.model.homography);
-    std::vector<cv::Point2f> predicted(result.features1.size());
+  /// The rounds of TwoViewOptions::guided_matching on the chosen homography of `stage`: its
+  /// matches, positions, inliers and homography become the last successful round's.
+  void match_guided_rounds(const Features<kBits>& features1, const Features<kBits>& features2,
+                           StageModel& stage) const {
+    const GuidedMatchingOptions& guided = *options_.guided_matching;
+    std::optional<HomographyModel> current = HomographyModel::from_pixels(stage.model.homography);
+    std::vector<cv::Point2f> predicted(features1.size());
     GuidedMatchOptions gated = guided.matching;
-    for (int round = 0; round < guided.iterations && current; ++round) {
+    MatchedPoints points;
+    for (int round = 0; round < guided.rounds && current; ++round) {
       for (std::size_t i = 0; i < predicted.size(); ++i) {
-        const cv::Point2f& p = result.features1.keypoints[i].pt;
+        const cv::Point2f& p = features1.keypoints[i].pt;
         const Eigen::Vector2d q = (current->h * Eigen::Vector3d(p.x, p.y, 1.0)).hnormalized();
         predicted[i] = cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y()));
       }
-      gated.gate_radius = round == 0 ? guided.matching.gate_radius : guided.refined_gate_radius;
-      std::vector<Match> matches = match_guided(result.features1, result.features2, predicted, gated);
-      matched_points(result.features1.keypoints, result.features2.keypoints, matches, points_);
-      if (points_.points1.size() < 8) break;
-      const RansacResult<HomographyModel> refined = refit(*current);
-      if (!refined.success) break;
-      current = refined.model;
-      result.matches = std::move(matches);
-      take_homography(result, refined);
-      ++guided_rounds_;
+      gated.gate_radius = round == 0 ? guided.matching.gate_radius : guided.tight_gate_radius;
+      std::vector<Match> matches = match_guided(features1, features2, predicted, gated);
+      matched_points(features1.keypoints, features2.keypoints, matches, points);
+      if (points.points1.size() < 8) break;
+      const RansacResult<HomographyModel> fitted = refit(points, *current);
+      if (!fitted.success) break;
+      current = fitted.model;
+      stage.matches = std::move(matches);
+      std::swap(stage.points, points);
+      take_homography(stage, fitted);
+      ++stage.guided_rounds;
     }
-    matched_points(result.features1.keypoints, result.features2.keypoints, result.matches, points_);
   }
 
   /// The chosen model has min_inliers inliers making up min_inlier_ratio of the matches.
-  bool supported(const TwoViewResult<kBits>& result) const {
-    return result.inlier_count >= options_.min_inliers &&
-           result.inlier_count >= options_.min_inlier_ratio * static_cast<double>(result.matches.size());
+  bool supported(const StageModel& stage) const {
+    return stage.inlier_count >= options_.min_inliers &&
+           stage.inlier_count >= options_.min_inlier_ratio * static_cast<double>(stage.matches.size());
   }
 
   /// The chosen model passes the precision test (TwoViewOptions::max_half_disagreement; an F model
   /// and a test that is off always do).
-  bool precise(const TwoViewResult<kBits>& result) const {
-    return options_.max_half_disagreement <= 0.0 || result.model.model != GeometricModel::kHomography ||
-           (result.half_disagreement && *result.half_disagreement <= options_.max_half_disagreement);
+  bool precise(const StageModel& stage) const {
+    return !options_.max_half_disagreement || stage.model.model != GeometricModel::kHomography ||
+           (stage.half_disagreement && *stage.half_disagreement <= *options_.max_half_disagreement);
   }
-
-  bool is_verified(const TwoViewResult<kBits>& result) const { return precise(result) && supported(result); }
 
   TwoViewOptions options_;
   Extractor<Descriptor> extractor1_;
   Extractor<Descriptor> extractor2_;
-  MatchedPoints points_;   ///< matched positions, reused across stages
-  std::vector<float> scales_;  ///< per match, the scale of the image-1 keypoint (refine_positions())
-  int guided_rounds_ = 0;  ///< guided rounds of the current stage
 };
 
 /// TwoViewMatcher<Rbrief>(options).match(image1, image2): two-view matching with views on demand

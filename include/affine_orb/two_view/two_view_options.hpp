@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// The options and the result of TwoViewMatcher (two_view.hpp): the escalation stages, the guided
-/// rounds, the verification thresholds, and what each stage and the whole match report.
+/// The options and the result of TwoViewMatcher (two_view.hpp): the escalation stages, guided
+/// matching, the verification thresholds, and what each stage and the whole match report.
 
 #include <cmath>
 #include <cstdint>
@@ -32,50 +32,44 @@ struct ViewStage {
   double view_features = 0.5;
 };
 
-/// Refinement of a homography a stage verifies: guided matching and local optimisation (Hartley &
-/// Zisserman, Multiple View Geometry, 2nd ed., Alg. 4.6, step (v)).
-struct GuidedRefinementOptions {
-  /// Rounds (0 = off): each predicts every keypoint of image 1 in image 2 by the current
-  /// homography, matches it within the gate (match_guided(); `matching.gate_radius` in the first
-  /// round, `refined_gate_radius` after), and re-estimates the homography on
-  /// the guided matches by local optimisation (evaluate_model() from the current homography, then
-  /// optimise_locally()) under `sigma`. The result's matches, inliers and homography are the last
-  /// round's. A round whose matches give no homography of 4 or more inliers ends the refinement
-  /// with the previous round's. In [0, 10]. Default 2 (a wide gate, then a tight one): it solves
-  /// more pairs of bench/eval_two_view than no refinement, no subset fewer, with more distinct
-  /// correct matches, for little time (docs/two_view.md, "Reading").
-  int iterations = 2;
+/// Guided matching of a homography a stage verifies (TwoViewOptions::guided_matching; Hartley &
+/// Zisserman, Multiple View Geometry, 2nd ed., Alg. 4.6, step (v)). Each round predicts every
+/// keypoint of image 1 in image 2 by the current homography, matches it within the gate
+/// (match_guided()) and re-estimates the homography on the guided matches (TwoViewOptions::refit).
+/// The result's matches, inliers and homography are the last round's; a round whose matches give
+/// no homography of 4 or more inliers ends the rounds with the previous round's.
+struct GuidedMatchingOptions {
+  /// Rounds; [1, 10]; default 2, a wide gate, then a tight one (docs/two_view.md, "Reading").
+  int rounds = 2;
   /// The gated matching of each round; its gate_radius is the first round's.
   GuidedMatchOptions matching;
-  /// The gate of the rounds after the first, pixels of image 2: once a round has refined the
-  /// homography its predictions are good to about a pixel, and a wide gate only adds wrong
-  /// partners near the true ones (with the first round's gate in every round bench/eval_two_view's
-  /// judge, cv::findHomography on all matches, loses pairs the matcher itself fits well).
-  /// 4 px: the inlier bound σ·√5.991 ≈ 2.4 px at σ = 1 plus a keypoint's ~1 px noise, the search
-  /// region of guided matching in Hartley & Zisserman (Multiple View Geometry, 2nd ed., Alg. 4.6).
-  /// In (0, 1000].
-  double refined_gate_radius = 4.0;
-  /// σ of the local optimisation, pixels: a correspondence is an inlier when both transfer errors
-  /// are below σ·√5.991 (ModelSelectionOptions::homography_chi2). Tighter than model selection's
-  /// 2 px, which lets the 4.9 px errors of coarse-octave keypoints weigh on the fit: 1 px keeps the
-  /// inliers within 2.4 px, under the judge's 3 px (bench/eval_two_view). Positive and finite.
-  double sigma = 1.0;
-  /// Local optimisation passes per round (RansacOptions::refinement_passes' meaning). In [1, 100].
-  int refinement_passes = 10;
+  /// The gate of the rounds after the first, pixels of image 2; (0, 1000]; default 4: the inlier
+  /// bound σ·√5.991 ≈ 2.4 px at σ = 1 plus a keypoint's ~1 px noise, Alg. 4.6's search region.
+  double tight_gate_radius = 4.0;
 
   /// Throws std::invalid_argument for a value outside its range or invalid matching options.
   void check() const {
     matching.check();
-    detail::require(iterations >= 0 && iterations <= 10,
-                    "GuidedRefinementOptions: iterations must be in [0, 10], got " + std::to_string(iterations));
-    detail::require(detail::positive_finite(sigma),
-                    "GuidedRefinementOptions: sigma must be positive and finite, got " + std::to_string(sigma));
-    detail::require(std::isfinite(refined_gate_radius) && refined_gate_radius > 0.0 && refined_gate_radius <= 1000.0,
-                    "GuidedRefinementOptions: refined_gate_radius must be in (0, 1000], got " +
-                        std::to_string(refined_gate_radius));
-    detail::require(
-        refinement_passes >= 1 && refinement_passes <= 100,
-        "GuidedRefinementOptions: refinement_passes must be in [1, 100], got " + std::to_string(refinement_passes));
+    detail::require_range(rounds, {1.0, 10.0}, "GuidedMatchingOptions: rounds");
+    detail::require_range(tight_gate_radius, {0.0, 1000.0, true}, "GuidedMatchingOptions: tight_gate_radius");
+  }
+};
+
+/// The local optimisation (evaluate_model() from the current homography, then
+/// optimise_locally()) that re-estimates a homography in the guided rounds and on aligned
+/// correspondences.
+struct RefitOptions {
+  /// σ, pixels: a correspondence is an inlier when both transfer errors are below σ·√5.991
+  /// (ModelSelectionOptions::homography_chi2); (0, inf); default 1, which keeps the inliers within
+  /// 2.4 px, under the judge's 3 px (bench/eval_two_view).
+  double sigma = 1.0;
+  /// Local optimisation passes (RansacOptions::refinement_passes' meaning); [1, 100]; default 10.
+  int passes = 10;
+
+  /// Throws std::invalid_argument for a value outside its range.
+  void check() const {
+    detail::require_range(sigma, detail::kPositive, "RefitOptions: sigma");
+    detail::require_range(passes, {1.0, 100.0}, "RefitOptions: passes");
   }
 };
 
@@ -111,37 +105,28 @@ struct TwoViewOptions {
   /// escalation. Range [0, 1]; values from 0 to 0.2 verify the same pairs of bench/eval_two_view
   /// --sweep, 0.1 is a guard, not a tuned value.
   double min_inlier_ratio = 0.1;
-  /// Precision test of a chosen homography, pixels of image 2 (0 = off): the stage verifies only
-  /// when two homographies fitted to the two halves of its inliers (alternate inliers in match
-  /// order, linear fit of each) map image 1's four corners within this distance of each other,
-  /// mean of the four. Two independent estimates from half the data each differ by about twice the
-  /// full estimate's random error, so a value of 2·e rejects models whose corners are predicted
-  /// less precisely than about e pixels; a model supported only near one part of the image fails
-  /// it, as its extrapolation to the far corners disagrees. The test judges the stage's RANSAC
-  /// model, before the guided rounds: those match within a gate around the model's own predictions
-  /// and fill both halves with matches that confirm it, right or wrong (graf 1→4: 44 px apart
-  /// before them, 2.8 px after, on a model 26 px off). F models are not tested. Default 10 px
-  /// (e ≈ the judge's 5 px): against no test, bench/eval_two_view stops on fewer unsolved pairs
-  /// and verifies fewer imprecise homographies, solving as many pairs, for the time of the
-  /// escalations it causes (docs/two_view.md, "Reading").
-  double max_half_disagreement = 10.0;
-  /// Guided matching and local optimisation of a homography that has min_inliers inliers making up
-  /// min_inlier_ratio of the matches, after the precision test and before the stopping rule counts
-  /// its inliers (on by default: GuidedRefinementOptions::iterations).
-  GuidedRefinementOptions guided;
-  /// Sub-pixel correspondences (refine_correspondences()) for a homography that has min_inliers
-  /// inliers making up min_inlier_ratio of the matches, after the guided rounds: image 2's point of
-  /// every match is aligned with image 1's patch under the homography, the homography is
-  /// re-estimated on the aligned points by local optimisation (GuidedRefinementOptions' σ and
-  /// passes), and TwoViewResult::points2 holds them. Off by default: on bench/eval_two_view it
-  /// lowers the judge's corner error (cv::findHomography on the correspondences) on most pairs but
-  /// barely moves the matcher's own homography or the pairs solved, and the alignment makes the
-  /// pairs plain extraction solves markedly slower (docs/two_view.md, "Reading"). On where the
-  /// correspondences themselves must be precise (mosaics, calibration; test_refinement checks the
-  /// aligned points on a known warp).
-  bool refine = false;
-  /// The alignment of `refine`.
-  CorrespondenceRefinementOptions refinement;
+  /// Precision test of a chosen homography, pixels of image 2: the stage verifies only when two
+  /// homographies fitted to alternate halves of its inliers map image 1's four corners within this
+  /// mean distance of each other (half_disagreement()). Two half-data estimates differ by about
+  /// twice the full estimate's error, so 2·e rejects models whose corners are less precise than
+  /// about e pixels, and a model supported near one part of the image only fails. It judges the
+  /// RANSAC model, before guided matching (whose gate fills both halves with confirming matches,
+  /// right or wrong); F models are not tested. (0, inf); default 10 (e ≈ the judge's 5 px,
+  /// docs/two_view.md, "Reading"); nullopt: no test.
+  std::optional<double> max_half_disagreement = 10.0;
+  /// Guided matching of a homography that has min_inliers inliers making up min_inlier_ratio of the
+  /// matches, after the precision test and before the stopping rule counts its inliers; default
+  /// GuidedMatchingOptions{} (on); nullopt: off.
+  std::optional<GuidedMatchingOptions> guided_matching = GuidedMatchingOptions{};
+  /// Sub-pixel correspondences for such a homography, after guided matching: image 2's point of
+  /// every match is aligned with image 1's patch under the homography (align_correspondences()),
+  /// the homography is fitted again on them (`refit`), and TwoViewResult::points2 holds them.
+  /// Default nullopt (off): it lowers the judge's corner error on most pairs of bench/eval_two_view
+  /// but barely moves the matcher's own homography, and slows the easy pairs (docs/two_view.md,
+  /// "Reading"); for mosaics and calibration, where the correspondences must be precise.
+  std::optional<CorrespondenceAlignmentOptions> align_correspondences;
+  /// The re-estimation of guided matching and of aligned correspondences.
+  RefitOptions refit;
   /// Run every stage whatever stage 0 verified (the views on for every pair); the result is then
   /// that of the last stage.
   bool all_stages = false;
@@ -163,30 +148,23 @@ struct TwoViewOptions {
     extractor.check();
     matching.check();
     model.check();
-    guided.check();
-    refinement.check();
-    detail::require(extractor.view_budget == ViewBudget::kAdditive,
-                    "TwoViewOptions: views on demand need ExtractorOptions::view_budget = kAdditive");
+    if (guided_matching) guided_matching->check();
+    if (align_correspondences) align_correspondences->check();
+    refit.check();
+    detail::require(extractor.additive_budget() != nullptr,
+                    "TwoViewOptions: views on demand need the AdditiveBudget extractor.view_budget");
     double previous = 1.0;
     for (const ViewStage& stage : stages) {
-      detail::require(
-          std::isfinite(stage.max_tilt) && stage.max_tilt > previous * (1.0 + 1e-3),
-          "TwoViewOptions: stage max_tilt values must increase from above 1, got " + std::to_string(stage.max_tilt));
-      detail::require(stage.max_tilt <= extractor.views.max_tilt * (1.0 + 1e-3),
-                      "TwoViewOptions: a stage's max_tilt exceeds extractor.views.max_tilt (" +
-                          std::to_string(stage.max_tilt) + " > " + std::to_string(extractor.views.max_tilt) + ")");
-      detail::require(
-          std::isfinite(stage.view_features) && stage.view_features >= 0.0 && stage.view_features <= 16.0,
-          "TwoViewOptions: a stage's view_features must be in [0, 16], got " + std::to_string(stage.view_features));
+      detail::require_range(stage.max_tilt, {previous * (1.0 + 1e-3), extractor.views.max_tilt * (1.0 + 1e-3), true},
+                            "TwoViewOptions: a stage's max_tilt (increasing, within extractor.views.max_tilt)");
+      detail::require_range(stage.view_features, {0.0, 16.0}, "TwoViewOptions: a stage's view_features");
       previous = stage.max_tilt;
     }
-    detail::require(min_inliers >= 8 && min_inliers <= 1000000,
-                    "TwoViewOptions: min_inliers must be in [8, 1000000], got " + std::to_string(min_inliers));
-    detail::require(std::isfinite(min_inlier_ratio) && min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0,
-                    "TwoViewOptions: min_inlier_ratio must be in [0, 1], got " + std::to_string(min_inlier_ratio));
-    detail::require(
-        std::isfinite(max_half_disagreement) && max_half_disagreement >= 0.0,
-        "TwoViewOptions: max_half_disagreement must be finite and >= 0, got " + std::to_string(max_half_disagreement));
+    detail::require_range(min_inliers, {8.0, 1000000.0}, "TwoViewOptions: min_inliers");
+    detail::require_range(min_inlier_ratio, {0.0, 1.0}, "TwoViewOptions: min_inlier_ratio");
+    if (max_half_disagreement) {
+      detail::require_range(*max_half_disagreement, detail::kPositive, "TwoViewOptions: max_half_disagreement");
+    }
   }
 };
 
@@ -241,12 +219,12 @@ struct TwoViewStageReport {
   /// (TwoViewOptions::max_half_disagreement); measured only when the test is on and a homography
   /// was chosen.
   std::optional<double> half_disagreement;
-  /// Rounds of guided matching run on the stage's homography (TwoViewOptions::guided; 0 when none,
+  /// Rounds of guided matching run on the stage's homography (TwoViewOptions::guided_matching; 0 when none,
   /// and on a homography that failed the precision test when a further stage follows).
   int guided_rounds = 0;
-  /// Matches whose image-2 point was aligned (TwoViewOptions::refine; 0 when it did not run, as for
-  /// guided_rounds).
-  int refined = 0;
+  /// Matches whose image-2 point was aligned (TwoViewOptions::align_correspondences; 0 when it did
+  /// not run, as for guided_rounds).
+  int aligned = 0;
   double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
   double match_ms = 0.0;    ///< matching, milliseconds
   double verify_ms = 0.0;   ///< RANSAC and model selection, milliseconds
@@ -267,18 +245,18 @@ struct TwoViewResult {
   /// Correspondences of the last stage: Match::query indexes features1, Match::train features2.
   std::vector<Match> matches;
   /// Per match, image 2's point of the correspondence, pixels of image 2: aligned with image 1's
-  /// patch around the query keypoint where TwoViewOptions::refine accepted it, else the train
+  /// patch around the query keypoint where TwoViewOptions::align_correspondences accepted it, else the train
   /// keypoint's position.
   std::vector<cv::Point2f> points2;
-  /// Matches whose points2 entry was aligned (TwoViewOptions::refine).
-  int refined_count = 0;
+  /// Matches whose points2 entry was aligned (TwoViewOptions::align_correspondences).
+  int aligned_count = 0;
   /// Per match, 1 = inlier of the chosen model (model.model; all 0 when none was chosen).
   std::vector<std::uint8_t> inliers;
   int inlier_count = 0;
   /// The last stage's TwoViewStageReport::half_disagreement, pixels (nullopt when not measured).
   std::optional<double> half_disagreement;
   /// Both estimates and the choice of the last stage: x2 ~ H x1 and x2ᵀ F x1 = 0, pixels. After
-  /// guided rounds (TwoViewOptions::guided) the homography, its score, inlier flags and count are
+  /// guided rounds (TwoViewOptions::guided_matching) the homography, its score, inlier flags and count are
   /// the last round's, on `matches`; fundamental_inliers is then empty (its flags indexed the
   /// stage's own matches), the fundamental matrix and its inlier count stay the stage's.
   ModelSelectionResult model;

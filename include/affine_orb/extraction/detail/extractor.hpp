@@ -65,7 +65,7 @@ struct ThreadWork {
 template <int Bits>
 struct LevelWork {
   RowSpans valid;  ///< level pixels whose support maps inside the original image (image-size dependent)
-  std::vector<cv::Point2f> original_points;  ///< unrefined positions, original pixels
+  std::vector<cv::Point2f> original_points;  ///< positions before snapping and sub-pixel shifts, original pixels
   std::vector<float> responses;
   std::vector<cv::KeyPoint> keypoints;
   std::vector<BinaryDescriptor<Bits>> descriptors;
@@ -187,11 +187,11 @@ inline cv::Rect2f spread_region(const AffineView& view, const RowSpans& valid_pi
   return cv::Rect2f(tl, br);
 }
 
-/// RefineOptions: the strongest FAST corner of level o of the original image's pyramid within
+/// CornerSnapOptions: the strongest FAST corner of level o of the original image's pyramid within
 /// `radius` level-o pixels of `point` (original pixels), as a level-0 point, if one scores at
 /// least `min_threshold` and lies where the mask allows (ties: the nearer pixel, then raster
 /// order).
-inline std::optional<cv::Point2f> refine_to_corner(const Pyramid& original, cv::Point2f point, int o, int radius,
+inline std::optional<cv::Point2f> snap_to_corner(const Pyramid& original, cv::Point2f point, int o, int radius,
                                                    int min_threshold, const cv::Mat& mask) {
   const cv::Mat& level = original.level(o);
   const cv::Size base = original.level(0).size();
@@ -217,10 +217,10 @@ inline std::optional<cv::Point2f> refine_to_corner(const Pyramid& original, cv::
     }
   }
   if (best_score < 0) return std::nullopt;
-  const cv::Point2f refined =
+  const cv::Point2f snapped =
       Pyramid::to_level0(cv::Point2f(static_cast<float>(best.x), static_cast<float>(best.y)), base, level.size());
-  if (!mask.empty() && mask.at<std::uint8_t>(cvRound(refined.y), cvRound(refined.x)) == 0) return std::nullopt;
-  return refined;
+  if (!mask.empty() && mask.at<std::uint8_t>(cvRound(snapped.y), cvRound(snapped.x)) == 0) return std::nullopt;
+  return snapped;
 }
 
 /// ExtractorOptions::subpixel: the offset, in level pixels, of the vertex of the parabola through
@@ -253,7 +253,7 @@ inline cv::Point2f subpixel_offset(const cv::Mat& level, cv::Point p) {
 /// Step 4 of an Extractor for the chosen candidates of level l of `view` (in work.levels[l]):
 /// orientation and descriptor in the view at the integer level position, keypoints mapped back
 /// with octave `octave` (from the sub-pixel position with ExtractorOptions::subpixel; for a tilted
-/// view, refined on the original image's pyramid `original`: RefineOptions), appended to the
+/// view, snapped on the original image's pyramid `original`: CornerSnapOptions), appended to the
 /// level's record `level`.
 template <class Descriptor, int Bits>
 void describe_level(const Descriptor& descriptor, const AffineView& view, const Pyramid& pyramid, int l, int octave,
@@ -283,10 +283,11 @@ void describe_level(const Descriptor& descriptor, const AffineView& view, const 
       const cv::Point2d q = apply_affine(back, pyramid.to_level0(shifted, l));
       position = cv::Point2f(static_cast<float>(q.x), static_cast<float>(q.y));
     }
-    if (!identity && options.refine.enabled) {
-      if (const std::optional<cv::Point2f> refined = refine_to_corner(original, position, octave, options.refine.radius,
-                                                                      options.detector.min_threshold, mask)) {
-        position = *refined;
+    if (!identity && options.snap_to_corners) {
+      if (const std::optional<cv::Point2f> snapped = snap_to_corner(original, position, octave,
+                                                                    options.snap_to_corners->radius,
+                                                                    options.detector.min_threshold, mask)) {
+        position = *snapped;
       }
     }
     level.keypoints.emplace_back(position, Descriptor::kPatchSize * scale, radians_to_degrees_0_360(original_angle),

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Internals of refine_correspondences() (two_view/alignment.hpp): bilinear sampling of a grey
+/// Internals of align_correspondences() (two_view/alignment.hpp): bilinear sampling of a grey
 /// image and the inverse-compositional Lucas–Kanade alignment of one patch under a fixed local
 /// affine map, translation only (Baker & Matthews, "Lucas-Kanade 20 Years On: A Unifying
 /// Framework", IJCV 56(3), 2004, section 3.2), with the patch's mean and contrast normalised so

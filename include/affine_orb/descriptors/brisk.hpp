@@ -104,16 +104,12 @@ struct BriskOptions {
   /// long pair, and for a pattern whose boxes exceed 127 pixels (the limit of the exact comparison of
   /// box means) or whose radius exceeds 30000 pixels (16-bit offsets); use the pyramid for scale.
   void check() const {
-    const std::array<std::pair<const char*, double>, 6> values = {{{"pattern_scale", pattern_scale},
-                                                                   {"sigma_factor", sigma_factor},
-                                                                   {"centre_sigma", centre_sigma},
-                                                                   {"pair_scale", pair_scale},
-                                                                   {"short_pair_factor", short_pair_factor},
-                                                                   {"long_pair_factor", long_pair_factor}}};
-    for (const auto& [name, value] : values) {
-      detail::require(detail::positive_finite(value),
-                      std::string("BriskOptions::") + name + " must be finite and > 0, got " + std::to_string(value));
-    }
+    detail::require_range(pattern_scale, detail::kPositive, "BriskOptions::pattern_scale");
+    detail::require_range(sigma_factor, detail::kPositive, "BriskOptions::sigma_factor");
+    detail::require_range(centre_sigma, detail::kPositive, "BriskOptions::centre_sigma");
+    detail::require_range(pair_scale, detail::kPositive, "BriskOptions::pair_scale");
+    detail::require_range(short_pair_factor, detail::kPositive, "BriskOptions::short_pair_factor");
+    detail::require_range(long_pair_factor, detail::kPositive, "BriskOptions::long_pair_factor");
     const detail::BriskPattern p = pattern();
     detail::require(p.short_pairs.size() == 512,
                     "BriskOptions: the pattern has " + std::to_string(p.short_pairs.size()) +

@@ -46,12 +46,10 @@ struct RbriefOptions {
   double blur_sigma = 2.0;
 
   void check() const {
-    detail::require(orientation_radius >= 3 && orientation_radius <= 64,
-                    "RbriefOptions::orientation_radius must be in [3, 64], got " + std::to_string(orientation_radius));
-    detail::require(blur_kernel >= 1 && blur_kernel <= 31 && blur_kernel % 2 == 1,
-                    "RbriefOptions::blur_kernel must be odd and in [1, 31], got " + std::to_string(blur_kernel));
-    detail::require(detail::positive_finite(blur_sigma) && blur_sigma <= 16.0,
-                    "RbriefOptions::blur_sigma must be in (0, 16], got " + std::to_string(blur_sigma));
+    detail::require_range(orientation_radius, {3, 64}, "RbriefOptions::orientation_radius");
+    detail::require_range(blur_kernel, {1, 31}, "RbriefOptions::blur_kernel");
+    detail::require(blur_kernel % 2 == 1, "RbriefOptions::blur_kernel must be odd, got " + std::to_string(blur_kernel));
+    detail::require_range(blur_sigma, {0, 16, true}, "RbriefOptions::blur_sigma");
   }
 };
 

@@ -42,18 +42,16 @@ struct DetectorOptions {
   float harris_k = 0.04f;
 
   void check() const {
-    detail::require(initial_threshold >= 1 && initial_threshold <= 254,
-                    "DetectorOptions::initial_threshold must be in [1, 254], got " + std::to_string(initial_threshold));
+    detail::require_range(initial_threshold, {1, 254}, "DetectorOptions::initial_threshold");
     detail::require(
         min_threshold >= 1 && min_threshold <= initial_threshold,
         "DetectorOptions::min_threshold must be in [1, initial_threshold], got " + std::to_string(min_threshold));
-    detail::require(cell_size >= 4 && cell_size <= 4096,
-                    "DetectorOptions::cell_size must be in [4, 4096], got " + std::to_string(cell_size));
+    detail::require_range(cell_size, {4, 4096}, "DetectorOptions::cell_size");
     detail::require(score == ScoreType::kFast || score == ScoreType::kHarris, "DetectorOptions::score is invalid");
-    detail::require(harris_block_size >= 3 && harris_block_size <= 15 && harris_block_size % 2 == 1,
-                    "DetectorOptions::harris_block_size must be odd and in [3, 15]");
-    detail::require(std::isfinite(harris_k) && harris_k >= 0.0f && harris_k <= 0.25f,
-                    "DetectorOptions::harris_k must be in [0, 0.25]");
+    detail::require_range(harris_block_size, {3, 15}, "DetectorOptions::harris_block_size");
+    detail::require(harris_block_size % 2 == 1,
+                    "DetectorOptions::harris_block_size must be odd, got " + std::to_string(harris_block_size));
+    detail::require_range(harris_k, {0, 0.25}, "DetectorOptions::harris_k");
   }
 
   /// Pixels around a candidate that ranking reads (FAST circle, or the Harris block with Sobel).

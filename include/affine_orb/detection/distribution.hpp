@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -22,9 +23,10 @@ namespace affine_orb {
 /// each next level f times the previous (rounded), and the last level the remainder, so that the
 /// budgets sum to exactly `total`. `budgets` (its buffer reused) receives one entry per level.
 inline void level_budgets(int total, double scale_factor, int levels, std::vector<int>& budgets) {
-  detail::require(total >= 0, "level_budgets: total must be >= 0");
-  detail::require(levels >= 1, "level_budgets: levels must be >= 1");
-  detail::require(std::isfinite(scale_factor) && scale_factor > 1.0, "level_budgets: scale_factor must be > 1");
+  detail::require_range(total, detail::kNonNegative, "level_budgets: total");
+  detail::require_range(levels, detail::kPositive, "level_budgets: levels");
+  detail::require_range(scale_factor, {1, std::numeric_limits<double>::infinity(), true, true},
+                        "level_budgets: scale_factor");
   // max(): GCC 12 does not see that require() threw for levels < 1 and warns about back().
   budgets.assign(static_cast<std::size_t>(std::max(levels, 1)), 0);
   const double f = 1.0 / scale_factor;
@@ -79,7 +81,7 @@ inline std::vector<int> allocate_with_carry(const std::vector<int>& budgets, con
 /// (its buffer reused); all of them when there are no more than `target`. cv::ORB's selection (no
 /// spatial spreading).
 inline void select_strongest(const std::vector<float>& responses, int target, std::vector<int>& kept) {
-  detail::require(target >= 0, "select_strongest: target must be >= 0");
+  detail::require_range(target, detail::kNonNegative, "select_strongest: target");
   kept.resize(responses.size());
   std::iota(kept.begin(), kept.end(), 0);
   if (static_cast<std::size_t>(target) < kept.size()) {
@@ -132,7 +134,7 @@ struct QuadtreeWorkspace {
 inline void distribute_quadtree(const std::vector<cv::Point2f>& points, const std::vector<float>& responses,
                                 cv::Rect2f region, int target, QuadtreeWorkspace& work, std::vector<int>& kept) {
   detail::require(points.size() == responses.size(), "distribute_quadtree: points and responses differ in size");
-  detail::require(target >= 0, "distribute_quadtree: target must be >= 0");
+  detail::require_range(target, detail::kNonNegative, "distribute_quadtree: target");
   const int n = static_cast<int>(points.size());
   kept.clear();
   if (target == 0 || n == 0) return;

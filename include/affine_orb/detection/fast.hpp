@@ -45,8 +45,7 @@ inline int fast_score(const std::uint8_t* p, std::ptrdiff_t step) {
 /// elsewhere; all write identical maps.
 inline void fast_score_rect(const cv::Mat& image, cv::Rect rect, int threshold, cv::Mat& scores) {
   detail::require_gray8(image, "fast_score_rect");
-  detail::require(threshold >= 1 && threshold <= 255,
-                  "fast_score_rect: threshold must be in [1, 255], got " + std::to_string(threshold));
+  detail::require_range(threshold, {1, 255}, "fast_score_rect: threshold");
   detail::require(scores.type() == CV_8UC1 && scores.size() == image.size(),
                   "fast_score_rect: the score map must be CV_8UC1 of the image size");
   detail::score_rect(image, rect, threshold, scores);
@@ -68,8 +67,7 @@ inline void fast_score_map(const cv::Mat& image, cv::Rect roi, int threshold, cv
 /// whose circle is not inside the image get 0.
 inline void fast_score_spans(const cv::Mat& image, const RowSpans& region, int threshold, cv::Mat& scores) {
   detail::require_gray8(image, "fast_score_spans");
-  detail::require(threshold >= 1 && threshold <= 255,
-                  "fast_score_spans: threshold must be in [1, 255], got " + std::to_string(threshold));
+  detail::require_range(threshold, {1, 255}, "fast_score_spans: threshold");
   detail::require(scores.type() == CV_8UC1 && scores.size() == image.size(),
                   "fast_score_spans: the score map must be CV_8UC1 of the image size");
   detail::score_spans(image, region, threshold, scores);

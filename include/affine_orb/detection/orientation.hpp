@@ -22,7 +22,7 @@ namespace affine_orb {
 /// OpenCV's ORB (Rublee et al., ICCV 2011) and of ORB-SLAM2's extractor; for r = 15 it is
 /// {15, 15, 15, 15, 14, 14, 14, 13, 13, 12, 11, 10, 9, 8, 6, 3}.
 inline std::vector<int> orb_disc_half_widths(int radius) {
-  detail::require(radius >= 1 && radius <= 255, "orb_disc_half_widths: radius must be in [1, 255]");
+  detail::require_range(radius, {1, 255}, "orb_disc_half_widths: radius");
   std::vector<int> w(static_cast<std::size_t>(radius) + 2, 0);
   const double diagonal = radius * std::sqrt(2.0) / 2.0;
   const int rounded_rows = std::min(static_cast<int>(std::floor(diagonal + 1.0)), radius);

@@ -27,10 +27,8 @@ struct PyramidOptions {
   int levels = 8;
 
   void check() const {
-    detail::require(std::isfinite(scale_factor) && scale_factor > 1.0 && scale_factor <= 4.0,
-                    "PyramidOptions::scale_factor must be in (1, 4], got " + std::to_string(scale_factor));
-    detail::require(levels >= 1 && levels <= 32,
-                    "PyramidOptions::levels must be in [1, 32], got " + std::to_string(levels));
+    detail::require_range(scale_factor, {1, 4, true}, "PyramidOptions::scale_factor");
+    detail::require_range(levels, {1, 32}, "PyramidOptions::levels");
   }
 
   /// Nominal scale of level l, s^l.

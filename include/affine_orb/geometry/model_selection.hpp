@@ -94,10 +94,7 @@ struct ScoreRatioOptions {
   /// ORB-SLAM2's Initializer uses 0.40).
   double threshold = 0.45;
   /// Throws std::invalid_argument unless threshold is in (0, 1).
-  void check() const {
-    detail::require(std::isfinite(threshold) && threshold > 0.0 && threshold < 1.0,
-                    "ScoreRatioOptions: threshold must be in (0, 1), got " + std::to_string(threshold));
-  }
+  void check() const { detail::require_range(threshold, {0, 1, true, true}, "ScoreRatioOptions: threshold"); }
 };
 
 /// SelectionRule::kGric's parameter.
@@ -108,10 +105,7 @@ struct GricOptions {
   /// eq. 20–21 residuals carry both points' noise).
   double sigma = 1.0;
   /// Throws std::invalid_argument unless sigma is positive and finite.
-  void check() const {
-    detail::require(detail::positive_finite(sigma),
-                    "GricOptions: sigma must be positive and finite, got " + std::to_string(sigma));
-  }
+  void check() const { detail::require_range(sigma, detail::kPositive, "GricOptions: sigma"); }
 };
 
 /// SelectionRule::kInlierRatio's parameter.
@@ -120,10 +114,7 @@ struct InlierRatioOptions {
   /// max_H_inlier_ratio (TwoViewGeometryOptions), there with one pixel threshold for both models.
   double threshold = 0.8;
   /// Throws std::invalid_argument unless threshold is positive and finite.
-  void check() const {
-    detail::require(detail::positive_finite(threshold),
-                    "InlierRatioOptions: threshold must be positive and finite, got " + std::to_string(threshold));
-  }
+  void check() const { detail::require_range(threshold, detail::kPositive, "InlierRatioOptions: threshold"); }
 };
 
 /// SelectionRule::kPlaneParallax's parameter.
@@ -185,9 +176,7 @@ struct ModelSelectionOptions {
     detail::require(rule == SelectionRule::kScoreRatio || rule == SelectionRule::kGric ||
                         rule == SelectionRule::kInlierRatio || rule == SelectionRule::kPlaneParallax,
                     "ModelSelectionOptions: rule is invalid");
-    detail::require(
-        std::isfinite(level_scale_factor) && level_scale_factor >= 1.0 && level_scale_factor <= 4.0,
-        "ModelSelectionOptions: level_scale_factor must be in [1, 4], got " + std::to_string(level_scale_factor));
+    detail::require_range(level_scale_factor, {1, 4}, "ModelSelectionOptions: level_scale_factor");
     score_ratio.check();
     gric.check();
     inlier_ratio.check();
@@ -356,8 +345,7 @@ inline ModelSelectionResult select_model(const std::vector<cv::Point2f>& points1
   for (const auto& [octaves, out] :
        {std::make_pair(&octaves1, &scales.image1), std::make_pair(&octaves2, &scales.image2)}) {
     for (const int octave : *octaves) {
-      detail::require(octave >= 0 && octave <= 31,
-                      "select_model: octaves must be in [0, 31], got " + std::to_string(octave));
+      detail::require_range(octave, {0, 31}, "select_model: octaves");
       out->push_back(std::pow(options.level_scale_factor, octave));
     }
   }

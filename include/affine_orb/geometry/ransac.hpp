@@ -75,18 +75,13 @@ struct RansacOptions {
   /// max_iterations, 0 < confidence < 1, 0 <= termination_inlier_ratio <= 1 and
   /// refinement_passes >= 0.
   void check() const {
-    detail::require(max_iterations >= 1,
-                    "RansacOptions: max_iterations must be >= 1, got " + std::to_string(max_iterations));
+    detail::require_range(max_iterations, detail::kPositive, "RansacOptions: max_iterations");
     detail::require(
         min_iterations >= 0 && min_iterations <= max_iterations,
         "RansacOptions: min_iterations must be in [0, max_iterations], got " + std::to_string(min_iterations));
-    detail::require(std::isfinite(confidence) && confidence > 0.0 && confidence < 1.0,
-                    "RansacOptions: confidence must be in (0, 1), got " + std::to_string(confidence));
-    detail::require(
-        std::isfinite(termination_inlier_ratio) && termination_inlier_ratio >= 0.0 && termination_inlier_ratio <= 1.0,
-        "RansacOptions: termination_inlier_ratio must be in [0, 1], got " + std::to_string(termination_inlier_ratio));
-    detail::require(refinement_passes >= 0,
-                    "RansacOptions: refinement_passes must be >= 0, got " + std::to_string(refinement_passes));
+    detail::require_range(confidence, {0, 1, true, true}, "RansacOptions: confidence");
+    detail::require_range(termination_inlier_ratio, {0, 1}, "RansacOptions: termination_inlier_ratio");
+    detail::require_range(refinement_passes, detail::kNonNegative, "RansacOptions: refinement_passes");
   }
 };
 
@@ -105,11 +100,8 @@ struct TruncatedChi2Score {
   /// Throws std::invalid_argument unless sigma and chi2_threshold are positive and finite and
   /// chi2_threshold <= score_constant < infinity (so that every inlier term is positive).
   void check() const {
-    detail::require(detail::positive_finite(sigma),
-                    "TruncatedChi2Score: sigma must be positive and finite, got " + std::to_string(sigma));
-    detail::require(
-        detail::positive_finite(chi2_threshold),
-        "TruncatedChi2Score: chi2_threshold must be positive and finite, got " + std::to_string(chi2_threshold));
+    detail::require_range(sigma, detail::kPositive, "TruncatedChi2Score: sigma");
+    detail::require_range(chi2_threshold, detail::kPositive, "TruncatedChi2Score: chi2_threshold");
     detail::require(std::isfinite(score_constant) && score_constant >= chi2_threshold,
                     "TruncatedChi2Score: score_constant must be finite and >= chi2_threshold, got " +
                         std::to_string(score_constant));
@@ -134,8 +126,7 @@ struct SigmaScales {
                         std::to_string(image2.size()));
     for (const std::vector<double>* list : {&image1, &image2}) {
       for (const double v : *list) {
-        detail::require(detail::positive_finite(v),
-                        "SigmaScales: every multiplier must be positive and finite, got " + std::to_string(v));
+        detail::require_range(v, detail::kPositive, "SigmaScales: every multiplier");
       }
     }
   }

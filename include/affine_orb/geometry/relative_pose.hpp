@@ -51,9 +51,8 @@ struct PinholeCamera {
 
   /// Throws std::invalid_argument unless fx and fy are positive and finite and cx, cy finite.
   void check() const {
-    detail::require(
-        detail::positive_finite(fx) && detail::positive_finite(fy),
-        "PinholeCamera: fx and fy must be positive and finite, got " + std::to_string(fx) + ", " + std::to_string(fy));
+    detail::require_range(fx, detail::kPositive, "PinholeCamera: fx");
+    detail::require_range(fy, detail::kPositive, "PinholeCamera: fy");
     detail::require(std::isfinite(cx) && std::isfinite(cy), "PinholeCamera: cx and cy must be finite");
   }
 
@@ -113,18 +112,11 @@ struct RelativePoseOptions {
   /// Throws std::invalid_argument for a σ or χ² bound that is not positive and finite, a
   /// min_good_points below 1, an ambiguity_ratio outside (0, 1] or a tolerance outside (0, 180].
   void check() const {
-    detail::require(detail::positive_finite(sigma),
-                    "RelativePoseOptions: sigma must be positive and finite, got " + std::to_string(sigma));
-    detail::require(
-        detail::positive_finite(reprojection_chi2),
-        "RelativePoseOptions: reprojection_chi2 must be positive and finite, got " + std::to_string(reprojection_chi2));
-    detail::require(min_good_points >= 1,
-                    "RelativePoseOptions: min_good_points must be >= 1, got " + std::to_string(min_good_points));
-    detail::require(std::isfinite(ambiguity_ratio) && ambiguity_ratio > 0.0 && ambiguity_ratio <= 1.0,
-                    "RelativePoseOptions: ambiguity_ratio must be in (0, 1], got " + std::to_string(ambiguity_ratio));
-    detail::require(
-        std::isfinite(tolerance_degrees) && tolerance_degrees > 0.0 && tolerance_degrees <= 180.0,
-        "RelativePoseOptions: tolerance_degrees must be in (0, 180], got " + std::to_string(tolerance_degrees));
+    detail::require_range(sigma, detail::kPositive, "RelativePoseOptions: sigma");
+    detail::require_range(reprojection_chi2, detail::kPositive, "RelativePoseOptions: reprojection_chi2");
+    detail::require_range(min_good_points, detail::kPositive, "RelativePoseOptions: min_good_points");
+    detail::require_range(ambiguity_ratio, {0, 1, true}, "RelativePoseOptions: ambiguity_ratio");
+    detail::require_range(tolerance_degrees, {0, 180, true}, "RelativePoseOptions: tolerance_degrees");
   }
 };
 

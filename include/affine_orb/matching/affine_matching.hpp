@@ -41,13 +41,8 @@ struct AffineMatchOptions {
 
   void check() const {
     matcher.check();
-    detail::require(
-        std::isfinite(ratio_exclusion_radius) && ratio_exclusion_radius >= 0.0 && ratio_exclusion_radius <= 1000.0,
-        "AffineMatchOptions::ratio_exclusion_radius must be in [0, 1000], got " +
-            std::to_string(ratio_exclusion_radius));
-    detail::require(
-        std::isfinite(duplicate_radius) && duplicate_radius >= 0.0 && duplicate_radius <= 1000.0,
-        "AffineMatchOptions::duplicate_radius must be in [0, 1000], got " + std::to_string(duplicate_radius));
+    detail::require_range(ratio_exclusion_radius, {0, 1000}, "AffineMatchOptions::ratio_exclusion_radius");
+    detail::require_range(duplicate_radius, {0, 1000}, "AffineMatchOptions::duplicate_radius");
   }
 };
 
@@ -78,19 +73,11 @@ struct GuidedMatchOptions {
 
   /// Throws std::invalid_argument for a value outside its range.
   void check() const {
-    detail::require(std::isfinite(gate_radius) && gate_radius > 0.0 && gate_radius <= 1000.0,
-                    "GuidedMatchOptions::gate_radius must be in (0, 1000], got " + std::to_string(gate_radius));
-    detail::require(detail::positive_finite(ratio),
-                    "GuidedMatchOptions::ratio must be finite and > 0, got " + std::to_string(ratio));
-    detail::require(
-        std::isfinite(ratio_exclusion_radius) && ratio_exclusion_radius >= 0.0 && ratio_exclusion_radius <= 1000.0,
-        "GuidedMatchOptions::ratio_exclusion_radius must be in [0, 1000], got " +
-            std::to_string(ratio_exclusion_radius));
-    detail::require(max_distance >= 0,
-                    "GuidedMatchOptions::max_distance must be >= 0, got " + std::to_string(max_distance));
-    detail::require(
-        std::isfinite(duplicate_radius) && duplicate_radius >= 0.0 && duplicate_radius <= 1000.0,
-        "GuidedMatchOptions::duplicate_radius must be in [0, 1000], got " + std::to_string(duplicate_radius));
+    detail::require_range(gate_radius, {0, 1000, true}, "GuidedMatchOptions::gate_radius");
+    detail::require_range(ratio, detail::kPositive, "GuidedMatchOptions::ratio");
+    detail::require_range(ratio_exclusion_radius, {0, 1000}, "GuidedMatchOptions::ratio_exclusion_radius");
+    detail::require_range(max_distance, detail::kNonNegative, "GuidedMatchOptions::max_distance");
+    detail::require_range(duplicate_radius, {0, 1000}, "GuidedMatchOptions::duplicate_radius");
   }
 };
 
@@ -101,7 +88,7 @@ struct GuidedMatchOptions {
 /// sorted by query index, then train index.
 inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, const std::vector<cv::Point2f>& points1,
                                                    const std::vector<cv::Point2f>& points2, double radius) {
-  detail::require(std::isfinite(radius) && radius >= 0.0, "remove_duplicate_matches: radius must be finite and >= 0");
+  detail::require_range(radius, detail::kNonNegative, "remove_duplicate_matches: radius");
   std::sort(matches.begin(), matches.end(), [](const Match& a, const Match& b) {
     return a.distance < b.distance ||
            (a.distance == b.distance && (a.query < b.query || (a.query == b.query && a.train < b.train)));

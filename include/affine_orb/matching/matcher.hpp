@@ -59,10 +59,8 @@ struct MatcherOptions {
   /// Throws std::invalid_argument for a ratio that is not finite and > 0 or a negative
   /// max_distance.
   void check() const {
-    detail::require(detail::positive_finite(ratio),
-                    "MatcherOptions: ratio must be finite and > 0, got " + std::to_string(ratio));
-    detail::require(max_distance >= 0,
-                    "MatcherOptions: max_distance must be >= 0, got " + std::to_string(max_distance));
+    detail::require_range(ratio, detail::kPositive, "MatcherOptions: ratio");
+    detail::require_range(max_distance, detail::kNonNegative, "MatcherOptions: max_distance");
   }
 };
 

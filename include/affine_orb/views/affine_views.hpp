@@ -40,15 +40,10 @@ struct AffineViewOptions {
   double antialias = 0.8;
 
   void check() const {
-    detail::require(std::isfinite(max_tilt) && max_tilt >= 1.0 && max_tilt <= 16.0,
-                    "AffineViewOptions::max_tilt must be in [1, 16], got " + std::to_string(max_tilt));
-    detail::require(std::isfinite(tilt_ratio) && tilt_ratio > 1.0 && tilt_ratio <= 4.0,
-                    "AffineViewOptions::tilt_ratio must be in (1, 4], got " + std::to_string(tilt_ratio));
-    detail::require(
-        std::isfinite(rotation_base_degrees) && rotation_base_degrees >= 1.0 && rotation_base_degrees <= 180.0,
-        "AffineViewOptions::rotation_base_degrees must be in [1, 180], got " + std::to_string(rotation_base_degrees));
-    detail::require(std::isfinite(antialias) && antialias >= 0.0 && antialias <= 4.0,
-                    "AffineViewOptions::antialias must be in [0, 4], got " + std::to_string(antialias));
+    detail::require_range(max_tilt, {1, 16}, "AffineViewOptions::max_tilt");
+    detail::require_range(tilt_ratio, {1, 4, true}, "AffineViewOptions::tilt_ratio");
+    detail::require_range(rotation_base_degrees, {1, 180}, "AffineViewOptions::rotation_base_degrees");
+    detail::require_range(antialias, {0, 4}, "AffineViewOptions::antialias");
   }
 };
 
@@ -99,7 +94,7 @@ inline std::vector<std::pair<double, double>> view_parameters(const AffineViewOp
 
 /// The view of tilt t and rotation φ (degrees) for an image of size `image_size`.
 inline AffineView make_view(double tilt, double rotation_degrees, cv::Size image_size) {
-  detail::require(std::isfinite(tilt) && tilt >= 1.0 && tilt <= 64.0, "make_view: tilt must be in [1, 64]");
+  detail::require_range(tilt, {1, 64}, "make_view: tilt");
   detail::require(std::isfinite(rotation_degrees), "make_view: the rotation must be finite");
   detail::require(image_size.width > 0 && image_size.height > 0, "make_view: the image size must be positive");
   AffineView view;

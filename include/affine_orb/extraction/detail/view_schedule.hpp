@@ -75,8 +75,8 @@ class RepeatGrids {
   /// Empties the grids for an image of `size` (pixels) and a pyramid of `pyramid.levels` levels.
   void reset(cv::Size size, const PyramidOptions& pyramid, double merge_radius, int reach) {
     require(size.width > 0 && size.height > 0, "RepeatGrids::reset: the image size must be positive");
-    require(std::isfinite(merge_radius) && merge_radius > 0.0, "RepeatGrids::reset: merge_radius must be > 0");
-    require(reach >= 0, "RepeatGrids::reset: reach must be >= 0");
+    require_range(merge_radius, kPositive, "RepeatGrids::reset: merge_radius");
+    require_range(reach, kNonNegative, "RepeatGrids::reset: reach");
     levels_ = pyramid.levels;
     reach_ = reach;
     grids_.resize(static_cast<std::size_t>(levels_));
@@ -167,7 +167,7 @@ class ViewBudgets {
     require(first >= 0 && first <= last && static_cast<std::size_t>(last) <= per_view_.size() &&
                 tilts.size() == per_view_.size(),
             "ViewBudgets::share: bad view range");
-    require(total >= 0, "ViewBudgets::share: total must be >= 0");
+    require_range(total, kNonNegative, "ViewBudgets::share: total");
     remainders_.clear();
     double total_weight = 0.0;
     for (int v = first; v < last; ++v) total_weight += std::pow(tilts[static_cast<std::size_t>(v)], exponent);

@@ -73,13 +73,9 @@ struct KeyframeTrackerOptions {
 
   /// Throws std::invalid_argument for values outside the ranges above or invalid nested options.
   void check() const {
-    detail::require(min_inliers >= 8 && min_inliers <= 1000000,
-                    "KeyframeTrackerOptions::min_inliers must be in [8, 1000000], got " + std::to_string(min_inliers));
-    detail::require(std::isfinite(keyframe_inlier_ratio) && keyframe_inlier_ratio > 0.0 && keyframe_inlier_ratio <= 1.0,
-                    "KeyframeTrackerOptions::keyframe_inlier_ratio must be in (0, 1], got " +
-                        std::to_string(keyframe_inlier_ratio));
-    detail::require(max_lost_frames >= 1,
-                    "KeyframeTrackerOptions::max_lost_frames must be >= 1, got " + std::to_string(max_lost_frames));
+    detail::require_range(min_inliers, {8, 1000000}, "KeyframeTrackerOptions::min_inliers");
+    detail::require_range(keyframe_inlier_ratio, {0, 1, true}, "KeyframeTrackerOptions::keyframe_inlier_ratio");
+    detail::require_range(max_lost_frames, detail::kPositive, "KeyframeTrackerOptions::max_lost_frames");
     model_selection.check();
     matching.check();
     pose.check();

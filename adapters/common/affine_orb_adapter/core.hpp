@@ -268,13 +268,10 @@ struct ForkParameters {
   int min_th_fast = 7;
 
   void check(const std::string& who) const {
-    require_option(nfeatures >= 1 && nfeatures <= 1000000,
-                   who + ": nfeatures must be in [1, 1000000], got " + std::to_string(nfeatures));
-    require_option(std::isfinite(scale_factor) && scale_factor > 1.0f && scale_factor <= 4.0f,
-                   who + ": scaleFactor must be in (1, 4], got " + std::to_string(scale_factor));
-    require_option(levels >= 1 && levels <= 32, who + ": nlevels must be in [1, 32], got " + std::to_string(levels));
-    require_option(ini_th_fast >= 1 && ini_th_fast <= 254,
-                   who + ": iniThFAST must be in [1, 254], got " + std::to_string(ini_th_fast));
+    affine_orb::detail::require_range(nfeatures, {1, 1000000}, (who + ": nfeatures").c_str());
+    affine_orb::detail::require_range(scale_factor, {1, 4, true}, (who + ": scaleFactor").c_str());
+    affine_orb::detail::require_range(levels, {1, 32}, (who + ": nlevels").c_str());
+    affine_orb::detail::require_range(ini_th_fast, {1, 254}, (who + ": iniThFAST").c_str());
     require_option(min_th_fast >= 1 && min_th_fast <= ini_th_fast,
                    who + ": minThFAST must be in [1, iniThFAST], got " + std::to_string(min_th_fast));
   }

@@ -5,6 +5,7 @@
 /// strongest texture.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -119,6 +120,172 @@ struct QuadtreeWorkspace {
   std::vector<int> rest;
 };
 
+namespace detail {
+
+/// Orders candidate indices strongest first: the larger response, ties the lower index.
+struct StrongerCandidate {
+  const std::vector<float>& responses;
+
+  bool operator()(int a, int b) const {
+    const float ra = responses[static_cast<std::size_t>(a)];
+    const float rb = responses[static_cast<std::size_t>(b)];
+    return ra > rb || (ra == rb && a < b);
+  }
+};
+
+/// True for a cell that distribute_quadtree() may split: more than one member and at least one
+/// pixel wide and high.
+inline bool splittable(const QuadCell& cell) {
+  return cell.size() > 1 && cell.box.width >= 1.0f && cell.box.height >= 1.0f;
+}
+
+/// Sizes the member buffers of `work` for `points` and makes work.cells the root cells of
+/// `region` that hold points: max(1, round(width/height)) cells side by side, roughly square.
+/// Cells hold ranges of one member buffer (work.index and work.position), filled here by a
+/// counting sort of all points on their root (work.rest holds each point's root, work.order the
+/// bucket starts).
+inline void make_root_cells(const std::vector<cv::Point2f>& points, cv::Rect2f region, QuadtreeWorkspace& work) {
+  const std::size_t size = points.size();
+  const int n = static_cast<int>(size);
+  work.index.resize(size);
+  work.position.resize(size);
+  work.index_scratch.resize(size);
+  work.position_scratch.resize(size);
+  work.quadrant.resize(size);
+  work.cells.clear();
+  const int roots = std::max(1, static_cast<int>(std::lround(region.width / std::max(region.height, 1.0f))));
+  const float root_width = region.width / static_cast<float>(roots);
+  std::vector<int>& root_of = work.rest;
+  root_of.resize(size);
+  work.order.assign(static_cast<std::size_t>(roots) + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    const cv::Point2f& p = points[static_cast<std::size_t>(i)];
+    const int r = std::clamp(static_cast<int>((p.x - region.x) / root_width), 0, roots - 1);
+    root_of[static_cast<std::size_t>(i)] = r;
+    ++work.order[static_cast<std::size_t>(r) + 1];
+  }
+  for (int r = 0; r < roots; ++r)
+    work.order[static_cast<std::size_t>(r) + 1] += work.order[static_cast<std::size_t>(r)];
+  for (int r = 0; r < roots; ++r) {
+    const int begin = work.order[static_cast<std::size_t>(r)];
+    const int end = work.order[static_cast<std::size_t>(r) + 1];
+    if (begin == end) continue;
+    work.cells.push_back({{region.x + r * root_width, region.y, root_width, region.height}, begin, end});
+  }
+  for (int i = 0; i < n; ++i) {
+    const std::size_t to =
+        static_cast<std::size_t>(work.order[static_cast<std::size_t>(root_of[static_cast<std::size_t>(i)])]++);
+    work.index[to] = i;
+    work.position[to] = points[static_cast<std::size_t>(i)];
+  }
+}
+
+/// Copies members [begin, end) of work.index_scratch/position_scratch back to work.index/position
+/// grouped by work.quadrant (0 .. 3), a counting sort (the order of a cell's members does not
+/// matter: every step depends only on the member set). Returns the bucket starts: quadrant q
+/// covers [begin + start[q], begin + start[q + 1]).
+inline std::array<int, 5> regroup_by_quadrant(int begin, int end, QuadtreeWorkspace& work) {
+  std::array<int, 5> start = {0, 0, 0, 0, 0};
+  for (int i = begin; i < end; ++i) ++start[work.quadrant[static_cast<std::size_t>(i)] + 1];
+  for (int q = 0; q < 4; ++q) start[q + 1] += start[q];
+  std::array<int, 4> fill = {start[0], start[1], start[2], start[3]};
+  for (int i = begin; i < end; ++i) {
+    const std::size_t to = static_cast<std::size_t>(begin + fill[work.quadrant[static_cast<std::size_t>(i)]]++);
+    work.index[to] = work.index_scratch[static_cast<std::size_t>(i)];
+    work.position[to] = work.position_scratch[static_cast<std::size_t>(i)];
+  }
+  return start;
+}
+
+/// Splits `cell` into four at its centre, quadrant q = (x >= cx) + 2·(y >= cy): regroups its
+/// members by quadrant and appends the non-empty quadrants to work.children in the order of q.
+/// Returns how many it appended.
+inline int split_cell(const QuadCell& cell, QuadtreeWorkspace& work) {
+  const float hw = cell.box.width * 0.5f;
+  const float hh = cell.box.height * 0.5f;
+  const float cx = cell.box.x + hw;
+  const float cy = cell.box.y + hh;
+  for (int i = cell.begin; i < cell.end; ++i) {
+    const cv::Point2f& p = work.position[static_cast<std::size_t>(i)];
+    work.quadrant[static_cast<std::size_t>(i)] = static_cast<unsigned char>((p.x >= cx) + 2 * (p.y >= cy));
+    work.index_scratch[static_cast<std::size_t>(i)] = work.index[static_cast<std::size_t>(i)];
+    work.position_scratch[static_cast<std::size_t>(i)] = p;
+  }
+  const std::array<int, 5> start = regroup_by_quadrant(cell.begin, cell.end, work);
+  const cv::Rect2f boxes[4] = {
+      {cell.box.x, cell.box.y, hw, hh}, {cx, cell.box.y, hw, hh}, {cell.box.x, cy, hw, hh}, {cx, cy, hw, hh}};
+  int nonempty = 0;
+  for (int q = 0; q < 4; ++q) {
+    if (start[q] == start[q + 1]) continue;
+    work.children.push_back({boxes[q], cell.begin + start[q], cell.begin + start[q + 1]});
+    ++nonempty;
+  }
+  return nonempty;
+}
+
+/// One round of splitting work.cells: the splittable cells, most populated first (ties in cell
+/// order), are split until there are `target` cells; work.cells becomes the cells not split
+/// followed by the children. Returns false, changing nothing, when no cell is splittable.
+inline bool split_round(int target, QuadtreeWorkspace& work) {
+  work.order.clear();
+  for (std::size_t i = 0; i < work.cells.size(); ++i) {
+    if (splittable(work.cells[i])) work.order.push_back(static_cast<int>(i));
+  }
+  if (work.order.empty()) return false;
+  // A stable sort by size, without its buffer.
+  std::sort(work.order.begin(), work.order.end(), [&](int a, int b) {
+    const int sa = work.cells[static_cast<std::size_t>(a)].size();
+    const int sb = work.cells[static_cast<std::size_t>(b)].size();
+    return sa > sb || (sa == sb && a < b);
+  });
+  work.split.assign(work.cells.size(), 0);
+  int count = static_cast<int>(work.cells.size());
+  work.children.clear();
+  for (int idx : work.order) {
+    if (count >= target) break;
+    count += split_cell(work.cells[static_cast<std::size_t>(idx)], work) - 1;
+    work.split[static_cast<std::size_t>(idx)] = 1;
+  }
+  work.next.clear();
+  for (std::size_t i = 0; i < work.cells.size(); ++i) {
+    if (!work.split[i]) work.next.push_back(work.cells[i]);
+  }
+  work.next.insert(work.next.end(), work.children.begin(), work.children.end());
+  // Copied, not swapped, so that each buffer keeps its own capacity from call to call.
+  work.cells.assign(work.next.begin(), work.next.end());
+  return true;
+}
+
+/// Fills `kept` with the strongest member of each of work.cells, then drops the weakest of them
+/// or adds the strongest other candidates so that exactly `target` (at most `n`, the number of
+/// candidates) remain, in ascending order.
+inline void keep_cell_winners(const std::vector<float>& responses, int n, int target, QuadtreeWorkspace& work,
+                              std::vector<int>& kept) {
+  const StrongerCandidate stronger{responses};
+  work.taken.assign(static_cast<std::size_t>(n), 0);
+  for (const QuadCell& cell : work.cells) {
+    const int best = *std::min_element(work.index.begin() + cell.begin, work.index.begin() + cell.end, stronger);
+    kept.push_back(best);
+    work.taken[static_cast<std::size_t>(best)] = 1;
+  }
+  std::sort(kept.begin(), kept.end(), stronger);
+  if (static_cast<int>(kept.size()) > target) {
+    kept.resize(static_cast<std::size_t>(target));
+  } else if (static_cast<int>(kept.size()) < target) {
+    work.rest.clear();
+    for (int i = 0; i < n; ++i) {
+      if (!work.taken[static_cast<std::size_t>(i)]) work.rest.push_back(i);
+    }
+    const std::size_t missing = static_cast<std::size_t>(target) - kept.size();
+    std::partial_sort(work.rest.begin(), work.rest.begin() + static_cast<std::ptrdiff_t>(missing), work.rest.end(),
+                      stronger);
+    kept.insert(kept.end(), work.rest.begin(), work.rest.begin() + static_cast<std::ptrdiff_t>(missing));
+  }
+  std::sort(kept.begin(), kept.end());
+}
+
+}  // namespace detail
+
 /// Spatial spreading by a quadtree over `region` (the same role as ORB-SLAM2's octree distribution;
 /// this is an independent formulation):
 /// 1. the region is cut into max(1, round(width/height)) roughly square root cells;
@@ -138,143 +305,16 @@ inline void distribute_quadtree(const std::vector<cv::Point2f>& points, const st
   const int n = static_cast<int>(points.size());
   kept.clear();
   if (target == 0 || n == 0) return;
-  auto stronger = [&](int a, int b) {
-    return responses[static_cast<std::size_t>(a)] > responses[static_cast<std::size_t>(b)] ||
-           (responses[static_cast<std::size_t>(a)] == responses[static_cast<std::size_t>(b)] && a < b);
-  };
   if (n <= target) {
     kept.resize(static_cast<std::size_t>(n));
     std::iota(kept.begin(), kept.end(), 0);
     return;
   }
-
-  // Cells hold ranges of one member buffer; a split regroups its range by quadrant with a
-  // counting sort (the order of a cell's members does not matter: every step depends only on the
-  // member set).
-  const std::size_t size = static_cast<std::size_t>(n);
-  work.index.resize(size);
-  work.position.resize(size);
-  work.index_scratch.resize(size);
-  work.position_scratch.resize(size);
-  work.quadrant.resize(size);
-  work.cells.clear();
-  // Copies members [begin, end) of index_scratch/position_scratch back to index/position grouped
-  // by work.quadrant (0 .. groups − 1); bucket b then covers [begin + start[b], begin + start[b + 1]).
-  auto regroup = [&](int begin, int end, int groups, int* start) {
-    for (int i = begin; i < end; ++i) ++start[work.quadrant[static_cast<std::size_t>(i)] + 1];
-    for (int g = 0; g < groups; ++g) start[g + 1] += start[g];
-    int fill[5];
-    std::copy(start, start + groups, fill);
-    for (int i = begin; i < end; ++i) {
-      const std::size_t to = static_cast<std::size_t>(begin + fill[work.quadrant[static_cast<std::size_t>(i)]]++);
-      work.index[to] = work.index_scratch[static_cast<std::size_t>(i)];
-      work.position[to] = work.position_scratch[static_cast<std::size_t>(i)];
-    }
-  };
-  const int roots = std::max(1, static_cast<int>(std::lround(region.width / std::max(region.height, 1.0f))));
-  const float root_width = region.width / static_cast<float>(roots);
-  {
-    // Root cells by a counting sort of all points (work.rest holds each point's root, work.order
-    // the bucket starts).
-    std::vector<int>& root_of = work.rest;
-    root_of.resize(size);
-    work.order.assign(static_cast<std::size_t>(roots) + 1, 0);
-    for (int i = 0; i < n; ++i) {
-      const cv::Point2f& p = points[static_cast<std::size_t>(i)];
-      const int r = std::clamp(static_cast<int>((p.x - region.x) / root_width), 0, roots - 1);
-      root_of[static_cast<std::size_t>(i)] = r;
-      ++work.order[static_cast<std::size_t>(r) + 1];
-    }
-    for (int r = 0; r < roots; ++r)
-      work.order[static_cast<std::size_t>(r) + 1] += work.order[static_cast<std::size_t>(r)];
-    for (int r = 0; r < roots; ++r) {
-      const int begin = work.order[static_cast<std::size_t>(r)];
-      const int end = work.order[static_cast<std::size_t>(r) + 1];
-      if (begin == end) continue;
-      work.cells.push_back({{region.x + r * root_width, region.y, root_width, region.height}, begin, end});
-    }
-    for (int i = 0; i < n; ++i) {
-      const std::size_t to =
-          static_cast<std::size_t>(work.order[static_cast<std::size_t>(root_of[static_cast<std::size_t>(i)])]++);
-      work.index[to] = i;
-      work.position[to] = points[static_cast<std::size_t>(i)];
-    }
-  }
-
-  auto splittable = [](const detail::QuadCell& c) {
-    return c.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f;
-  };
+  detail::make_root_cells(points, region, work);
   while (static_cast<int>(work.cells.size()) < target) {
-    work.order.clear();
-    for (std::size_t i = 0; i < work.cells.size(); ++i) {
-      if (splittable(work.cells[i])) work.order.push_back(static_cast<int>(i));
-    }
-    if (work.order.empty()) break;
-    // Most populated first, ties in cell order (a stable sort by size, without its buffer).
-    std::sort(work.order.begin(), work.order.end(), [&](int a, int b) {
-      const int sa = work.cells[static_cast<std::size_t>(a)].size();
-      const int sb = work.cells[static_cast<std::size_t>(b)].size();
-      return sa > sb || (sa == sb && a < b);
-    });
-    work.split.assign(work.cells.size(), 0);
-    int count = static_cast<int>(work.cells.size());
-    work.children.clear();
-    for (int idx : work.order) {
-      if (count >= target) break;
-      const detail::QuadCell cell = work.cells[static_cast<std::size_t>(idx)];
-      const float hw = cell.box.width * 0.5f;
-      const float hh = cell.box.height * 0.5f;
-      const float cx = cell.box.x + hw;
-      const float cy = cell.box.y + hh;
-      // Quadrant q = (x >= cx) + 2·(y >= cy), children in the order of q.
-      for (int i = cell.begin; i < cell.end; ++i) {
-        const cv::Point2f& p = work.position[static_cast<std::size_t>(i)];
-        work.quadrant[static_cast<std::size_t>(i)] = static_cast<unsigned char>((p.x >= cx) + 2 * (p.y >= cy));
-        work.index_scratch[static_cast<std::size_t>(i)] = work.index[static_cast<std::size_t>(i)];
-        work.position_scratch[static_cast<std::size_t>(i)] = p;
-      }
-      int start[5] = {0, 0, 0, 0, 0};
-      regroup(cell.begin, cell.end, 4, start);
-      const cv::Rect2f boxes[4] = {
-          {cell.box.x, cell.box.y, hw, hh}, {cx, cell.box.y, hw, hh}, {cell.box.x, cy, hw, hh}, {cx, cy, hw, hh}};
-      int nonempty = 0;
-      for (int q = 0; q < 4; ++q) {
-        if (start[q] == start[q + 1]) continue;
-        work.children.push_back({boxes[q], cell.begin + start[q], cell.begin + start[q + 1]});
-        ++nonempty;
-      }
-      count += nonempty - 1;
-      work.split[static_cast<std::size_t>(idx)] = 1;
-    }
-    work.next.clear();
-    for (std::size_t i = 0; i < work.cells.size(); ++i) {
-      if (!work.split[i]) work.next.push_back(work.cells[i]);
-    }
-    work.next.insert(work.next.end(), work.children.begin(), work.children.end());
-    // Copied, not swapped, so that each buffer keeps its own capacity from call to call.
-    work.cells.assign(work.next.begin(), work.next.end());
+    if (!detail::split_round(target, work)) break;
   }
-
-  work.taken.assign(size, 0);
-  for (const detail::QuadCell& cell : work.cells) {
-    const int best = *std::min_element(work.index.begin() + cell.begin, work.index.begin() + cell.end, stronger);
-    kept.push_back(best);
-    work.taken[static_cast<std::size_t>(best)] = 1;
-  }
-  std::sort(kept.begin(), kept.end(), stronger);
-  if (static_cast<int>(kept.size()) > target) {
-    kept.resize(static_cast<std::size_t>(target));
-  } else if (static_cast<int>(kept.size()) < target) {
-    work.rest.clear();
-    for (int i = 0; i < n; ++i) {
-      if (!work.taken[static_cast<std::size_t>(i)]) work.rest.push_back(i);
-    }
-    const std::size_t missing = static_cast<std::size_t>(target) - kept.size();
-    std::partial_sort(work.rest.begin(), work.rest.begin() + static_cast<std::ptrdiff_t>(missing), work.rest.end(),
-                      stronger);
-    kept.insert(kept.end(), work.rest.begin(), work.rest.begin() + static_cast<std::ptrdiff_t>(missing));
-  }
-  std::sort(kept.begin(), kept.end());
+  detail::keep_cell_winners(responses, n, target, work, kept);
 }
 
 /// distribute_quadtree() with fresh buffers, returning the kept indices.

@@ -258,6 +258,53 @@ RansacResult<typename Estimator::Model> optimise_locally(const Estimator& estima
   return start;
 }
 
+namespace detail {
+
+/// Iterations ransac() needs at `inlier_ratio` (adaptive_iterations(), the ratio never below
+/// options.termination_inlier_ratio).
+inline int needed_iterations(const RansacOptions& options, int sample_size, double inlier_ratio) {
+  return adaptive_iterations(std::max(inlier_ratio, options.termination_inlier_ratio), sample_size, options.confidence,
+                             options.max_iterations);
+}
+
+/// The models of one ransac() iteration: draws drawn.size() distinct indices into `drawn` and
+/// hands the first Estimator::kSampleSize of them to estimator.generate().
+template <class Estimator>
+auto sample_models(const Estimator& estimator, IndexSampler& sampler, std::vector<int>& drawn) {
+  std::array<int, static_cast<std::size_t>(Estimator::kSampleSize)> sample{};
+  sampler.draw(drawn.data(), static_cast<int>(drawn.size()));
+  std::copy_n(drawn.begin(), Estimator::kSampleSize, sample.begin());
+  return estimator.generate(sample);
+}
+
+/// A sample model that beat every earlier sample, locally optimised (optimise_locally()):
+/// `candidate`, its buffers reused, takes `model`, its score and inlier count `scored`, and the
+/// inliers in `mask`, whose buffer it swaps for its own.
+template <class Estimator>
+RansacResult<typename Estimator::Model> optimised_sample(const Estimator& estimator,
+                                                         const typename Estimator::Model& model,
+                                                         std::pair<double, int> scored, std::vector<std::uint8_t>& mask,
+                                                         RansacResult<typename Estimator::Model> candidate,
+                                                         int passes) {
+  candidate.model = model;
+  candidate.score = scored.first;
+  candidate.inlier_count = scored.second;
+  candidate.inliers.swap(mask);
+  return optimise_locally(estimator, std::move(candidate), passes);
+}
+
+/// Makes `candidate` the result: copies its model, score and inlier count into `result` and swaps
+/// their inlier buffers.
+template <class Model>
+void adopt_candidate(RansacResult<Model>& candidate, RansacResult<Model>& result) {
+  result.model = candidate.model;
+  result.score = candidate.score;
+  result.inlier_count = candidate.inlier_count;
+  result.inliers.swap(candidate.inliers);
+}
+
+}  // namespace detail
+
 /// RANSAC with the estimator's score (MSAC-style when the score is the truncated χ² one):
 /// draws `draw_size` distinct correspondence indices per iteration from a std::mt19937_64 seeded
 /// with options.seed, hands the first Estimator::kSampleSize of them to estimator.generate(),
@@ -290,13 +337,8 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
 
   detail::IndexSampler sampler(n, options.seed);
   std::vector<int> drawn(static_cast<std::size_t>(draw_size));
-  std::array<int, static_cast<std::size_t>(kSampleSize)> sample{};
   std::vector<std::uint8_t> mask(n, 0);
-  const auto iterations_for = [&](double inlier_ratio) {
-    return detail::adaptive_iterations(std::max(inlier_ratio, options.termination_inlier_ratio), kSampleSize,
-                                       options.confidence, options.max_iterations);
-  };
-  int needed = iterations_for(0.0);
+  int needed = detail::needed_iterations(options, kSampleSize, 0.0);
 
   // Minimal-sample models compete with each other (best_sample_score); each new best one is
   // locally optimised (LO-RANSAC, Chum, Matas & Kittler, DAGM 2003): re-estimated from its
@@ -311,26 +353,19 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
   int iteration = 0;
   while (iteration < options.max_iterations && (iteration < options.min_iterations || iteration < needed)) {
     ++iteration;
-    sampler.draw(drawn.data(), draw_size);
-    std::copy_n(drawn.begin(), kSampleSize, sample.begin());
-    const auto models = estimator.generate(sample);
+    const auto models = detail::sample_models(estimator, sampler, drawn);
     for (int m = 0; m < models.count; ++m) {
       const Model& model = models.models[static_cast<std::size_t>(m)];
       const auto scored = detail::score_model(estimator, model, best_sample_score, mask);
       if (!scored || !(scored->first > best_sample_score)) continue;
       best_sample_score = scored->first;
-      candidate.model = model;
-      candidate.score = scored->first;
-      candidate.inlier_count = scored->second;
-      candidate.inliers.swap(mask);
-      candidate = optimise_locally(estimator, std::move(candidate), options.refinement_passes);
+      candidate =
+          detail::optimised_sample(estimator, model, *scored, mask, std::move(candidate), options.refinement_passes);
       if (found && !(candidate.score > result.score)) continue;
       found = true;
-      result.model = candidate.model;
-      result.score = candidate.score;
-      result.inlier_count = candidate.inlier_count;
-      result.inliers.swap(candidate.inliers);
-      needed = iterations_for(static_cast<double>(result.inlier_count) / static_cast<double>(n));
+      detail::adopt_candidate(candidate, result);
+      needed = detail::needed_iterations(options, kSampleSize,
+                                         static_cast<double>(result.inlier_count) / static_cast<double>(n));
     }
   }
   result.iterations = iteration;

@@ -148,23 +148,12 @@ class KeyframeTracker {
     out.features = static_cast<int>(frame.size());
     const bool can_be_keyframe = out.features >= options_.min_inliers;
 
-    ModelSelectionResult keyframe_selection;
-    MatchedPoints keyframe_pairs;
+    KeyframeMatch to_keyframe;
     if (keyframe_index_ < 0) {
       out.lost = !can_be_keyframe;
       out.keyframe = out.initialised = can_be_keyframe;
     } else {
-      out.reference_keyframe = keyframe_index_;
-      out.matches = match_features(keyframe_, frame, options_.matching);
-      matched_points(keyframe_.keypoints, frame.keypoints, out.matches, keyframe_pairs);
-      keyframe_selection = select(keyframe_pairs);
-      out.model = keyframe_selection.model;
-      out.homography_ratio = keyframe_selection.homography_ratio;
-      out.inlier_mask = keyframe_selection.chosen_inliers();
-      out.inliers = keyframe_selection.chosen_inlier_count();
-      out.inlier_ratio =
-          keyframe_.empty() ? 0.0 : static_cast<double>(out.inliers) / static_cast<double>(keyframe_.size());
-      out.lost = !keyframe_selection.success || out.inliers < options_.min_inliers;
+      to_keyframe = match_keyframe(frame, out);
       if (!out.lost) {
         lost_streak_ = 0;
         out.keyframe = out.inlier_ratio < options_.keyframe_inlier_ratio;
@@ -172,37 +161,8 @@ class KeyframeTracker {
         out.keyframe = out.initialised = true;
       }
     }
-
-    if (camera_ && has_previous_) {
-      if (out.reference_keyframe >= 0 && out.reference_keyframe == frames_ - 1) {
-        out.previous_matches = static_cast<int>(out.matches.size());
-        out.previous_inliers = out.inliers;
-        out.previous_model = out.model;
-        out.relative_pose =
-            relative_pose(keyframe_selection, *camera_, keyframe_pairs.points1, keyframe_pairs.points2, options_.pose);
-      } else {
-        const std::vector<Match> matches = match_features(previous_, frame, options_.matching);
-        const MatchedPoints pairs = matched_points(previous_.keypoints, frame.keypoints, matches);
-        const ModelSelectionResult selection = select(pairs);
-        out.previous_matches = static_cast<int>(matches.size());
-        out.previous_inliers = selection.chosen_inlier_count();
-        out.previous_model = selection.model;
-        out.relative_pose = relative_pose(selection, *camera_, pairs.points1, pairs.points2, options_.pose);
-      }
-    }
-
-    ++frames_;
-    lost_frames_ += out.lost ? 1 : 0;
-    if (out.keyframe) {
-      ++keyframes_;
-      keyframe_ = frame;
-      keyframe_index_ = out.index;
-      lost_streak_ = 0;
-    }
-    if (camera_) {
-      previous_ = std::move(frame);
-      has_previous_ = true;
-    }
+    if (camera_ && has_previous_) relate_to_previous(frame, to_keyframe, out);
+    count_and_keep(std::move(frame), out);
     return out;
   }
 
@@ -232,6 +192,69 @@ class KeyframeTracker {
   /// select_model() on the matched points; an unsuccessful result for fewer than 8 matches.
   ModelSelectionResult select(const MatchedPoints& pairs) const {
     return select_model(pairs.points1, pairs.points2, options_.model_selection);
+  }
+
+  /// The model chosen between the keyframe and a frame, and the matched points it was chosen on
+  /// (the relative pose needs both).
+  struct KeyframeMatch {
+    ModelSelectionResult selection;
+    MatchedPoints pairs;
+  };
+
+  /// Matches `frame` to the keyframe and selects a model: fills out's reference keyframe, matches,
+  /// model, homography ratio, inliers and inlier ratio, and `lost` (no model or fewer than
+  /// min_inliers inliers). Returns the selection and its points.
+  KeyframeMatch match_keyframe(const Features<Bits>& frame, TrackedFrame& out) const {
+    KeyframeMatch match;
+    out.reference_keyframe = keyframe_index_;
+    out.matches = match_features(keyframe_, frame, options_.matching);
+    matched_points(keyframe_.keypoints, frame.keypoints, out.matches, match.pairs);
+    match.selection = select(match.pairs);
+    out.model = match.selection.model;
+    out.homography_ratio = match.selection.homography_ratio;
+    out.inlier_mask = match.selection.chosen_inliers();
+    out.inliers = match.selection.chosen_inlier_count();
+    out.inlier_ratio =
+        keyframe_.empty() ? 0.0 : static_cast<double>(out.inliers) / static_cast<double>(keyframe_.size());
+    out.lost = !match.selection.success || out.inliers < options_.min_inliers;
+    return match;
+  }
+
+  /// Step 5, frame to previous frame: fills out's previous matches, inliers, model and relative
+  /// pose. When the previous frame is the keyframe `to_keyframe` (its match) is reused.
+  void relate_to_previous(const Features<Bits>& frame, const KeyframeMatch& to_keyframe, TrackedFrame& out) const {
+    if (out.reference_keyframe >= 0 && out.reference_keyframe == frames_ - 1) {
+      out.previous_matches = static_cast<int>(out.matches.size());
+      out.previous_inliers = out.inliers;
+      out.previous_model = out.model;
+      out.relative_pose = relative_pose(to_keyframe.selection, *camera_, to_keyframe.pairs.points1,
+                                        to_keyframe.pairs.points2, options_.pose);
+      return;
+    }
+    const std::vector<Match> matches = match_features(previous_, frame, options_.matching);
+    const MatchedPoints pairs = matched_points(previous_.keypoints, frame.keypoints, matches);
+    const ModelSelectionResult selection = select(pairs);
+    out.previous_matches = static_cast<int>(matches.size());
+    out.previous_inliers = selection.chosen_inlier_count();
+    out.previous_model = selection.model;
+    out.relative_pose = relative_pose(selection, *camera_, pairs.points1, pairs.points2, options_.pose);
+  }
+
+  /// Counts the tracked frame `out` and keeps `frame` as the keyframe when it became one, and as
+  /// the previous frame when there is a camera.
+  void count_and_keep(Features<Bits> frame, const TrackedFrame& out) {
+    ++frames_;
+    lost_frames_ += out.lost ? 1 : 0;
+    if (out.keyframe) {
+      ++keyframes_;
+      keyframe_ = frame;
+      keyframe_index_ = out.index;
+      lost_streak_ = 0;
+    }
+    if (camera_) {
+      previous_ = std::move(frame);
+      has_previous_ = true;
+    }
   }
 
   KeyframeTrackerOptions options_;

@@ -73,10 +73,35 @@ class Feature2DExtractor : public cv::Feature2D {
   void compute_given(const cv::Mat& image, std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors) {
     detail::require_gray8(image, "Feature2D::compute");
     pyramid_.build(image);
+    const LevelMembers members = assign_levels(image, keypoints);
+    const Described described = describe_levels(keypoints, members);
+    const std::vector<Row> rows = restore_caller_order(members, described, keypoints);
+    views_.assign(keypoints.size(), 0);
+    if (!descriptors.needed()) return;
+    if (rows.empty()) {
+      descriptors.release();
+    } else {
+      descriptors.assign(descriptors_to_mat(rows));
+    }
+  }
+
+  using Row = BinaryDescriptor<Descriptor::kBits>;
+
+  /// The keypoints of compute_given() grouped by the pyramid level they are described on.
+  struct LevelMembers {
+    std::vector<std::vector<std::size_t>> by_level;  ///< per level: indices into the keypoints, ascending
+    std::vector<cv::Point2f> points;                 ///< per keypoint: its pixel on its level
+  };
+
+  /// Assigns each keypoint to level o = its octave (clamped to the pyramid) of the built pyramid,
+  /// at its position mapped to that level and rounded to a pixel. A keypoint with a non-finite
+  /// position or whose support does not fit in the level is in no level.
+  LevelMembers assign_levels(const cv::Mat& image, const std::vector<cv::KeyPoint>& keypoints) const {
     const int levels = pyramid_.levels();
     const int border = descriptor_.border();
-    std::vector<std::vector<std::size_t>> by_level(static_cast<std::size_t>(levels));
-    std::vector<cv::Point2f> level_points(keypoints.size());
+    LevelMembers members;
+    members.by_level.resize(static_cast<std::size_t>(levels));
+    members.points.resize(keypoints.size());
     for (std::size_t i = 0; i < keypoints.size(); ++i) {
       const cv::KeyPoint& kp = keypoints[i];
       if (!std::isfinite(kp.pt.x) || !std::isfinite(kp.pt.y)) continue;
@@ -87,50 +112,63 @@ class Feature2DExtractor : public cv::Feature2D {
       const double x = std::round((kp.pt.x + 0.5) / rx - 0.5);
       const double y = std::round((kp.pt.y + 0.5) / ry - 0.5);
       if (x < border || y < border || x >= level.cols - border || y >= level.rows - border) continue;
-      level_points[i] = cv::Point2f(static_cast<float>(x), static_cast<float>(y));
-      by_level[static_cast<std::size_t>(l)].push_back(i);
+      members.points[i] = cv::Point2f(static_cast<float>(x), static_cast<float>(y));
+      members.by_level[static_cast<std::size_t>(l)].push_back(i);
     }
-    std::vector<cv::KeyPoint> kept;
-    std::vector<BinaryDescriptor<Descriptor::kBits>> rows;
+    return members;
+  }
+
+  /// Described keypoints and their descriptor rows, in the same order.
+  struct Described {
+    std::vector<cv::KeyPoint> keypoints;
+    std::vector<Row> rows;
+  };
+
+  /// Describes the keypoints of `members` level by level (level 0 first, each level's in index
+  /// order) with the angle rule of compute_given(); a keypoint without an angle gets the centroid's.
+  Described describe_levels(const std::vector<cv::KeyPoint>& keypoints, const LevelMembers& members) {
+    Described described;
     std::vector<cv::Point2f> points;
-    for (int l = 0; l < levels; ++l) {
-      const std::vector<std::size_t>& members = by_level[static_cast<std::size_t>(l)];
-      if (members.empty()) continue;
+    for (std::size_t l = 0; l < members.by_level.size(); ++l) {
+      const std::vector<std::size_t>& level_members = members.by_level[l];
+      if (level_members.empty()) continue;
       points.clear();
-      for (std::size_t i : members) points.push_back(level_points[i]);
-      descriptor_.prepare(pyramid_.level(l), points, data_);
-      for (std::size_t i : members) {
+      for (std::size_t i : level_members) points.push_back(members.points[i]);
+      descriptor_.prepare(pyramid_.level(static_cast<int>(l)), points, data_);
+      for (std::size_t i : level_members) {
         cv::KeyPoint kp = keypoints[i];
-        const float centroid = descriptor_.orientation(data_, level_points[i]);
+        const float centroid = descriptor_.orientation(data_, members.points[i]);
         float angle = centroid;
         if (kp.angle < 0.0f) {
           kp.angle = radians_to_degrees_0_360(centroid);
         } else if (radians_to_degrees_0_360(centroid) != kp.angle) {
           angle = kp.angle * static_cast<float>(CV_PI / 180.0);
         }
-        rows.push_back(descriptor_.describe(data_, level_points[i], angle));
-        kept.push_back(kp);
+        described.rows.push_back(descriptor_.describe(data_, members.points[i], angle));
+        described.keypoints.push_back(kp);
       }
     }
-    // Back in the caller's order.
+    return described;
+  }
+
+  /// Puts the described keypoints (in level order) into `keypoints` in the caller's order, the
+  /// order of their indices in `members`, and returns their rows in that order.
+  static std::vector<Row> restore_caller_order(const LevelMembers& members, const Described& described,
+                                               std::vector<cv::KeyPoint>& keypoints) {
     std::vector<std::size_t> order;
-    for (const auto& members : by_level) order.insert(order.end(), members.begin(), members.end());
+    for (const auto& level_members : members.by_level) {
+      order.insert(order.end(), level_members.begin(), level_members.end());
+    }
     std::vector<std::size_t> rank(order.size());
     for (std::size_t k = 0; k < order.size(); ++k) rank[k] = k;
     std::sort(rank.begin(), rank.end(), [&](std::size_t a, std::size_t b) { return order[a] < order[b]; });
     keypoints.clear();
-    std::vector<BinaryDescriptor<Descriptor::kBits>> sorted;
+    std::vector<Row> rows;
     for (std::size_t k : rank) {
-      keypoints.push_back(kept[k]);
-      sorted.push_back(rows[k]);
+      keypoints.push_back(described.keypoints[k]);
+      rows.push_back(described.rows[k]);
     }
-    views_.assign(keypoints.size(), 0);
-    if (!descriptors.needed()) return;
-    if (sorted.empty()) {
-      descriptors.release();
-    } else {
-      descriptors.assign(descriptors_to_mat(sorted));
-    }
+    return rows;
   }
 
   Extractor<Descriptor> extractor_;

@@ -24,9 +24,6 @@ inline void require(bool condition, const char* what) {
   if (!condition) throw std::invalid_argument(std::string("affine_orb: ") + what);
 }
 
-/// True for a finite value strictly greater than zero (rejects NaN and infinity).
-inline bool positive_finite(double value) { return std::isfinite(value) && value > 0.0; }
-
 /// An interval of allowed values for require_range(): [lo, hi] with each end open on request.
 /// Infinite ends are allowed; NaN lies in no range.
 struct Range {

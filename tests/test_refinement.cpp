@@ -1,6 +1,6 @@
 // Sub-pixel correspondences under a homography (two_view/alignment.hpp) against known geometry:
 // image 2 is image 1 warped by a chosen homography, so where each point of image 1 lies in image 2
-// is known exactly; and TwoViewOptions::refine on real Oxford pairs against their ground truth.
+// is known exactly; and TwoViewOptions::align_correspondences on real Oxford pairs against their ground truth.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -82,20 +82,20 @@ TEST_CASE("aligned points land within a twentieth of a pixel of the truth on a k
   const cv::Mat image2 = warped(image1, h);
   const Perturbed p = perturbed_keypoints(image1, h, 1.5);
   REQUIRE(p.points1.size() > 500);
-  const affine_orb::RefinedCorrespondences r =
-      affine_orb::refine_correspondences(image1, image2, p.points1, p.points2, p.scales1, h);
+  const affine_orb::AlignedCorrespondences r =
+      affine_orb::align_correspondences(image1, image2, p.points1, p.points2, p.scales1, h);
   REQUIRE(r.points2.size() == p.points1.size());
-  CHECK(r.refined_count == std::count(r.refined.begin(), r.refined.end(), 1));
-  CHECK(r.refined_count > 0.9 * static_cast<double>(p.points1.size()));
+  CHECK(r.aligned_count == std::count(r.aligned.begin(), r.aligned.end(), 1));
+  CHECK(r.aligned_count > 0.9 * static_cast<double>(p.points1.size()));
   const std::vector<std::uint8_t> all(p.points1.size(), 1);
-  const double before = mean_error(p.points2, p.truth, r.refined);
-  const double after = mean_error(r.points2, p.truth, r.refined);
+  const double before = mean_error(p.points2, p.truth, r.aligned);
+  const double after = mean_error(r.points2, p.truth, r.aligned);
   MESSAGE("mean error of the aligned points: " << before << " px before, " << after << " px after");
   CHECK(before > 0.9);
   CHECK(after < 0.08);
   // Points it did not align keep exactly the position handed in.
   for (std::size_t i = 0; i < r.points2.size(); ++i) {
-    if (!r.refined[i]) CHECK(r.points2[i] == p.points2[i]);
+    if (!r.aligned[i]) CHECK(r.points2[i] == p.points2[i]);
   }
 }
 
@@ -105,10 +105,10 @@ TEST_CASE("a change of light between the images does not move the aligned points
   cv::Mat image2;
   warped(image1, h).convertTo(image2, CV_8U, 0.6, 40.0);  // less contrast, brighter
   const Perturbed p = perturbed_keypoints(image1, h, 1.5);
-  const affine_orb::RefinedCorrespondences r =
-      affine_orb::refine_correspondences(image1, image2, p.points1, p.points2, p.scales1, h);
-  CHECK(r.refined_count > 0.8 * static_cast<double>(p.points1.size()));
-  CHECK(mean_error(r.points2, p.truth, r.refined) < 0.12);
+  const affine_orb::AlignedCorrespondences r =
+      affine_orb::align_correspondences(image1, image2, p.points1, p.points2, p.scales1, h);
+  CHECK(r.aligned_count > 0.8 * static_cast<double>(p.points1.size()));
+  CHECK(mean_error(r.points2, p.truth, r.aligned) < 0.12);
 }
 
 TEST_CASE("flat patches, patches leaving an image and far moves keep their points") {
@@ -118,26 +118,26 @@ TEST_CASE("flat patches, patches leaving an image and far moves keep their point
   SUBCASE("a flat image pair has nothing to align") {
     const cv::Mat flat(200, 200, CV_8UC1, cv::Scalar(90));
     const std::vector<cv::Point2f> points = {{100.0f, 100.0f}, {50.0f, 60.0f}};
-    const affine_orb::RefinedCorrespondences r = affine_orb::refine_correspondences(
+    const affine_orb::AlignedCorrespondences r = affine_orb::align_correspondences(
         flat, flat, points, points, {1.0f, 1.0f}, Eigen::Matrix3d::Identity());
-    CHECK(r.refined_count == 0);
+    CHECK(r.aligned_count == 0);
     CHECK(r.points2 == points);
   }
   SUBCASE("points at or beyond the border") {
     const std::vector<cv::Point2f> points1 = {{1.0f, 1.0f}, {-30.0f, 20.0f}, {1e6f, 5.0f}};
     const std::vector<cv::Point2f> points2 = {{2.0f, 2.0f}, {10.0f, 10.0f}, {5.0f, 5.0f}};
-    const affine_orb::RefinedCorrespondences r =
-        affine_orb::refine_correspondences(image1, image2, points1, points2, {1.0f, 1.0f, 1.0f}, h);
-    CHECK(r.refined_count == 0);
+    const affine_orb::AlignedCorrespondences r =
+        affine_orb::align_correspondences(image1, image2, points1, points2, {1.0f, 1.0f, 1.0f}, h);
+    CHECK(r.aligned_count == 0);
     CHECK(r.points2 == points2);
   }
   SUBCASE("a start farther than max_shift from the truth is not pulled there") {
     Perturbed p = perturbed_keypoints(image1, h, 0.0);
     for (cv::Point2f& q : p.points2) q.x += 6.0f;  // 6 px off: beyond max_shift
-    affine_orb::CorrespondenceRefinementOptions options;
+    affine_orb::CorrespondenceAlignmentOptions options;
     options.max_shift = 2.0;
-    const affine_orb::RefinedCorrespondences r =
-        affine_orb::refine_correspondences(image1, image2, p.points1, p.points2, p.scales1, h, options);
+    const affine_orb::AlignedCorrespondences r =
+        affine_orb::align_correspondences(image1, image2, p.points1, p.points2, p.scales1, h, options);
     for (std::size_t i = 0; i < r.points2.size(); ++i) {
       const double moved = std::hypot(r.points2[i].x - p.points2[i].x, r.points2[i].y - p.points2[i].y);
       CHECK(moved <= options.max_shift + 1e-4);
@@ -145,25 +145,25 @@ TEST_CASE("flat patches, patches leaving an image and far moves keep their point
   }
 }
 
-TEST_CASE("refine_correspondences refuses bad input") {
+TEST_CASE("align_correspondences refuses bad input") {
   const cv::Mat image(64, 64, CV_8UC1, cv::Scalar(0));
   const std::vector<cv::Point2f> one = {{10.0f, 10.0f}};
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
-  CHECK_THROWS_AS(affine_orb::refine_correspondences(cv::Mat(), image, one, one, {1.0f}, identity),
+  CHECK_THROWS_AS(affine_orb::align_correspondences(cv::Mat(), image, one, one, {1.0f}, identity),
                   std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::refine_correspondences(cv::Mat(64, 64, CV_8UC3), image, one, one, {1.0f}, identity),
+  CHECK_THROWS_AS(affine_orb::align_correspondences(cv::Mat(64, 64, CV_8UC3), image, one, one, {1.0f}, identity),
                   std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::refine_correspondences(image, image, one, {}, {1.0f}, identity), std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::refine_correspondences(image, image, one, one, {}, identity), std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::refine_correspondences(image, image, one, one, {0.5f}, identity),
+  CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, {}, {1.0f}, identity), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, one, {}, identity), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, one, {0.5f}, identity),
                   std::invalid_argument);
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  CHECK_THROWS_AS(affine_orb::refine_correspondences(image, image, {{nan, 1.0f}}, one, {1.0f}, identity),
+  CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, {{nan, 1.0f}}, one, {1.0f}, identity),
                   std::invalid_argument);
   Eigen::Matrix3d broken = identity;
   broken(0, 2) = std::numeric_limits<double>::infinity();
-  CHECK_THROWS_AS(affine_orb::refine_correspondences(image, image, one, one, {1.0f}, broken), std::invalid_argument);
-  affine_orb::CorrespondenceRefinementOptions options;
+  CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, one, {1.0f}, broken), std::invalid_argument);
+  affine_orb::CorrespondenceAlignmentOptions options;
   options.patch_radius = 1;
   CHECK_THROWS_AS(options.check(), std::invalid_argument);
   options = {};
@@ -173,11 +173,12 @@ TEST_CASE("refine_correspondences refuses bad input") {
   options.min_correlation = 1.5;
   CHECK_THROWS_AS(options.check(), std::invalid_argument);
   affine_orb::TwoViewOptions two_view;
-  two_view.refinement.iterations = 0;
+  two_view.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
+  two_view.align_correspondences->iterations = 0;
   CHECK_THROWS_AS(two_view.check(), std::invalid_argument);
 }
 
-TEST_CASE("TwoViewOptions::refine brings the matcher's homography closer to the ground truth" *
+TEST_CASE("TwoViewOptions::align_correspondences brings the matcher's homography closer to the ground truth" *
           doctest::test_suite("data")) {
   // Oxford pairs with their published homographies; the judge of bench/eval_two_view's corners.
   double sum_off = 0.0, sum_on = 0.0;
@@ -189,19 +190,19 @@ TEST_CASE("TwoViewOptions::refine brings the matcher's homography closer to the 
     const cv::Matx33d truth = affine_orb::test::oxford_homography(sequence, n);
     affine_orb::TwoViewOptions options;
     const auto off = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image2);
-    options.refine = true;
+    options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
     const auto on = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image2);
     REQUIRE(off.verified);
     REQUIRE(on.verified);
-    // Without refinement, points2 are the train keypoints' positions.
+    // Without alignment, points2 are the train keypoints' positions.
     REQUIRE(off.points2.size() == off.matches.size());
-    CHECK(off.refined_count == 0);
+    CHECK(off.aligned_count == 0);
     for (std::size_t i = 0; i < off.matches.size(); ++i) {
       CHECK(off.points2[i] == off.features2.keypoints[static_cast<std::size_t>(off.matches[i].train)].pt);
     }
     REQUIRE(on.points2.size() == on.matches.size());
-    CHECK(on.refined_count > on.inlier_count / 2);
-    CHECK(on.stages.back().refined == on.refined_count);
+    CHECK(on.aligned_count > on.inlier_count / 2);
+    CHECK(on.stages.back().aligned == on.aligned_count);
     const double e_off = affine_orb::test::corner_error(off.model.homography, truth, image1.size());
     const double e_on = affine_orb::test::corner_error(on.model.homography, truth, image1.size());
     MESSAGE(sequence << " 1->" << n << ": corner error " << e_off << " px without, " << e_on << " px with");

@@ -28,7 +28,7 @@ struct CorrespondenceAlignmentOptions {
   /// twice this many original pixels. In [2, 32]. 5 (patch sides 11 to 21 original pixels): on
   /// graf 1 warped by a known homography, with image 2's points moved up to 1.5 px off, the aligned
   /// points lie 0.045 px from the truth on average, against 0.031 px with 7 at twice the time and
-  /// 0.061 px with 4 (test_refinement measures the precision).
+  /// 0.061 px with 4 (test_alignment measures the precision).
   int patch_radius = 5;
   /// Lucas–Kanade updates at most, in [1, 100]; an alignment that starts within 1.5 px converges
   /// in 3–5 (10 gains 0.004 px over 5 on the same warp).

@@ -56,9 +56,9 @@ stage "ThreadSanitizer (threaded tests)"
 CC=clang CXX=clang++ cmake -S . -B "$root/tsan" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFFINE_ORB_BUILD_EXAMPLES=OFF -DAFFINE_ORB_BUILD_BENCH=OFF -DAFFINE_ORB_BUILD_ADAPTERS=OFF \
   -DAFFINE_ORB_BUILD_PYTHON=OFF -DCMAKE_CXX_FLAGS="-fsanitize=thread" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread"
-cmake --build "$root/tsan" -j "$jobs" --target test_concurrency test_affine_views
+cmake --build "$root/tsan" -j "$jobs" --target test_concurrency test_affine_views test_views_on_demand
 TSAN_OPTIONS="suppressions=$PWD/tests/tsan.supp halt_on_error=1" \
-  ctest --test-dir "$root/tsan" --output-on-failure -R "test_concurrency|test_affine_views"
+  ctest --test-dir "$root/tsan" --output-on-failure -R "test_concurrency|test_affine_views|test_views_on_demand"
 
 stage "libFuzzer"
 CC=clang CXX=clang++ cmake -S . -B "$root/fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \

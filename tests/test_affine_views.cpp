@@ -1,16 +1,19 @@
 // Affine view simulation (paper eqs. 13–16), mapping back to the original image, thread
-// determinism, the mask in tilted views, and matching of affine feature sets (SPEC §1, §2, §4, §7).
+// determinism, repeats across views, the mask in tilted views, the renderer against its definition
+// and its SIMD paths, and the correct matches the views add on graf 1→3 (SPEC §1, §2, §4, §7).
+// Views on demand are tested in test_views_on_demand.cpp, the snapping of view keypoints to corners
+// in test_corner_snapping.cpp, the matching of affine feature sets in test_affine_matching.cpp.
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
+#include <cstdint>
 #include <map>
-#include <numeric>
 #include <random>
 #include <set>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -18,24 +21,18 @@
 
 #include "affine_orb/descriptors/brisk.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
-#include "affine_orb/detection/distribution.hpp"
-#include "affine_orb/detection/fast.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/views/affine_views.hpp"
 #include "test_data.hpp"
+#include "test_views.hpp"
 
 namespace {
 
-const double kSqrt2 = std::sqrt(2.0);
-
-affine_orb::ExtractorOptions affine_options(int features, affine_orb::DuplicatePolicy duplicates, int threads = 1) {
-  affine_orb::ExtractorOptions options;
-  options.features = features;
-  options.duplicates = duplicates;
-  options.threads = threads;
-  return options;
-}
+using affine_orb::test::affine_options;
+using affine_orb::test::kSqrt2;
+using affine_orb::test::LevelledKeypoint;
+using affine_orb::test::with_levels;
 
 double angle_difference_degrees(double a, double b) {
   const double d = std::fmod(std::abs(a - b), 360.0);
@@ -289,32 +286,6 @@ TEST_CASE("with the views on, the image's keypoints and descriptors are exactly 
   }
 }
 
-namespace {
-
-/// A keypoint with the level it was detected at in its view, recovered from its size
-/// 31·s^l·√t (Features).
-struct LevelledKeypoint {
-  cv::KeyPoint kp;
-  int view;
-  int level;
-  int order;  ///< position among the keypoints of its view and level (raster order)
-};
-
-std::vector<LevelledKeypoint> with_levels(const affine_orb::Features<256>& f,
-                                          const std::vector<affine_orb::AffineView>& views) {
-  std::vector<LevelledKeypoint> out;
-  std::map<std::pair<int, int>, int> counts;
-  for (std::size_t i = 0; i < f.size(); ++i) {
-    const double tilt = views[static_cast<std::size_t>(f.views[i])].tilt;
-    const int level = static_cast<int>(std::lround(
-        std::log(f.keypoints[i].size / (affine_orb::Rbrief::kPatchSize * std::sqrt(tilt))) / std::log(1.2)));
-    out.push_back({f.keypoints[i], f.views[i], level, counts[{f.views[i], level}]++});
-  }
-  return out;
-}
-
-}  // namespace
-
 TEST_CASE("repeat suppression equals a brute-force reference") {
   // A small crop and budgets larger than the candidates, so that every candidate that survives is
   // shortlisted and output: keep-all then gives all candidates, and the merged output must be
@@ -412,237 +383,6 @@ TEST_CASE("the mask is honoured for keypoints of tilted views too") {
   CHECK(outside == 0);
 }
 
-TEST_CASE("duplicate correspondences are removed exactly as defined") {
-  // Points in a 40 px square (many duplicates), then the same spread over 4e6 px with a few points
-  // at ±1e30 and NaN (the grid's cells widen; a NaN point is never within the radius).
-  for (const float scale : {1.0f, 1e5f}) {
-    CAPTURE(scale);
-    std::mt19937 rng(17);
-    std::uniform_real_distribution<float> coord(0.0f, 40.0f);
-    std::vector<cv::Point2f> p1(60);
-    std::vector<cv::Point2f> p2(60);
-    for (auto& p : p1) p = {coord(rng) * scale, coord(rng) * scale};
-    for (auto& p : p2) p = {coord(rng) * scale, coord(rng) * scale};
-    if (scale > 1.0f) {
-      p1[3] = {1e30f, -1e30f};
-      p1[4] = {std::numeric_limits<float>::quiet_NaN(), 0.0f};
-      p2[5] = {-1e30f, 1e30f};
-    }
-    std::vector<affine_orb::Match> matches;
-    for (int k = 0; k < 300; ++k) {
-      matches.push_back({static_cast<int>(rng() % 60), static_cast<int>(rng() % 60), static_cast<int>(rng() % 20)});
-    }
-    const auto kept = affine_orb::remove_duplicate_matches(matches, p1, p2, 3.0);
-    // Naive reference: greedy by (distance, query, train), O(n²).
-    auto order = matches;
-    std::sort(order.begin(), order.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
-      return std::tie(a.distance, a.query, a.train) < std::tie(b.distance, b.query, b.train);
-    });
-    std::vector<affine_orb::Match> expected;
-    for (const auto& m : order) {
-      bool duplicate = false;
-      for (const auto& k : expected) {
-        const auto& a = p1[static_cast<std::size_t>(m.query)];
-        const auto& b = p1[static_cast<std::size_t>(k.query)];
-        const auto& c = p2[static_cast<std::size_t>(m.train)];
-        const auto& d = p2[static_cast<std::size_t>(k.train)];
-        duplicate = duplicate || (std::hypot(a.x - b.x, a.y - b.y) < 3.0 && std::hypot(c.x - d.x, c.y - d.y) < 3.0);
-      }
-      if (!duplicate) expected.push_back(m);
-    }
-    std::sort(expected.begin(), expected.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
-      return std::tie(a.query, a.train) < std::tie(b.query, b.train);
-    });
-    CHECK(expected.size() < matches.size());  // the case has duplicates to remove
-    REQUIRE(kept.size() == expected.size());
-    for (std::size_t i = 0; i < kept.size(); ++i) {
-      CHECK(kept[i].query == expected[i].query);
-      CHECK(kept[i].train == expected[i].train);
-      CHECK(kept[i].distance == expected[i].distance);
-    }
-    CHECK_THROWS_AS(affine_orb::remove_duplicate_matches(matches, p1, p2, -1.0), std::invalid_argument);
-  }
-}
-
-TEST_CASE("the location-aware ratio test equals a naive reference") {
-  // Descriptors with planted near-duplicates at nearly the same image-2 location.
-  std::mt19937_64 rng(23);
-  affine_orb::Features<256> a;
-  affine_orb::Features<256> b;
-  for (int i = 0; i < 80; ++i) {
-    affine_orb::BinaryDescriptor<256> d{rng(), rng(), rng(), rng()};
-    a.descriptors.push_back(d);
-    a.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300)), 31.0f);
-    a.views.push_back(0);
-    const cv::Point2f at(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300));
-    for (int copy = 0; copy < 1 + i % 3; ++copy) {
-      affine_orb::BinaryDescriptor<256> e = d;
-      for (int flip = 0; flip < 20 + 15 * copy; ++flip) {
-        const unsigned bit = static_cast<unsigned>(rng() % 256);
-        e[bit / 64] ^= 1ull << (bit % 64);
-      }
-      b.descriptors.push_back(e);
-      b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.5f * copy), 31.0f);
-      b.views.push_back(copy);
-    }
-  }
-  for (double radius : {0.0, 4.0}) {
-    for (bool cross : {false, true}) {
-      CAPTURE(radius);
-      CAPTURE(cross);
-      affine_orb::AffineMatchOptions options;
-      options.ratio_exclusion_radius = radius;
-      options.matcher.cross_check = cross;
-      options.duplicate_radius = 0.0;
-      const auto got = affine_orb::match_features(a, b, options);
-      std::vector<affine_orb::Match> expected;
-      for (std::size_t i = 0; i < a.size(); ++i) {
-        int best = 1 << 30;
-        std::size_t j1 = 0;
-        for (std::size_t j = 0; j < b.size(); ++j) {
-          const int d = affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]);
-          if (d < best) {
-            best = d;
-            j1 = j;
-          }
-        }
-        int second = 1 << 30;
-        for (std::size_t j = 0; j < b.size(); ++j) {
-          if (j == j1) continue;
-          const auto& p = b.keypoints[j].pt;
-          const auto& q = b.keypoints[j1].pt;
-          if (std::hypot(p.x - q.x, p.y - q.y) <= radius) continue;
-          second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
-        }
-        if (!(best < 0.8 * second)) continue;
-        if (cross) {
-          int back = 1 << 30;
-          std::size_t i1 = 0;
-          for (std::size_t k = 0; k < a.size(); ++k) {
-            const int d = affine_orb::hamming_distance(a.descriptors[k], b.descriptors[j1]);
-            if (d < back) {
-              back = d;
-              i1 = k;
-            }
-          }
-          if (i1 != i) continue;
-        }
-        expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
-      }
-      REQUIRE(got.size() == expected.size());
-      for (std::size_t k = 0; k < got.size(); ++k) {
-        CHECK(got[k].query == expected[k].query);
-        CHECK(got[k].train == expected[k].train);
-      }
-      if (radius > 0.0) CHECK(got.size() > 60);  // the planted copies no longer veto their originals
-    }
-  }
-  affine_orb::AffineMatchOptions bad;
-  bad.ratio_exclusion_radius = -1.0;
-  CHECK_THROWS_AS(affine_orb::match_features(a, b, bad), std::invalid_argument);
-  bad = {};
-  bad.matcher.ratio = 0.0f;
-  CHECK_THROWS_AS(affine_orb::match_features(a, b, bad), std::invalid_argument);
-  CHECK(affine_orb::match_features(affine_orb::Features<256>{}, b).empty());
-}
-
-TEST_CASE("guided matching equals a naive reference over every keypoint of image 2") {
-  // Image-2 partners near each prediction (shifted by up to 3 px, some with near-duplicates one
-  // pixel apart), random distractors all over; some predictions are not finite.
-  std::mt19937_64 rng(31);
-  affine_orb::Features<256> a;
-  affine_orb::Features<256> b;
-  std::vector<cv::Point2f> predicted;
-  const auto flipped = [&](affine_orb::BinaryDescriptor<256> d, int bits) {
-    for (int flip = 0; flip < bits; ++flip) {
-      const unsigned bit = static_cast<unsigned>(rng() % 256);
-      d[bit / 64] ^= 1ull << (bit % 64);
-    }
-    return d;
-  };
-  for (int i = 0; i < 120; ++i) {
-    const affine_orb::BinaryDescriptor<256> d{rng(), rng(), rng(), rng()};
-    const cv::Point2f p(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300));
-    a.descriptors.push_back(d);
-    a.keypoints.emplace_back(p, 31.0f);
-    a.views.push_back(0);
-    predicted.push_back(i % 17 == 0 ? cv::Point2f(std::numeric_limits<float>::quiet_NaN(), 0.0f)
-                                    : p + cv::Point2f(20.0f, -10.0f));
-    const cv::Point2f at =
-        p + cv::Point2f(20.0f + static_cast<float>(rng() % 7) - 3.0f, -10.0f + static_cast<float>(rng() % 7) - 3.0f);
-    for (int copy = 0; copy < 1 + i % 2; ++copy) {
-      b.descriptors.push_back(flipped(d, 10 + 30 * copy + static_cast<int>(rng() % 60)));
-      b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.0f), 31.0f);
-      b.views.push_back(copy);
-    }
-    b.descriptors.push_back({rng(), rng(), rng(), rng()});
-    b.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 340), static_cast<float>(rng() % 340)), 31.0f);
-    b.views.push_back(0);
-  }
-  // The same with one more image-2 keypoint 1e30 px away, which widens the search grid's cells.
-  affine_orb::Features<256> b_far = b;
-  b_far.keypoints.emplace_back(cv::Point2f(1e30f, -1e30f), 31.0f);
-  b_far.descriptors.push_back(b.descriptors.front());
-  b_far.views.push_back(0);
-  for (const bool far : {false, true}) {
-    CAPTURE(far);
-    const affine_orb::Features<256>& train = far ? b_far : b;
-    for (const double gate : {4.0, 10.0, 40.0}) {
-      for (const double exclusion : {0.0, 4.0}) {
-        for (const int max_distance : {40, 100}) {
-          CAPTURE(gate);
-          CAPTURE(exclusion);
-          CAPTURE(max_distance);
-          affine_orb::GuidedMatchOptions options;
-          options.gate_radius = gate;
-          options.ratio_exclusion_radius = exclusion;
-          options.max_distance = max_distance;
-          options.duplicate_radius = 0.0;
-          const auto got = affine_orb::match_guided(a, train, predicted, options);
-          std::vector<affine_orb::Match> expected;
-          const auto squared = [](cv::Point2f p, cv::Point2f q) {
-            return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
-          };
-          for (std::size_t i = 0; i < a.size(); ++i) {
-            if (!std::isfinite(predicted[i].x)) continue;
-            int best = 1 << 30;
-            std::size_t j1 = 0;
-            for (std::size_t j = 0; j < train.size(); ++j) {
-              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
-              const int d = affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]);
-              if (d < best) {
-                best = d;
-                j1 = j;
-              }
-            }
-            if (best > max_distance) continue;
-            int second = 1 << 30;
-            for (std::size_t j = 0; j < train.size(); ++j) {
-              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
-              if (squared(train.keypoints[j].pt, train.keypoints[j1].pt) <= exclusion * exclusion) continue;
-              second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]));
-            }
-            if (second != 1 << 30 && !(best < 0.8 * second)) continue;
-            expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
-          }
-          REQUIRE(got.size() == expected.size());
-          for (std::size_t k = 0; k < got.size(); ++k) {
-            CHECK(got[k].query == expected[k].query);
-            CHECK(got[k].train == expected[k].train);
-            CHECK(got[k].distance == expected[k].distance);
-          }
-          if (gate == 10.0 && max_distance == 100) CHECK(got.size() > 60);  // the planted partners are found
-        }
-      }
-    }
-  }
-  affine_orb::GuidedMatchOptions bad;
-  bad.gate_radius = 0.0;
-  CHECK_THROWS_AS(affine_orb::match_guided(a, b, predicted, bad), std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::match_guided(a, b, std::vector<cv::Point2f>(3)), std::invalid_argument);
-  CHECK(affine_orb::match_guided(a, affine_orb::Features<256>{}, predicted).empty());
-}
-
 TEST_CASE("graf 1->3: affine features give more distinct correct matches than plain ones") {
   const cv::Mat a = affine_orb::test::graf(1);
   const cv::Mat b = affine_orb::test::graf(3);
@@ -669,261 +409,6 @@ TEST_CASE("graf 1->3: affine features give more distinct correct matches than pl
   CHECK(plain >= 90);
   CHECK(affine >= 120);
   CHECK(affine > plain);
-}
-
-TEST_CASE("refinement puts view keypoints on corners of the original image, as precisely as image keypoints") {
-  // A synthetic scene with known geometry: random grey quadrilaterals drawn at 8x resolution and
-  // averaged down (area interpolation), so that every vertex is known to 1/8 px; then an oblique
-  // view of it by a known affine map A (tilt 2.5 at 30°, cv::warpAffine), whose vertices are A·v.
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> coordinate(0.0, 1.0);
-  std::uniform_int_distribution<int> grey(20, 235);
-  const int size = 480;
-  cv::Mat fine(size * 8, size * 8, CV_8UC1, cv::Scalar(128));
-  std::vector<cv::Point2d> vertices;
-  for (int q = 0; q < 70; ++q) {
-    const cv::Point2d centre(40 + coordinate(rng) * (size - 80), 40 + coordinate(rng) * (size - 80));
-    std::vector<cv::Point> polygon;
-    for (int k = 0; k < 4; ++k) {
-      const double angle = (k + 0.4 * coordinate(rng)) * CV_PI / 2.0;
-      const double radius = 12.0 + 18.0 * coordinate(rng);
-      const cv::Point2d v(centre.x + radius * std::cos(angle), centre.y + radius * std::sin(angle));
-      vertices.push_back(v);
-      // Pixel centres at integers: fine pixel (8x + 3.5) is the centre of coarse pixel x.
-      polygon.emplace_back(cvRound(8.0 * v.x + 3.5), cvRound(8.0 * v.y + 3.5));
-    }
-    cv::fillConvexPoly(fine, polygon, cv::Scalar(grey(rng)), cv::LINE_8);
-  }
-  cv::Mat scene;
-  cv::resize(fine, scene, cv::Size(size, size), 0, 0, cv::INTER_AREA);
-  const double phi = 30.0 * CV_PI / 180.0;
-  const cv::Matx22d rotate(std::cos(phi), -std::sin(phi), std::sin(phi), std::cos(phi));
-  const cv::Matx22d squeeze = cv::Matx22d(rotate.t()) * cv::Matx22d(1.0 / 2.5, 0.0, 0.0, 1.0) * rotate;
-  const cv::Point2d centre(size / 2.0, size / 2.0);
-  const cv::Vec2d offset = cv::Vec2d(centre.x, centre.y) - squeeze * cv::Vec2d(centre.x, centre.y);
-  const cv::Matx23d a(squeeze(0, 0), squeeze(0, 1), offset[0], squeeze(1, 0), squeeze(1, 1), offset[1]);
-  cv::Mat oblique;
-  cv::warpAffine(scene, oblique, a, scene.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-  std::vector<cv::Point2d> truth;
-  for (const cv::Point2d& v : vertices) truth.push_back(affine_orb::apply_affine(a, v));
-  auto error = [&](cv::Point2f p) {
-    double best = 1e9;
-    for (const cv::Point2d& t : truth) best = std::min(best, std::hypot(t.x - p.x, t.y - p.y));
-    return best;
-  };
-
-  affine_orb::ExtractorOptions options = affine_options(600, affine_orb::DuplicatePolicy::kKeepAll);
-  options.view_features = 2.0;
-  affine_orb::Extractor<affine_orb::Rbrief> mapped(options);
-  options.refine.enabled = true;
-  affine_orb::Extractor<affine_orb::Rbrief> refined(options);
-  const auto f_mapped = mapped.extract(oblique);
-  const auto f_refined = refined.extract(oblique);
-  REQUIRE(f_mapped.size() == f_refined.size());
-  const affine_orb::Pyramid& pyramid = refined.pyramid();
-  std::vector<double> image_errors, mapped_errors, refined_errors;
-  int moved = 0;
-  int on_corner = 0;
-  for (std::size_t i = 0; i < f_refined.size(); ++i) {
-    const cv::KeyPoint& r = f_refined.keypoints[i];
-    const cv::KeyPoint& m = f_mapped.keypoints[i];
-    REQUIRE(f_refined.views[i] == f_mapped.views[i]);
-    REQUIRE(r.octave == m.octave);
-    CHECK(r.angle == m.angle);
-    CHECK(f_refined.descriptors[i] == f_mapped.descriptors[i]);
-    // Distances in pixels of the keypoint's octave, where both kinds are located to a pixel.
-    const double unit = std::pow(1.2, r.octave);
-    if (f_refined.views[i] == 0) {
-      CHECK(r.pt == m.pt);
-      if (error(r.pt) < 3.0 * unit) image_errors.push_back(error(r.pt) / unit);
-      continue;
-    }
-    if (r.pt != m.pt) {
-      ++moved;
-      // On a pixel of level o within the search radius of the mapped position, and a FAST
-      // corner there.
-      const cv::Mat& level = pyramid.level(r.octave);
-      const double rx = static_cast<double>(oblique.cols) / level.cols;
-      const double ry = static_cast<double>(oblique.rows) / level.rows;
-      const double x = (r.pt.x + 0.5) / rx - 0.5;
-      const double y = (r.pt.y + 0.5) / ry - 0.5;
-      CHECK(std::abs(x - std::round(x)) < 1e-3);
-      CHECK(std::abs(y - std::round(y)) < 1e-3);
-      CHECK(std::abs(std::round(x) - std::round((m.pt.x + 0.5) / rx - 0.5)) <= 1.0);
-      CHECK(std::abs(std::round(y) - std::round((m.pt.y + 0.5) / ry - 0.5)) <= 1.0);
-      on_corner += affine_orb::fast_score(level.ptr<std::uint8_t>(cvRound(y)) + cvRound(x),
-                                          static_cast<std::ptrdiff_t>(level.step[0])) >= options.detector.min_threshold;
-    }
-    if (error(r.pt) < 3.0 * unit && error(m.pt) < 3.0 * unit) {
-      refined_errors.push_back(error(r.pt) / unit);
-      mapped_errors.push_back(error(m.pt) / unit);
-    }
-  }
-  REQUIRE(image_errors.size() > 30);
-  REQUIRE(refined_errors.size() > 30);
-  CHECK(moved > 0);
-  CHECK(on_corner == moved);
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
-  MESSAGE("median distance to the true vertex in pixels of the keypoint's octave: image keypoints "
-          << median(image_errors) << " px (" << image_errors.size() << "), view keypoints mapped "
-          << median(mapped_errors) << " px, refined " << median(refined_errors) << " px (" << refined_errors.size()
-          << ", " << moved << " moved)");
-  // Both are located as precisely as the image's own keypoints (the mapped position already is).
-  CHECK(median(mapped_errors) <= median(image_errors) + 0.25);
-  CHECK(median(refined_errors) <= median(image_errors) + 0.25);
-}
-
-namespace {
-
-/// The stages' keypoints in extract()'s order: by octave, then by view (stages are in view order),
-/// each stage's own order kept within.
-affine_orb::Features<256> in_extract_order(const std::vector<affine_orb::Features<256>>& stages) {
-  affine_orb::Features<256> all;
-  for (const auto& s : stages) {
-    all.keypoints.insert(all.keypoints.end(), s.keypoints.begin(), s.keypoints.end());
-    all.descriptors.insert(all.descriptors.end(), s.descriptors.begin(), s.descriptors.end());
-    all.views.insert(all.views.end(), s.views.begin(), s.views.end());
-  }
-  std::vector<std::size_t> order(all.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return all.keypoints[a].octave < all.keypoints[b].octave; });
-  affine_orb::Features<256> sorted;
-  for (std::size_t i : order) {
-    sorted.keypoints.push_back(all.keypoints[i]);
-    sorted.descriptors.push_back(all.descriptors[i]);
-    sorted.views.push_back(all.views[i]);
-  }
-  return sorted;
-}
-
-/// Number of keypoints that differ between a and b in any field (sizes must match).
-int differing(const affine_orb::Features<256>& a, const affine_orb::Features<256>& b) {
-  REQUIRE(a.size() == b.size());
-  int n = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const cv::KeyPoint& p = a.keypoints[i];
-    const cv::KeyPoint& q = b.keypoints[i];
-    n += p.pt != q.pt || p.angle != q.angle || p.size != q.size || p.octave != q.octave || p.response != q.response ||
-         a.descriptors[i] != b.descriptors[i] || a.views[i] != b.views[i];
-  }
-  return n;
-}
-
-}  // namespace
-
-TEST_CASE("views on demand: stage 0 is plain extraction, and the image plus one stage of every view is extract()") {
-  for (const bool wide : {false, true}) {
-    const cv::Mat image = wide ? affine_orb::test::panning_frame(1, cv::Size(1226, 370)) : affine_orb::test::graf(1);
-    for (const auto spreading : {affine_orb::Spreading::kQuadtree, affine_orb::Spreading::kStrongest}) {
-      for (int threads : {1, 2}) {
-        CAPTURE(wide);
-        CAPTURE(static_cast<int>(spreading));
-        CAPTURE(threads);
-        affine_orb::ExtractorOptions on;
-        on.features = 1000;
-        on.spreading = spreading;
-        on.threads = threads;
-        affine_orb::ExtractorOptions off = on;
-        off.views.max_tilt = 1.0;
-        const auto plain = affine_orb::Extractor<affine_orb::Rbrief>(off).extract(image);
-        const auto one_shot = affine_orb::Extractor<affine_orb::Rbrief>(on).extract(image);
-        affine_orb::Extractor<affine_orb::Rbrief> staged(on);
-        auto [image_only, cursor] = staged.extract_image(image);
-        CHECK(cursor.extracted_tilt() == 1.0);
-        CHECK(differing(image_only, plain) == 0);
-        const auto views =
-            staged.extend(cursor, on.views.max_tilt, static_cast<int>(std::lround(on.view_features * on.features)));
-        CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
-        CHECK(cursor.extracted_views() == static_cast<int>(staged.views().size()));
-        CHECK(std::count(views.views.begin(), views.views.end(), 0) == 0);
-        CHECK(differing(in_extract_order({image_only, views}), one_shot) == 0);
-      }
-    }
-  }
-}
-
-TEST_CASE("views on demand: each stage adds the views of its tilts and keeps what earlier stages found") {
-  const cv::Mat image = affine_orb::test::textured_photo();
-  affine_orb::ExtractorOptions options;
-  options.features = 800;
-  affine_orb::Extractor<affine_orb::Rbrief> staged(options);
-  auto [s0, cursor] = staged.extract_image(image);
-  const auto s1 = staged.extend(cursor, kSqrt2, 300);
-  const auto s2 = staged.extend(cursor, 2.0, 400);
-  const auto s3 = staged.extend(cursor, 2.0 * kSqrt2, 500);
-  const std::vector<affine_orb::AffineView> views = staged.views();
-  CHECK(s0.size() == 800);
-  CHECK(s1.size() == 300);
-  CHECK(s2.size() == 400);
-  CHECK(s3.size() == 500);
-  const auto tilt_of = [&](int v) { return views[static_cast<std::size_t>(v)].tilt; };
-  for (int v : s1.views) CHECK(tilt_of(v) == doctest::Approx(kSqrt2));
-  for (int v : s2.views) CHECK(tilt_of(v) == doctest::Approx(2.0));
-  for (int v : s3.views) CHECK(tilt_of(v) == doctest::Approx(2.0 * kSqrt2));
-  CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
-  CHECK(staged.extend(cursor, 4.0, 100).empty());  // no view is left up to 4 (max_tilt 2√2)
-  CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
-
-  SUBCASE("the first stage is the one-shot extraction of the same views") {
-    affine_orb::ExtractorOptions first = options;
-    first.views.max_tilt = kSqrt2;
-    first.view_features = 300.0 / 800.0;
-    CHECK(differing(in_extract_order({s0, s1}), affine_orb::Extractor<affine_orb::Rbrief>(first).extract(image)) == 0);
-  }
-  SUBCASE("no keypoint of a stage repeats one of an earlier stage (same level, within the merge radius)") {
-    const std::vector<affine_orb::Features<256>> stages = {s0, s1, s2, s3};
-    std::vector<std::vector<LevelledKeypoint>> levelled;
-    for (const auto& s : stages) levelled.push_back(with_levels(s, views));
-    int repeats = 0;
-    for (std::size_t k = 1; k < levelled.size(); ++k) {
-      for (const LevelledKeypoint& a : levelled[k]) {
-        for (std::size_t j = 0; j < k; ++j) {
-          for (const LevelledKeypoint& b : levelled[j]) {
-            if (a.level != b.level) continue;
-            const double r = options.merge_radius * std::pow(options.pyramid.scale_factor, a.level);
-            repeats += cv::norm(a.kp.pt - b.kp.pt) < r;
-          }
-        }
-      }
-    }
-    CHECK(repeats == 0);
-  }
-  SUBCASE("a new image starts again from stage 0") {
-    const cv::Mat other = affine_orb::test::graf(3);
-    auto other_stage = staged.extract_image(other);
-    CHECK(other_stage.cursor.extracted_tilt() == 1.0);
-    CHECK_THROWS_AS(staged.extend(cursor, 4.0, 100), std::invalid_argument);  // the first image's cursor
-    const auto again = staged.extend(other_stage.cursor, kSqrt2, 300);
-    for (int v : again.views) CHECK(tilt_of(v) == doctest::Approx(kSqrt2));
-  }
-}
-
-TEST_CASE("views on demand: misuse is refused with std::invalid_argument") {
-  const cv::Mat image = affine_orb::test::graf(1);
-  affine_orb::Extractor<affine_orb::Rbrief> extractor;
-  affine_orb::ViewCursor unused;
-  CHECK(unused.extracted_tilt() == 0.0);
-  CHECK_THROWS_AS(extractor.extend(unused, 2.0, 100), std::invalid_argument);  // not from extract_image()
-  auto stage = extractor.extract_image(image);
-  CHECK_THROWS_AS(extractor.extend(stage.cursor, std::nan(""), 100), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, -1), std::invalid_argument);
-  affine_orb::Extractor<affine_orb::Rbrief> other;
-  other.extract_image(image);  // the same image count as `extractor`: the cursor still is not its own
-  CHECK_THROWS_AS(other.extend(stage.cursor, 2.0, 100), std::invalid_argument);  // another Extractor's cursor
-  affine_orb::ViewCursor moved = std::move(stage.cursor);
-  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, 100), std::invalid_argument);  // moved from
-  CHECK(extractor.extend(moved, 2.0, 100).size() == 100);
-  extractor.extract(image);  // ends the staged image
-  CHECK_THROWS_AS(extractor.extend(moved, 2.0 * kSqrt2, 100), std::invalid_argument);
-  affine_orb::ExtractorOptions split;
-  split.view_budget = affine_orb::ViewBudget::kAreaSplit;
-  affine_orb::Extractor<affine_orb::Rbrief> area(split);
-  CHECK_THROWS_AS(area.extract_image(image), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extract_image(cv::Mat()), std::invalid_argument);
 }
 
 namespace {

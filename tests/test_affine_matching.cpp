@@ -1,0 +1,249 @@
+// Matching of affine feature sets (matching/affine_matching.hpp, SPEC §4) against naive references
+// written here: the removal of duplicate correspondences, the location-aware ratio test of
+// match_features() and the gated search of match_guided().
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/core/features.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+
+TEST_CASE("duplicate correspondences are removed exactly as defined") {
+  // Points in a 40 px square (many duplicates), then the same spread over 4e6 px with a few points
+  // at ±1e30 and NaN (the grid's cells widen; a NaN point is never within the radius).
+  for (const float scale : {1.0f, 1e5f}) {
+    CAPTURE(scale);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> coord(0.0f, 40.0f);
+    std::vector<cv::Point2f> p1(60);
+    std::vector<cv::Point2f> p2(60);
+    for (auto& p : p1) p = {coord(rng) * scale, coord(rng) * scale};
+    for (auto& p : p2) p = {coord(rng) * scale, coord(rng) * scale};
+    if (scale > 1.0f) {
+      p1[3] = {1e30f, -1e30f};
+      p1[4] = {std::numeric_limits<float>::quiet_NaN(), 0.0f};
+      p2[5] = {-1e30f, 1e30f};
+    }
+    std::vector<affine_orb::Match> matches;
+    for (int k = 0; k < 300; ++k) {
+      matches.push_back({static_cast<int>(rng() % 60), static_cast<int>(rng() % 60), static_cast<int>(rng() % 20)});
+    }
+    const auto kept = affine_orb::remove_duplicate_matches(matches, p1, p2, 3.0);
+    // Naive reference: greedy by (distance, query, train), O(n²).
+    auto order = matches;
+    std::sort(order.begin(), order.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
+      return std::tie(a.distance, a.query, a.train) < std::tie(b.distance, b.query, b.train);
+    });
+    std::vector<affine_orb::Match> expected;
+    for (const auto& m : order) {
+      bool duplicate = false;
+      for (const auto& k : expected) {
+        const auto& a = p1[static_cast<std::size_t>(m.query)];
+        const auto& b = p1[static_cast<std::size_t>(k.query)];
+        const auto& c = p2[static_cast<std::size_t>(m.train)];
+        const auto& d = p2[static_cast<std::size_t>(k.train)];
+        duplicate = duplicate || (std::hypot(a.x - b.x, a.y - b.y) < 3.0 && std::hypot(c.x - d.x, c.y - d.y) < 3.0);
+      }
+      if (!duplicate) expected.push_back(m);
+    }
+    std::sort(expected.begin(), expected.end(), [](const affine_orb::Match& a, const affine_orb::Match& b) {
+      return std::tie(a.query, a.train) < std::tie(b.query, b.train);
+    });
+    CHECK(expected.size() < matches.size());  // the case has duplicates to remove
+    REQUIRE(kept.size() == expected.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      CHECK(kept[i].query == expected[i].query);
+      CHECK(kept[i].train == expected[i].train);
+      CHECK(kept[i].distance == expected[i].distance);
+    }
+    CHECK_THROWS_AS(affine_orb::remove_duplicate_matches(matches, p1, p2, -1.0), std::invalid_argument);
+  }
+}
+
+TEST_CASE("the location-aware ratio test equals a naive reference") {
+  // Descriptors with planted near-duplicates at nearly the same image-2 location.
+  std::mt19937_64 rng(23);
+  affine_orb::Features<256> a;
+  affine_orb::Features<256> b;
+  for (int i = 0; i < 80; ++i) {
+    affine_orb::BinaryDescriptor<256> d{rng(), rng(), rng(), rng()};
+    a.descriptors.push_back(d);
+    a.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300)), 31.0f);
+    a.views.push_back(0);
+    const cv::Point2f at(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300));
+    for (int copy = 0; copy < 1 + i % 3; ++copy) {
+      affine_orb::BinaryDescriptor<256> e = d;
+      for (int flip = 0; flip < 20 + 15 * copy; ++flip) {
+        const unsigned bit = static_cast<unsigned>(rng() % 256);
+        e[bit / 64] ^= 1ull << (bit % 64);
+      }
+      b.descriptors.push_back(e);
+      b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.5f * copy), 31.0f);
+      b.views.push_back(copy);
+    }
+  }
+  for (double radius : {0.0, 4.0}) {
+    for (bool cross : {false, true}) {
+      CAPTURE(radius);
+      CAPTURE(cross);
+      affine_orb::AffineMatchOptions options;
+      options.ratio_exclusion_radius = radius;
+      options.matcher.cross_check = cross;
+      options.duplicate_radius = 0.0;
+      const auto got = affine_orb::match_features(a, b, options);
+      std::vector<affine_orb::Match> expected;
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        int best = 1 << 30;
+        std::size_t j1 = 0;
+        for (std::size_t j = 0; j < b.size(); ++j) {
+          const int d = affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]);
+          if (d < best) {
+            best = d;
+            j1 = j;
+          }
+        }
+        int second = 1 << 30;
+        for (std::size_t j = 0; j < b.size(); ++j) {
+          if (j == j1) continue;
+          const auto& p = b.keypoints[j].pt;
+          const auto& q = b.keypoints[j1].pt;
+          if (std::hypot(p.x - q.x, p.y - q.y) <= radius) continue;
+          second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
+        }
+        if (!(best < 0.8 * second)) continue;
+        if (cross) {
+          int back = 1 << 30;
+          std::size_t i1 = 0;
+          for (std::size_t k = 0; k < a.size(); ++k) {
+            const int d = affine_orb::hamming_distance(a.descriptors[k], b.descriptors[j1]);
+            if (d < back) {
+              back = d;
+              i1 = k;
+            }
+          }
+          if (i1 != i) continue;
+        }
+        expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
+      }
+      REQUIRE(got.size() == expected.size());
+      for (std::size_t k = 0; k < got.size(); ++k) {
+        CHECK(got[k].query == expected[k].query);
+        CHECK(got[k].train == expected[k].train);
+      }
+      if (radius > 0.0) CHECK(got.size() > 60);  // the planted copies no longer veto their originals
+    }
+  }
+  affine_orb::AffineMatchOptions bad;
+  bad.ratio_exclusion_radius = -1.0;
+  CHECK_THROWS_AS(affine_orb::match_features(a, b, bad), std::invalid_argument);
+  bad = {};
+  bad.matcher.ratio = 0.0f;
+  CHECK_THROWS_AS(affine_orb::match_features(a, b, bad), std::invalid_argument);
+  CHECK(affine_orb::match_features(affine_orb::Features<256>{}, b).empty());
+}
+
+TEST_CASE("guided matching equals a naive reference over every keypoint of image 2") {
+  // Image-2 partners near each prediction (shifted by up to 3 px, some with near-duplicates one
+  // pixel apart), random distractors all over; some predictions are not finite.
+  std::mt19937_64 rng(31);
+  affine_orb::Features<256> a;
+  affine_orb::Features<256> b;
+  std::vector<cv::Point2f> predicted;
+  const auto flipped = [&](affine_orb::BinaryDescriptor<256> d, int bits) {
+    for (int flip = 0; flip < bits; ++flip) {
+      const unsigned bit = static_cast<unsigned>(rng() % 256);
+      d[bit / 64] ^= 1ull << (bit % 64);
+    }
+    return d;
+  };
+  for (int i = 0; i < 120; ++i) {
+    const affine_orb::BinaryDescriptor<256> d{rng(), rng(), rng(), rng()};
+    const cv::Point2f p(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300));
+    a.descriptors.push_back(d);
+    a.keypoints.emplace_back(p, 31.0f);
+    a.views.push_back(0);
+    predicted.push_back(i % 17 == 0 ? cv::Point2f(std::numeric_limits<float>::quiet_NaN(), 0.0f)
+                                    : p + cv::Point2f(20.0f, -10.0f));
+    const cv::Point2f at =
+        p + cv::Point2f(20.0f + static_cast<float>(rng() % 7) - 3.0f, -10.0f + static_cast<float>(rng() % 7) - 3.0f);
+    for (int copy = 0; copy < 1 + i % 2; ++copy) {
+      b.descriptors.push_back(flipped(d, 10 + 30 * copy + static_cast<int>(rng() % 60)));
+      b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.0f), 31.0f);
+      b.views.push_back(copy);
+    }
+    b.descriptors.push_back({rng(), rng(), rng(), rng()});
+    b.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 340), static_cast<float>(rng() % 340)), 31.0f);
+    b.views.push_back(0);
+  }
+  // The same with one more image-2 keypoint 1e30 px away, which widens the search grid's cells.
+  affine_orb::Features<256> b_far = b;
+  b_far.keypoints.emplace_back(cv::Point2f(1e30f, -1e30f), 31.0f);
+  b_far.descriptors.push_back(b.descriptors.front());
+  b_far.views.push_back(0);
+  for (const bool far : {false, true}) {
+    CAPTURE(far);
+    const affine_orb::Features<256>& train = far ? b_far : b;
+    for (const double gate : {4.0, 10.0, 40.0}) {
+      for (const double exclusion : {0.0, 4.0}) {
+        for (const int max_distance : {40, 100}) {
+          CAPTURE(gate);
+          CAPTURE(exclusion);
+          CAPTURE(max_distance);
+          affine_orb::GuidedMatchOptions options;
+          options.gate_radius = gate;
+          options.ratio_exclusion_radius = exclusion;
+          options.max_distance = max_distance;
+          options.duplicate_radius = 0.0;
+          const auto got = affine_orb::match_guided(a, train, predicted, options);
+          std::vector<affine_orb::Match> expected;
+          const auto squared = [](cv::Point2f p, cv::Point2f q) {
+            return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
+          };
+          for (std::size_t i = 0; i < a.size(); ++i) {
+            if (!std::isfinite(predicted[i].x)) continue;
+            int best = 1 << 30;
+            std::size_t j1 = 0;
+            for (std::size_t j = 0; j < train.size(); ++j) {
+              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
+              const int d = affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]);
+              if (d < best) {
+                best = d;
+                j1 = j;
+              }
+            }
+            if (best > max_distance) continue;
+            int second = 1 << 30;
+            for (std::size_t j = 0; j < train.size(); ++j) {
+              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
+              if (squared(train.keypoints[j].pt, train.keypoints[j1].pt) <= exclusion * exclusion) continue;
+              second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]));
+            }
+            if (second != 1 << 30 && !(best < 0.8 * second)) continue;
+            expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
+          }
+          REQUIRE(got.size() == expected.size());
+          for (std::size_t k = 0; k < got.size(); ++k) {
+            CHECK(got[k].query == expected[k].query);
+            CHECK(got[k].train == expected[k].train);
+            CHECK(got[k].distance == expected[k].distance);
+          }
+          if (gate == 10.0 && max_distance == 100) CHECK(got.size() > 60);  // the planted partners are found
+        }
+      }
+    }
+  }
+  affine_orb::GuidedMatchOptions bad;
+  bad.gate_radius = 0.0;
+  CHECK_THROWS_AS(affine_orb::match_guided(a, b, predicted, bad), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::match_guided(a, b, std::vector<cv::Point2f>(3)), std::invalid_argument);
+  CHECK(affine_orb::match_guided(a, affine_orb::Features<256>{}, predicted).empty());
+}

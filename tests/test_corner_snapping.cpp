@@ -1,0 +1,131 @@
+// Snapping view keypoints to corners of the original image (ExtractorOptions::refine,
+// RefineOptions) on a synthetic scene whose corners are known to 1/8 px: snapped keypoints lie on
+// FAST corners of their level near the mapped position, as precisely as the image's own keypoints.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/detection/fast.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/views/affine_views.hpp"
+#include "test_views.hpp"
+
+namespace {
+
+using affine_orb::test::affine_options;
+
+}  // namespace
+
+TEST_CASE("refinement puts view keypoints on corners of the original image, as precisely as image keypoints") {
+  // A synthetic scene with known geometry: random grey quadrilaterals drawn at 8x resolution and
+  // averaged down (area interpolation), so that every vertex is known to 1/8 px; then an oblique
+  // view of it by a known affine map A (tilt 2.5 at 30°, cv::warpAffine), whose vertices are A·v.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coordinate(0.0, 1.0);
+  std::uniform_int_distribution<int> grey(20, 235);
+  const int size = 480;
+  cv::Mat fine(size * 8, size * 8, CV_8UC1, cv::Scalar(128));
+  std::vector<cv::Point2d> vertices;
+  for (int q = 0; q < 70; ++q) {
+    const cv::Point2d centre(40 + coordinate(rng) * (size - 80), 40 + coordinate(rng) * (size - 80));
+    std::vector<cv::Point> polygon;
+    for (int k = 0; k < 4; ++k) {
+      const double angle = (k + 0.4 * coordinate(rng)) * CV_PI / 2.0;
+      const double radius = 12.0 + 18.0 * coordinate(rng);
+      const cv::Point2d v(centre.x + radius * std::cos(angle), centre.y + radius * std::sin(angle));
+      vertices.push_back(v);
+      // Pixel centres at integers: fine pixel (8x + 3.5) is the centre of coarse pixel x.
+      polygon.emplace_back(cvRound(8.0 * v.x + 3.5), cvRound(8.0 * v.y + 3.5));
+    }
+    cv::fillConvexPoly(fine, polygon, cv::Scalar(grey(rng)), cv::LINE_8);
+  }
+  cv::Mat scene;
+  cv::resize(fine, scene, cv::Size(size, size), 0, 0, cv::INTER_AREA);
+  const double phi = 30.0 * CV_PI / 180.0;
+  const cv::Matx22d rotate(std::cos(phi), -std::sin(phi), std::sin(phi), std::cos(phi));
+  const cv::Matx22d squeeze = cv::Matx22d(rotate.t()) * cv::Matx22d(1.0 / 2.5, 0.0, 0.0, 1.0) * rotate;
+  const cv::Point2d centre(size / 2.0, size / 2.0);
+  const cv::Vec2d offset = cv::Vec2d(centre.x, centre.y) - squeeze * cv::Vec2d(centre.x, centre.y);
+  const cv::Matx23d a(squeeze(0, 0), squeeze(0, 1), offset[0], squeeze(1, 0), squeeze(1, 1), offset[1]);
+  cv::Mat oblique;
+  cv::warpAffine(scene, oblique, a, scene.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  std::vector<cv::Point2d> truth;
+  for (const cv::Point2d& v : vertices) truth.push_back(affine_orb::apply_affine(a, v));
+  auto error = [&](cv::Point2f p) {
+    double best = 1e9;
+    for (const cv::Point2d& t : truth) best = std::min(best, std::hypot(t.x - p.x, t.y - p.y));
+    return best;
+  };
+
+  affine_orb::ExtractorOptions options = affine_options(600, affine_orb::DuplicatePolicy::kKeepAll);
+  options.view_features = 2.0;
+  affine_orb::Extractor<affine_orb::Rbrief> mapped(options);
+  options.refine.enabled = true;
+  affine_orb::Extractor<affine_orb::Rbrief> refined(options);
+  const auto f_mapped = mapped.extract(oblique);
+  const auto f_refined = refined.extract(oblique);
+  REQUIRE(f_mapped.size() == f_refined.size());
+  const affine_orb::Pyramid& pyramid = refined.pyramid();
+  std::vector<double> image_errors, mapped_errors, refined_errors;
+  int moved = 0;
+  int on_corner = 0;
+  for (std::size_t i = 0; i < f_refined.size(); ++i) {
+    const cv::KeyPoint& r = f_refined.keypoints[i];
+    const cv::KeyPoint& m = f_mapped.keypoints[i];
+    REQUIRE(f_refined.views[i] == f_mapped.views[i]);
+    REQUIRE(r.octave == m.octave);
+    CHECK(r.angle == m.angle);
+    CHECK(f_refined.descriptors[i] == f_mapped.descriptors[i]);
+    // Distances in pixels of the keypoint's octave, where both kinds are located to a pixel.
+    const double unit = std::pow(1.2, r.octave);
+    if (f_refined.views[i] == 0) {
+      CHECK(r.pt == m.pt);
+      if (error(r.pt) < 3.0 * unit) image_errors.push_back(error(r.pt) / unit);
+      continue;
+    }
+    if (r.pt != m.pt) {
+      ++moved;
+      // On a pixel of level o within the search radius of the mapped position, and a FAST
+      // corner there.
+      const cv::Mat& level = pyramid.level(r.octave);
+      const double rx = static_cast<double>(oblique.cols) / level.cols;
+      const double ry = static_cast<double>(oblique.rows) / level.rows;
+      const double x = (r.pt.x + 0.5) / rx - 0.5;
+      const double y = (r.pt.y + 0.5) / ry - 0.5;
+      CHECK(std::abs(x - std::round(x)) < 1e-3);
+      CHECK(std::abs(y - std::round(y)) < 1e-3);
+      CHECK(std::abs(std::round(x) - std::round((m.pt.x + 0.5) / rx - 0.5)) <= 1.0);
+      CHECK(std::abs(std::round(y) - std::round((m.pt.y + 0.5) / ry - 0.5)) <= 1.0);
+      on_corner += affine_orb::fast_score(level.ptr<std::uint8_t>(cvRound(y)) + cvRound(x),
+                                          static_cast<std::ptrdiff_t>(level.step[0])) >= options.detector.min_threshold;
+    }
+    if (error(r.pt) < 3.0 * unit && error(m.pt) < 3.0 * unit) {
+      refined_errors.push_back(error(r.pt) / unit);
+      mapped_errors.push_back(error(m.pt) / unit);
+    }
+  }
+  REQUIRE(image_errors.size() > 30);
+  REQUIRE(refined_errors.size() > 30);
+  CHECK(moved > 0);
+  CHECK(on_corner == moved);
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  MESSAGE("median distance to the true vertex in pixels of the keypoint's octave: image keypoints "
+          << median(image_errors) << " px (" << image_errors.size() << "), view keypoints mapped "
+          << median(mapped_errors) << " px, refined " << median(refined_errors) << " px (" << refined_errors.size()
+          << ", " << moved << " moved)");
+  // Both are located as precisely as the image's own keypoints (the mapped position already is).
+  CHECK(median(mapped_errors) <= median(image_errors) + 0.25);
+  CHECK(median(refined_errors) <= median(image_errors) + 0.25);
+}

@@ -137,7 +137,7 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
   // mapped back through the known matrix, is a true position: each level-0 keypoint the extractor
   // found in that view of the original photo must lie on one, with J's angle.
   const cv::Mat photo = affine_orb::test::graf(1);
-  affine_orb::ExtractorOptions options = affine_options(3000, affine_orb::DuplicatePolicy::kKeepAll);
+  affine_orb::ExtractorOptions options = affine_options(3000, std::nullopt);
   options.views.max_tilt = 2.0;
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
   const auto features = extractor.extract(photo);
@@ -156,7 +156,7 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
   cv::GaussianBlur(photo, blurred, cv::Size(0, 0), 0.8, 0.8);
   cv::Mat by_warp;
   cv::warpAffine(blurred, by_warp, view.to_view, view.size, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-  affine_orb::ExtractorOptions plain = affine_options(1000000, affine_orb::DuplicatePolicy::kKeepAll);
+  affine_orb::ExtractorOptions plain = affine_options(1000000, std::nullopt);
   plain.views.max_tilt = 1.0;
   plain.pyramid.levels = 1;
   // Level-0 keypoints of the view: size = 31·s^0·√t.
@@ -212,7 +212,7 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
 TEST_CASE("affine extraction: exact budget, view records, identical output for every thread count") {
   const cv::Mat image = affine_orb::test::panning_frame(2, cv::Size(1226, 370));
   const auto one =
-      affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::DuplicatePolicy::kMerge, 1))
+      affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::MergeOptions{}, 1))
           .extract(image);
   // The additive budget: 2000 of the image, view_features (1) x 2000 from the tilted views.
   REQUIRE(one.size() == 4000);
@@ -231,7 +231,7 @@ TEST_CASE("affine extraction: exact budget, view records, identical output for e
   for (int threads : {2, 3, 8}) {
     CAPTURE(threads);
     const auto other =
-        affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::DuplicatePolicy::kMerge, threads))
+        affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::MergeOptions{}, threads))
             .extract(image);
     REQUIRE(other.size() == one.size());
     bool identical = true;
@@ -243,8 +243,8 @@ TEST_CASE("affine extraction: exact budget, view records, identical output for e
     CHECK(identical);
   }
   SUBCASE("the area split: `features` in all, the image about 1/9 of them") {
-    affine_orb::ExtractorOptions options = affine_options(2000, affine_orb::DuplicatePolicy::kMerge, 2);
-    options.view_budget = affine_orb::ViewBudget::kAreaSplit;
+    affine_orb::ExtractorOptions options = affine_options(2000, affine_orb::MergeOptions{}, 2);
+    options.view_budget = affine_orb::AreaSplitBudget{};
     const auto split = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
     CHECK(split.size() == 2000);
     const auto from_image = std::count(split.views.begin(), split.views.end(), 0);
@@ -297,15 +297,14 @@ TEST_CASE("repeat suppression equals a brute-force reference") {
     CAPTURE(reach);
     affine_orb::ExtractorOptions options;
     options.features = 1000000;
-    options.view_features = 16.0;
-    options.repeat_levels = reach;
-    options.merge_radius = 2.5;
+    std::get<affine_orb::AdditiveBudget>(options.view_budget).view_features = 16.0;
+    const affine_orb::MergeOptions merging{2.5, reach};
     options.threads = 2;
-    options.duplicates = affine_orb::DuplicatePolicy::kKeepAll;
+    options.merge_duplicates.reset();
     affine_orb::Extractor<affine_orb::Rbrief> keep_all(options);
     const auto all_features = keep_all.extract(image);
     const auto all = with_levels(all_features, keep_all.views());
-    options.duplicates = affine_orb::DuplicatePolicy::kMerge;
+    options.merge_duplicates = merging;
     affine_orb::Extractor<affine_orb::Rbrief> merge(options);
     const auto merged_features = merge.extract(image);
     const auto merged = with_levels(merged_features, merge.views());
@@ -356,8 +355,8 @@ TEST_CASE("no two output keypoints repeat each other under the merge; keep-all k
     }
     return repeats;
   };
-  affine_orb::Extractor<affine_orb::Rbrief> merge(affine_options(1500, affine_orb::DuplicatePolicy::kMerge, 2));
-  affine_orb::Extractor<affine_orb::Rbrief> keep(affine_options(1500, affine_orb::DuplicatePolicy::kKeepAll, 2));
+  affine_orb::Extractor<affine_orb::Rbrief> merge(affine_options(1500, affine_orb::MergeOptions{}, 2));
+  affine_orb::Extractor<affine_orb::Rbrief> keep(affine_options(1500, std::nullopt, 2));
   const auto merged = merge.extract(image);
   const auto all = keep.extract(image);
   CHECK(merged.size() == 3000);
@@ -370,7 +369,7 @@ TEST_CASE("the mask is honoured for keypoints of tilted views too") {
   const cv::Mat image = affine_orb::test::textured_photo();
   cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(0));
   mask(cv::Rect(image.cols / 4, image.rows / 4, image.cols / 2, image.rows / 2)).setTo(255);
-  const auto f = affine_orb::Extractor<affine_orb::Rbrief>(affine_options(1000, affine_orb::DuplicatePolicy::kMerge, 2))
+  const auto f = affine_orb::Extractor<affine_orb::Rbrief>(affine_options(1000, affine_orb::MergeOptions{}, 2))
                      .extract(image, mask);
   CHECK(f.size() == 2000);
   int tilted = 0;
@@ -388,7 +387,7 @@ TEST_CASE("graf 1->3: affine features give more distinct correct matches than pl
   const cv::Mat b = affine_orb::test::graf(3);
   const cv::Matx33d h = affine_orb::test::graf_homography_1to3();
   auto distinct_correct = [&](double max_tilt) {
-    affine_orb::ExtractorOptions options = affine_options(2000, affine_orb::DuplicatePolicy::kMerge, 2);
+    affine_orb::ExtractorOptions options = affine_options(2000, affine_orb::MergeOptions{}, 2);
     options.views.max_tilt = max_tilt;
     affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
     const auto fa = extractor.extract(a);

@@ -1,5 +1,5 @@
-// Snapping view keypoints to corners of the original image (ExtractorOptions::refine,
-// RefineOptions) on a synthetic scene whose corners are known to 1/8 px: snapped keypoints lie on
+// Snapping view keypoints to corners of the original image (ExtractorOptions::snap_to_corners,
+// CornerSnapOptions) on a synthetic scene whose corners are known to 1/8 px: snapped keypoints lie on
 // FAST corners of their level near the mapped position, as precisely as the image's own keypoints.
 #include <doctest/doctest.h>
 
@@ -25,7 +25,7 @@ using affine_orb::test::affine_options;
 
 }  // namespace
 
-TEST_CASE("refinement puts view keypoints on corners of the original image, as precisely as image keypoints") {
+TEST_CASE("snapping puts view keypoints on corners of the original image, as precisely as image keypoints") {
   // A synthetic scene with known geometry: random grey quadrilaterals drawn at 8x resolution and
   // averaged down (area interpolation), so that every vertex is known to 1/8 px; then an oblique
   // view of it by a known affine map A (tilt 2.5 at 30°, cv::warpAffine), whose vertices are A·v.
@@ -66,28 +66,28 @@ TEST_CASE("refinement puts view keypoints on corners of the original image, as p
     return best;
   };
 
-  affine_orb::ExtractorOptions options = affine_options(600, affine_orb::DuplicatePolicy::kKeepAll);
-  options.view_features = 2.0;
+  affine_orb::ExtractorOptions options = affine_options(600, std::nullopt);
+  std::get<affine_orb::AdditiveBudget>(options.view_budget).view_features = 2.0;
   affine_orb::Extractor<affine_orb::Rbrief> mapped(options);
-  options.refine.enabled = true;
-  affine_orb::Extractor<affine_orb::Rbrief> refined(options);
+  options.snap_to_corners = affine_orb::CornerSnapOptions{};
+  affine_orb::Extractor<affine_orb::Rbrief> snapped(options);
   const auto f_mapped = mapped.extract(oblique);
-  const auto f_refined = refined.extract(oblique);
-  REQUIRE(f_mapped.size() == f_refined.size());
-  const affine_orb::Pyramid& pyramid = refined.pyramid();
-  std::vector<double> image_errors, mapped_errors, refined_errors;
+  const auto f_snapped = snapped.extract(oblique);
+  REQUIRE(f_mapped.size() == f_snapped.size());
+  const affine_orb::Pyramid& pyramid = snapped.pyramid();
+  std::vector<double> image_errors, mapped_errors, snapped_errors;
   int moved = 0;
   int on_corner = 0;
-  for (std::size_t i = 0; i < f_refined.size(); ++i) {
-    const cv::KeyPoint& r = f_refined.keypoints[i];
+  for (std::size_t i = 0; i < f_snapped.size(); ++i) {
+    const cv::KeyPoint& r = f_snapped.keypoints[i];
     const cv::KeyPoint& m = f_mapped.keypoints[i];
-    REQUIRE(f_refined.views[i] == f_mapped.views[i]);
+    REQUIRE(f_snapped.views[i] == f_mapped.views[i]);
     REQUIRE(r.octave == m.octave);
     CHECK(r.angle == m.angle);
-    CHECK(f_refined.descriptors[i] == f_mapped.descriptors[i]);
+    CHECK(f_snapped.descriptors[i] == f_mapped.descriptors[i]);
     // Distances in pixels of the keypoint's octave, where both kinds are located to a pixel.
     const double unit = std::pow(1.2, r.octave);
-    if (f_refined.views[i] == 0) {
+    if (f_snapped.views[i] == 0) {
       CHECK(r.pt == m.pt);
       if (error(r.pt) < 3.0 * unit) image_errors.push_back(error(r.pt) / unit);
       continue;
@@ -109,12 +109,12 @@ TEST_CASE("refinement puts view keypoints on corners of the original image, as p
                                           static_cast<std::ptrdiff_t>(level.step[0])) >= options.detector.min_threshold;
     }
     if (error(r.pt) < 3.0 * unit && error(m.pt) < 3.0 * unit) {
-      refined_errors.push_back(error(r.pt) / unit);
+      snapped_errors.push_back(error(r.pt) / unit);
       mapped_errors.push_back(error(m.pt) / unit);
     }
   }
   REQUIRE(image_errors.size() > 30);
-  REQUIRE(refined_errors.size() > 30);
+  REQUIRE(snapped_errors.size() > 30);
   CHECK(moved > 0);
   CHECK(on_corner == moved);
   auto median = [](std::vector<double> v) {
@@ -123,9 +123,9 @@ TEST_CASE("refinement puts view keypoints on corners of the original image, as p
   };
   MESSAGE("median distance to the true vertex in pixels of the keypoint's octave: image keypoints "
           << median(image_errors) << " px (" << image_errors.size() << "), view keypoints mapped "
-          << median(mapped_errors) << " px, refined " << median(refined_errors) << " px (" << refined_errors.size()
+          << median(mapped_errors) << " px, snapped " << median(snapped_errors) << " px (" << snapped_errors.size()
           << ", " << moved << " moved)");
   // Both are located as precisely as the image's own keypoints (the mapped position already is).
   CHECK(median(mapped_errors) <= median(image_errors) + 0.25);
-  CHECK(median(refined_errors) <= median(image_errors) + 0.25);
+  CHECK(median(snapped_errors) <= median(image_errors) + 0.25);
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -19,11 +20,13 @@ namespace affine_orb::test {
 
 inline const double kSqrt2 = std::sqrt(2.0);
 
-inline affine_orb::ExtractorOptions affine_options(int features, affine_orb::DuplicatePolicy duplicates,
+/// The default options with `features` image keypoints, the merging of duplicates `merge` (nullopt:
+/// keep every view's keypoint) and `threads`.
+inline affine_orb::ExtractorOptions affine_options(int features, std::optional<affine_orb::MergeOptions> merge,
                                                    int threads = 1) {
   affine_orb::ExtractorOptions options;
   options.features = features;
-  options.duplicates = duplicates;
+  options.merge_duplicates = merge;
   options.threads = threads;
   return options;
 }

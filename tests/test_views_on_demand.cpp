@@ -1,6 +1,7 @@
-// Views on demand (Extractor::extract_image(), extend() and ViewCursor, extraction/view_cursor.hpp):
-// stage 0 is plain extraction, the image plus one stage of every view is extract() bit for bit,
-// each stage adds the views of its tilts without repeating earlier stages, and misuse is refused.
+// Views on demand (Extractor::extract_image() and ViewSession, extraction/view_session.hpp): stage 0
+// is plain extraction, the image plus one stage of every view is extract() bit for bit, each stage
+// adds the views of its tilts without repeating earlier stages, a session holds its Extractor until
+// it ends, and misuse is refused.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -79,13 +80,13 @@ TEST_CASE("views on demand: stage 0 is plain extraction, and the image plus one 
         const auto plain = affine_orb::Extractor<affine_orb::Rbrief>(off).extract(image);
         const auto one_shot = affine_orb::Extractor<affine_orb::Rbrief>(on).extract(image);
         affine_orb::Extractor<affine_orb::Rbrief> staged(on);
-        auto [image_only, cursor] = staged.extract_image(image);
-        CHECK(cursor.extracted_tilt() == 1.0);
+        auto [image_only, session] = staged.extract_image(image);
+        CHECK(session.extracted_tilt() == 1.0);
         CHECK(differing(image_only, plain) == 0);
-        const auto views =
-            staged.extend(cursor, on.views.max_tilt, static_cast<int>(std::lround(on.view_features * on.features)));
-        CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
-        CHECK(cursor.extracted_views() == static_cast<int>(staged.views().size()));
+        const double view_features = on.additive_budget()->view_features;
+        const auto views = session.extend(on.views.max_tilt, static_cast<int>(std::lround(view_features * on.features)));
+        CHECK(session.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
+        CHECK(session.extracted_views() == static_cast<int>(staged.views().size()));
         CHECK(std::count(views.views.begin(), views.views.end(), 0) == 0);
         CHECK(differing(in_extract_order({image_only, views}), one_shot) == 0);
       }
@@ -98,10 +99,10 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
   affine_orb::ExtractorOptions options;
   options.features = 800;
   affine_orb::Extractor<affine_orb::Rbrief> staged(options);
-  auto [s0, cursor] = staged.extract_image(image);
-  const auto s1 = staged.extend(cursor, kSqrt2, 300);
-  const auto s2 = staged.extend(cursor, 2.0, 400);
-  const auto s3 = staged.extend(cursor, 2.0 * kSqrt2, 500);
+  auto [s0, session] = staged.extract_image(image);
+  const auto s1 = session.extend(kSqrt2, 300);
+  const auto s2 = session.extend(2.0, 400);
+  const auto s3 = session.extend(2.0 * kSqrt2, 500);
   const std::vector<affine_orb::AffineView> views = staged.views();
   CHECK(s0.size() == 800);
   CHECK(s1.size() == 300);
@@ -111,14 +112,14 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
   for (int v : s1.views) CHECK(tilt_of(v) == doctest::Approx(kSqrt2));
   for (int v : s2.views) CHECK(tilt_of(v) == doctest::Approx(2.0));
   for (int v : s3.views) CHECK(tilt_of(v) == doctest::Approx(2.0 * kSqrt2));
-  CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
-  CHECK(staged.extend(cursor, 4.0, 100).empty());  // no view is left up to 4 (max_tilt 2√2)
-  CHECK(cursor.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
+  CHECK(session.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
+  CHECK(session.extend(4.0, 100).empty());  // no view is left up to 4 (max_tilt 2√2)
+  CHECK(session.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
 
   SUBCASE("the first stage is the one-shot extraction of the same views") {
     affine_orb::ExtractorOptions first = options;
     first.views.max_tilt = kSqrt2;
-    first.view_features = 300.0 / 800.0;
+    std::get<affine_orb::AdditiveBudget>(first.view_budget).view_features = 300.0 / 800.0;
     CHECK(differing(in_extract_order({s0, s1}), affine_orb::Extractor<affine_orb::Rbrief>(first).extract(image)) == 0);
   }
   SUBCASE("no keypoint of a stage repeats one of an earlier stage (same level, within the merge radius)") {
@@ -131,7 +132,7 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
         for (std::size_t j = 0; j < k; ++j) {
           for (const LevelledKeypoint& b : levelled[j]) {
             if (a.level != b.level) continue;
-            const double r = options.merge_radius * std::pow(options.pyramid.scale_factor, a.level);
+            const double r = options.merge_duplicates->radius * std::pow(options.pyramid.scale_factor, a.level);
             repeats += cv::norm(a.kp.pt - b.kp.pt) < r;
           }
         }
@@ -139,35 +140,42 @@ TEST_CASE("views on demand: each stage adds the views of its tilts and keeps wha
     }
     CHECK(repeats == 0);
   }
-  SUBCASE("a new image starts again from stage 0") {
-    const cv::Mat other = affine_orb::test::graf(3);
-    auto other_stage = staged.extract_image(other);
-    CHECK(other_stage.cursor.extracted_tilt() == 1.0);
-    CHECK_THROWS_AS(staged.extend(cursor, 4.0, 100), std::invalid_argument);  // the first image's cursor
-    const auto again = staged.extend(other_stage.cursor, kSqrt2, 300);
-    for (int v : again.views) CHECK(tilt_of(v) == doctest::Approx(kSqrt2));
+  SUBCASE("another image waits for the session's end") {
+    CHECK_THROWS_AS(staged.extract_image(affine_orb::test::graf(3)), std::invalid_argument);
+    CHECK_THROWS_AS(staged.extract(affine_orb::test::graf(3)), std::invalid_argument);
   }
 }
 
-TEST_CASE("views on demand: misuse is refused with std::invalid_argument") {
+TEST_CASE("views on demand: a session holds its Extractor, and misuse is refused with std::invalid_argument") {
   const cv::Mat image = affine_orb::test::graf(1);
   affine_orb::Extractor<affine_orb::Rbrief> extractor;
-  affine_orb::ViewCursor unused;
-  CHECK(unused.extracted_tilt() == 0.0);
-  CHECK_THROWS_AS(extractor.extend(unused, 2.0, 100), std::invalid_argument);  // not from extract_image()
-  auto stage = extractor.extract_image(image);
-  CHECK_THROWS_AS(extractor.extend(stage.cursor, std::nan(""), 100), std::invalid_argument);
-  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, -1), std::invalid_argument);
-  affine_orb::Extractor<affine_orb::Rbrief> other;
-  other.extract_image(image);  // the same image count as `extractor`: the cursor still is not its own
-  CHECK_THROWS_AS(other.extend(stage.cursor, 2.0, 100), std::invalid_argument);  // another Extractor's cursor
-  affine_orb::ViewCursor moved = std::move(stage.cursor);
-  CHECK_THROWS_AS(extractor.extend(stage.cursor, 2.0, 100), std::invalid_argument);  // moved from
-  CHECK(extractor.extend(moved, 2.0, 100).size() == 100);
-  extractor.extract(image);  // ends the staged image
-  CHECK_THROWS_AS(extractor.extend(moved, 2.0 * kSqrt2, 100), std::invalid_argument);
+  {
+    auto stage = extractor.extract_image(image);
+    CHECK(stage.session.extracted_tilt() == 1.0);
+    CHECK(stage.session.extracted_views() == 1);
+    CHECK_THROWS_AS(stage.session.extend(std::nan(""), 100), std::invalid_argument);
+    CHECK_THROWS_AS(stage.session.extend(2.0, -1), std::invalid_argument);
+    CHECK_THROWS_AS(extractor.extract(image), std::invalid_argument);  // the session holds the Extractor
+    CHECK_THROWS_AS(extractor.extract_image(image), std::invalid_argument);
+    CHECK_THROWS_AS(affine_orb::Extractor<affine_orb::Rbrief>(std::move(extractor)), std::invalid_argument);
+    affine_orb::ViewSession<affine_orb::Rbrief> moved = std::move(stage.session);
+    CHECK_THROWS_AS(stage.session.extend(2.0, 100), std::invalid_argument);  // moved from
+    CHECK(moved.extend(2.0, 100).size() == 100);
+  }
+  // The session has ended: the refused move left the Extractor whole, and it starts a new image
+  // from stage 0.
+  const cv::Mat other = affine_orb::test::graf(3);
+  {
+    auto again = extractor.extract_image(other);
+    CHECK(again.session.extracted_tilt() == 1.0);
+    const auto first = again.session.extend(kSqrt2, 300);
+    CHECK(first.size() == 300);
+    const std::vector<affine_orb::AffineView> views = extractor.views();
+    for (int v : first.views) CHECK(views[static_cast<std::size_t>(v)].tilt == doctest::Approx(kSqrt2));
+  }
+  CHECK(differing(extractor.extract(other), affine_orb::Extractor<affine_orb::Rbrief>().extract(other)) == 0);
   affine_orb::ExtractorOptions split;
-  split.view_budget = affine_orb::ViewBudget::kAreaSplit;
+  split.view_budget = affine_orb::AreaSplitBudget{};
   affine_orb::Extractor<affine_orb::Rbrief> area(split);
   CHECK_THROWS_AS(area.extract_image(image), std::invalid_argument);
   CHECK_THROWS_AS(extractor.extract_image(cv::Mat()), std::invalid_argument);

@@ -410,6 +410,9 @@ class Extractor {
     }
   }
 
+  /// Whether a ViewSession of this Extractor lives (it then holds the image being staged). The
+  /// first member, so that a move it refuses moves nothing.
+  detail::SessionFlag session_;
   ExtractorOptions options_;
   Descriptor descriptor_;
   /// Per view (fixed for a view set, prepare_views()): its tilt, and the octave shift: a keypoint
@@ -430,8 +433,6 @@ class Extractor {
   Pyramid image_pyramid_;
   /// ImageKeypoints of a fork: the buffers of the image's extraction.
   detail::ForkImageWork fork_;
-  /// Whether a ViewSession of this Extractor lives (it then holds the image being staged).
-  detail::SessionFlag session_;
   /// Per worker thread: the buffers views are processed in.
   std::vector<ThreadWork> thread_work_;
   std::unique_ptr<detail::ViewTurns> turns_;

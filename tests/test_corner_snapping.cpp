@@ -72,9 +72,9 @@ TEST_CASE("snapping puts view keypoints on corners of the original image, as pre
   options.snap_to_corners = affine_orb::CornerSnapOptions{};
   affine_orb::Extractor<affine_orb::Rbrief> snapped(options);
   const auto f_mapped = mapped.extract(oblique);
-  const auto f_snapped = snapped.extract(oblique);
+  std::vector<cv::Mat> pyramid;
+  const auto f_snapped = snapped.extract(oblique, cv::Mat(), pyramid);
   REQUIRE(f_mapped.size() == f_snapped.size());
-  const affine_orb::Pyramid& pyramid = snapped.pyramid();
   std::vector<double> image_errors, mapped_errors, snapped_errors;
   int moved = 0;
   int on_corner = 0;
@@ -96,7 +96,7 @@ TEST_CASE("snapping puts view keypoints on corners of the original image, as pre
       ++moved;
       // On a pixel of level o within the search radius of the mapped position, and a FAST
       // corner there.
-      const cv::Mat& level = pyramid.level(r.octave);
+      const cv::Mat& level = pyramid[static_cast<std::size_t>(r.octave)];
       const double rx = static_cast<double>(oblique.cols) / level.cols;
       const double ry = static_cast<double>(oblique.rows) / level.rows;
       const double x = (r.pt.x + 0.5) / rx - 0.5;

@@ -121,16 +121,16 @@ TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every 
   options.features = 1500;
   options.views.max_tilt = 1.0;
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
-  const auto features = extractor.extract(image);
+  std::vector<cv::Mat> pyramid;
+  const auto features = extractor.extract(image, cv::Mat(), pyramid);
   REQUIRE(features.size() == 1500);
   const cv::Mat mat = affine_orb::descriptors_to_mat(features.descriptors);
   REQUIRE(mat.rows == 1500);
   REQUIRE(mat.cols == 32);
 
-  std::vector<cv::Mat> smoothed(static_cast<std::size_t>(extractor.pyramid().levels()));
-  for (int l = 0; l < extractor.pyramid().levels(); ++l) {
-    cv::GaussianBlur(extractor.pyramid().level(l), smoothed[static_cast<std::size_t>(l)], cv::Size(7, 7), 2, 2,
-                     cv::BORDER_REFLECT_101);
+  std::vector<cv::Mat> smoothed(pyramid.size());
+  for (std::size_t l = 0; l < pyramid.size(); ++l) {
+    cv::GaussianBlur(pyramid[l], smoothed[l], cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
   }
   int angle_mismatch = 0;
   int bit_mismatch = 0;
@@ -138,7 +138,7 @@ TEST_CASE("rBRIEF bits and centroid angles equal the naive definitions on every 
     const cv::KeyPoint& kp = features.keypoints[i];
     const int level = kp.octave;
     // Back to the integer level position the keypoint was detected at.
-    const cv::Mat& level_image = extractor.pyramid().level(level);
+    const cv::Mat& level_image = pyramid[static_cast<std::size_t>(level)];
     const float sx = static_cast<float>(image.cols) / static_cast<float>(level_image.cols);
     const float sy = static_cast<float>(image.rows) / static_cast<float>(level_image.rows);
     const cv::Point2f p((kp.pt.x + 0.5f) / sx - 0.5f, (kp.pt.y + 0.5f) / sy - 0.5f);

@@ -257,13 +257,14 @@ Output expected_output(const cv::Mat& image, affine_orb::ImageKeypoints keypoint
   options.carry_shortfalls = false;
   options.views.max_tilt = 1.0;
   affine_orb::Extractor<Descriptor> plain(options);
-  const auto plain_features = plain.extract(image);
+  std::vector<cv::Mat> plain_pyramid;
+  const auto plain_features = plain.extract(image, cv::Mat(), plain_pyramid);
   options.views.max_tilt = max_tilt;
   affine_orb::Extractor<Descriptor> extractor(options);
   const auto features = extractor.extract(image);
   const std::vector<affine_orb::AffineView> views = extractor.views();
   const auto fits = [&](const cv::KeyPoint& kp, int o) {
-    const cv::Mat& level = plain.pyramid().level(o);
+    const cv::Mat& level = plain_pyramid[static_cast<std::size_t>(o)];
     const int u = cvRound(kp.pt.x * inverse_factors[static_cast<std::size_t>(o)]);
     const int v = cvRound(kp.pt.y * inverse_factors[static_cast<std::size_t>(o)]);
     return u >= 10 && v >= 10 && u < level.cols - 10 && v < level.rows - 10;

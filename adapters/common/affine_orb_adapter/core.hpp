@@ -399,9 +399,8 @@ class AdapterCore {
 
   template <class Descriptor>
   AdapterFrame convert(Extractor<Descriptor>& extractor, const cv::Mat& image, const cv::Mat& mask) const {
-    const Features<Descriptor::kBits> features = extractor.extract(image, mask);
     AdapterFrame frame;
-    for (const cv::Mat& level : extractor.pyramid().images()) frame.pyramid.push_back(level.clone());
+    const Features<Descriptor::kBits> features = extractor.extract(image, mask, frame.pyramid);
     // The extractor's octaves are ORB-SLAM's (the nearest scale, grouped, 0 first); the image's
     // keypoints come first within an octave.
     std::vector<std::size_t> picks;

@@ -88,12 +88,6 @@ class Extractor {
     return out;
   }
 
-  /// The pyramid of the original (untilted) image of the last extract() or extract_image() call.
-  const Pyramid& pyramid() const {
-    detail::require(!view_work_.empty() && !image_pyramid_.empty(), "Extractor::pyramid: extract() was not called yet");
-    return image_pyramid_;
-  }
-
   /// Keypoints (original pixel coordinates) and descriptors of a CV_8UC1 image (a ROI of a larger
   /// matrix is fine), every view at once; see Features for the keypoint fields.
   ///
@@ -116,6 +110,17 @@ class Extractor {
     }
     run_views(image, mask, 0, n_views);
     return assemble(0, n_views);
+  }
+
+  /// extract(), and the original image's pyramid, which the views and the snapping use too:
+  /// `levels[l]` receives a copy of level l, PyramidOptions::levels of them (cv::Mat::copyTo, so a
+  /// matrix that already has the level's size and type is written in place). For callers that keep
+  /// the pyramid, as ORB-SLAM's frames do.
+  Features<kBits> extract(const cv::Mat& image, const cv::Mat& mask, std::vector<cv::Mat>& levels) {
+    Features<kBits> features = extract(image, mask);
+    levels.resize(image_pyramid_.images().size());
+    for (std::size_t l = 0; l < levels.size(); ++l) image_pyramid_.images()[l].copyTo(levels[l]);
+    return features;
   }
 
   /// Views on demand, stage 0: the keypoints of the image alone, exactly extract()'s with
@@ -429,7 +434,7 @@ class Extractor {
   std::vector<int> octave_start_;  ///< buffer of assemble()
   cv::Size views_size_;
   std::vector<ViewWork> view_work_;
-  /// The image's pyramid, kept until the next call (pyramid(), CornerSnapOptions).
+  /// The image's pyramid, kept until the next call (the views' snapping, CornerSnapOptions).
   Pyramid image_pyramid_;
   /// ImageKeypoints of a fork: the buffers of the image's extraction.
   detail::ForkImageWork fork_;

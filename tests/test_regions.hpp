@@ -10,19 +10,19 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 
 namespace affine_orb::test {
 
 /// Whether pixel (x, y) belongs to `region`.
-inline bool in_region(const affine_orb::detail::RowSpans& region, int x, int y) {
+inline bool in_region(const affine_orb::RowSpans& region, int x, int y) {
   const auto [b, e] = region.run(y);
   return x >= b && x < e;
 }
 
 /// A rotated quadrilateral region, at least `inset` pixels inside the image.
-inline affine_orb::detail::RowSpans quad_region(cv::Size size, double angle_degrees, int inset) {
-  affine_orb::detail::RowSpans region;
+inline affine_orb::RowSpans quad_region(cv::Size size, double angle_degrees, int inset) {
+  affine_orb::RowSpans region;
   region.reset(0, size.height);
   const double a = angle_degrees * CV_PI / 180.0;
   const cv::Point2d centre(size.width / 2.0, size.height / 2.0);

@@ -18,19 +18,11 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
+#include "affine_orb/detection/corner.hpp"
 #include "affine_orb/detection/detail/fast.hpp"
 
 namespace affine_orb {
-
-/// Radius of the FAST circle in pixels: a pixel closer than this to the image border has no score.
-using detail::kFastRadius;
-/// The 16 circle offsets (dx, dy), clockwise from the top, as in Rosten & Drummond (2006), fig. 1.
-using detail::kFastCircle;
-
-/// A region given as one run of columns per row (detail/row_spans.hpp), for detection restricted
-/// to the part of a simulated view that maps inside the original image.
-using RowSpans = detail::RowSpans;
 
 /// FAST score of the pixel at `p` (pointer into a CV_8UC1 image with row step `step` bytes); the
 /// caller guarantees the 7x7 neighbourhood is inside the image.
@@ -72,9 +64,6 @@ inline void fast_score_spans(const cv::Mat& image, const RowSpans& region, int t
                   "fast_score_spans: the score map must be CV_8UC1 of the image size");
   detail::score_spans(image, region, threshold, scores);
 }
-
-/// A detected corner: integer pixel position in the image it was detected in, and its FAST score.
-using detail::Corner;
 
 /// Non-maximum suppression on a score map: the pixels of `roi` whose score is at least `threshold`
 /// and a local maximum of their 3x3 neighbourhood, in raster order. Ties are broken in raster

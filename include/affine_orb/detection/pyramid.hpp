@@ -13,7 +13,7 @@
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/detection/detail/opencv_resize.hpp"
 #include "affine_orb/detection/detail/resize.hpp"
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 
 namespace affine_orb {
 
@@ -76,7 +76,7 @@ class Pyramid {
   /// Computes levels 1… from the level 0 filled after level0(). With `regions` (one per level,
   /// regions[0] unused), level l >= 1 is computed only on the runs of regions[l], the rest of each
   /// row repeating its nearest computed pixel (see detail::resize_bilinear()).
-  void build_from_level0(const std::vector<detail::RowSpans>* regions = nullptr) {
+  void build_from_level0(const std::vector<RowSpans>* regions = nullptr) {
     detail::require(!levels_.empty() && !levels_[0].empty(), "Pyramid::build_from_level0: call level0() first");
     detail::require(regions == nullptr || static_cast<int>(regions->size()) == options_.levels,
                     "Pyramid::build_from_level0: one region per level expected");

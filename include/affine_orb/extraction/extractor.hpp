@@ -20,7 +20,7 @@
 
 #include "affine_orb/core/detail/buffer.hpp"
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/detail/worker_pool.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/descriptors/descriptor.hpp"

@@ -19,7 +19,7 @@
 
 #include "affine_orb/core/detail/buffer.hpp"
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/views/detail/view_render.hpp"
 
 namespace affine_orb {
@@ -184,7 +184,7 @@ class ViewRenderer {
   /// columns of each row's run are computed (the whole row where the run is empty), and the other
   /// pixels of the row repeat the nearest computed one. `scratch` holds one canvas row (grown to the
   /// widest row it has held, so that views of several sizes share it without reallocating).
-  void render(const cv::Mat& image, const detail::RowSpans* region, cv::Mat& scratch, cv::Mat& out) const {
+  void render(const cv::Mat& image, const RowSpans* region, cv::Mat& scratch, cv::Mat& out) const {
     detail::require_gray8(image, "render_view");
     if (view_.is_identity()) {
       image.copyTo(out);

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Internals (namespace detail, not part of the API): the FAST circle, the arc-strength score (scalar reference, SSE2
+/// Internals (namespace detail, not part of the API): the arc-strength score (scalar reference, SSE2
 /// or NEON and AVX2 lanes) and the row-wise non-maximum suppression behind detection/fast.hpp. The AVX2 rows run where
 /// the CPU has AVX2, chosen per row (core/detail/simd.hpp).
 
@@ -13,39 +13,12 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/detail/simd.hpp"
+#include "affine_orb/detection/corner.hpp"
 
 namespace affine_orb {
 namespace detail {
-
-/// Radius of the FAST circle in pixels: a pixel closer than this to the image border has no score.
-inline constexpr int kFastRadius = 3;
-
-/// The 16 circle offsets (dx, dy), clockwise from the top, as in Rosten & Drummond (2006), fig. 1.
-inline constexpr std::array<std::array<int, 2>, 16> kFastCircle = {{{0, -3},
-                                                                    {1, -3},
-                                                                    {2, -2},
-                                                                    {3, -1},
-                                                                    {3, 0},
-                                                                    {3, 1},
-                                                                    {2, 2},
-                                                                    {1, 3},
-                                                                    {0, 3},
-                                                                    {-1, 3},
-                                                                    {-2, 2},
-                                                                    {-3, 1},
-                                                                    {-3, 0},
-                                                                    {-3, -1},
-                                                                    {-2, -2},
-                                                                    {-1, -3}}};
-
-/// A detected corner: integer pixel position in the image it was detected in, and its FAST score.
-struct Corner {
-  int x = 0;
-  int y = 0;
-  int score = 0;
-};
 
 /// Arc strength of a pixel from its 16 circle differences d_k >= 0 (saturated at 0): the largest
 /// value v such that some 9 contiguous d_k are all >= v. For d_k = max(I_k − I_p, 0) (bright) or

@@ -20,7 +20,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/detail/simd.hpp"
 
 namespace affine_orb::detail {

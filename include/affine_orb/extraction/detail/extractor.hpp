@@ -13,7 +13,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/descriptors/descriptor.hpp"
 #include "affine_orb/detection/detector.hpp"

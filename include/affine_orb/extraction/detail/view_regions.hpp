@@ -10,7 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/views/affine_views.hpp"
-#include "affine_orb/core/detail/row_spans.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/detection/pyramid.hpp"
 
 namespace affine_orb::detail {

@@ -10,7 +10,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace affine_orb::detail {
+namespace affine_orb {
 
 /// Rows [y0, y0 + rows()), row y0 + i holding the columns [begin[i], end[i]) (empty when
 /// begin[i] >= end[i]); pixel coordinates of the image the region belongs to.
@@ -99,4 +99,4 @@ struct RowSpans {
   }
 };
 
-}  // namespace affine_orb::detail
+}  // namespace affine_orb

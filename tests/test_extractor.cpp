@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
+#include <tuple>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -169,13 +171,62 @@ TEST_CASE("extraction is deterministic across runs and instances") {
   }
 }
 
-TEST_CASE("Harris ranking gives the budget too") {
+TEST_CASE("Harris ranking gives the budget, ranked by the Harris response") {
+  // ScoreType::kHarris ranks the candidates by the Harris response on a 7x7 block with k = 0.04
+  // (detection/harris.hpp), and a keypoint's response is its ranking score. The reference is
+  // cv::cornerHarris on each level of the image's pyramid with those parameters: its Sobel
+  // derivatives are divided by 4·7·255 instead of 8·255, so its response is (28/8)^4 times
+  // smaller. Harris ranking must spend the budget on other keypoints than FAST ranking, ones of
+  // a larger Harris response.
+  const cv::Mat image = affine_orb::test::textured_photo();
   affine_orb::ExtractorOptions options;
   options.views.max_tilt = 1.0;
+  affine_orb::Extractor<affine_orb::Rbrief> fast_ranked(options);
   options.detector.score = affine_orb::ScoreType::kHarris;
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
-  const auto f = extractor.extract(affine_orb::test::textured_photo());
+  std::vector<cv::Mat> pyramid;
+  const auto f = extractor.extract(image, cv::Mat(), pyramid);
+  const auto by_fast = fast_ranked.extract(image);
   CHECK(f.size() == 1000);
+  REQUIRE(by_fast.size() == 1000);
+
+  std::vector<cv::Mat> reference(pyramid.size());
+  for (std::size_t l = 0; l < pyramid.size(); ++l) {
+    cv::cornerHarris(pyramid[l], reference[l], 7, 3, 0.04);
+    reference[l] *= std::pow(28.0 / 8.0, 4);
+  }
+  // The reference response at a keypoint's level pixel.
+  const auto harris_at = [&](const cv::KeyPoint& kp) {
+    const cv::Mat& level = pyramid[static_cast<std::size_t>(kp.octave)];
+    const double x = (kp.pt.x + 0.5) * level.cols / image.cols - 0.5;
+    const double y = (kp.pt.y + 0.5) * level.rows / image.rows - 0.5;
+    REQUIRE(std::abs(x - std::round(x)) < 1e-3);
+    REQUIRE(std::abs(y - std::round(y)) < 1e-3);
+    return static_cast<double>(reference[static_cast<std::size_t>(kp.octave)].at<float>(cvRound(y), cvRound(x)));
+  };
+  double largest = 0.0;
+  for (const cv::KeyPoint& kp : f.keypoints) largest = std::max(largest, std::abs(harris_at(kp)));
+  REQUIRE(largest > 0.0);
+  double worst = 0.0;
+  double harris_sum = 0.0;
+  for (const cv::KeyPoint& kp : f.keypoints) {
+    const double r = harris_at(kp);
+    worst = std::max(worst, std::abs(kp.response - r) / largest);
+    harris_sum += r;
+  }
+  double fast_sum = 0.0;
+  for (const cv::KeyPoint& kp : by_fast.keypoints) fast_sum += harris_at(kp);
+  std::set<std::tuple<int, float, float>> fast_keypoints;
+  for (const cv::KeyPoint& kp : by_fast.keypoints) fast_keypoints.insert({kp.octave, kp.pt.x, kp.pt.y});
+  int not_fast = 0;
+  for (const cv::KeyPoint& kp : f.keypoints) not_fast += fast_keypoints.count({kp.octave, kp.pt.x, kp.pt.y}) == 0;
+  MESSAGE("Harris ranking: responses within " << worst << " of the largest of cv::cornerHarris; " << not_fast
+                                              << " of 1000 keypoints not chosen by FAST ranking; mean Harris response "
+                                              << harris_sum / 1000 << " against " << fast_sum / 1000
+                                              << " under FAST ranking");
+  CHECK(worst < 1e-5);
+  CHECK(not_fast >= 500);
+  CHECK(harris_sum > 1.2 * fast_sum);
 }
 
 TEST_CASE("rotation by 90 degrees in software: most rBRIEF keypoints match correctly") {

@@ -14,6 +14,7 @@
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/detection/distribution.hpp"
 #include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 #include "test_data.hpp"
 #include "test_regions.hpp"
 
@@ -274,6 +275,7 @@ TEST_CASE("the strongest spreading gives the budget and more matches; the quadtr
   strongest.spreading = affine_orb::Spreading::kStrongest;
   const auto spread = affine_orb::Extractor<affine_orb::Rbrief>(options).extract(image);
   const auto strong = affine_orb::Extractor<affine_orb::Rbrief>(strongest).extract(image);
+  REQUIRE(spread.size() == 1000);
   CHECK(strong.size() == 1000);
   double spread_mean = 0.0;
   double strong_mean = 0.0;
@@ -289,4 +291,22 @@ TEST_CASE("the strongest spreading gives the budget and more matches; the quadtr
   }
   CHECK(strong_mean > spread_mean);
   CHECK(spread_cells.size() > strong_cells.size());
+
+  // More matches: graf 1 -> 3 matched (match_features()), correct within 3 px of the ground truth.
+  const cv::Mat other = affine_orb::test::graf(3);
+  const cv::Matx33d h = affine_orb::test::graf_homography_1to3();
+  const auto correct_matches = [&](const affine_orb::ExtractorOptions& o, const affine_orb::Features<256>& a) {
+    const auto b = affine_orb::Extractor<affine_orb::Rbrief>(o).extract(other);
+    int correct = 0;
+    for (const auto& m : affine_orb::match_features(a, b)) {
+      const cv::Point2d p = affine_orb::test::apply_homography(h, a.keypoints[static_cast<std::size_t>(m.query)].pt);
+      const cv::Point2f q = b.keypoints[static_cast<std::size_t>(m.train)].pt;
+      correct += std::hypot(p.x - q.x, p.y - q.y) < 3.0;
+    }
+    return correct;
+  };
+  const int spread_matches = correct_matches(options, spread);
+  const int strong_matches = correct_matches(strongest, strong);
+  MESSAGE("graf 1->3 correct matches: quadtree " << spread_matches << ", strongest " << strong_matches);
+  CHECK(strong_matches > spread_matches);
 }

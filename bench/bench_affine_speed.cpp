@@ -400,7 +400,7 @@ int main(int argc, char** argv) {
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
   const auto f1 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png"));
   const auto f3 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img3.png"));
-  std::printf("Accuracy, graf 1 -> 3 at full size, %d affine features per image, kKeepAll, ratio 0.8: ", kAffineFeatures);
+  std::printf("Accuracy, graf 1 -> 3 at full size, %d affine features per image, duplicates kept, ratio 0.8: ", kAffineFeatures);
   std::printf("%d distinct correct matches (< 3 px, 2-px cells)\n",
               distinct_correct(f1, f3, read_homography(data + "/oxford/graf/H1to3p")));
   return 0;

@@ -325,8 +325,8 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
   constexpr int kSampleSize = Estimator::kSampleSize;
   static_assert(kSampleSize >= 1, "an estimator needs a positive sample size");
   options.check();
-  detail::require(draw_size >= kSampleSize, "ransac: draw_size must be >= the estimator's sample size (" +
-                                                std::to_string(kSampleSize) + "), got " + std::to_string(draw_size));
+  detail::require_range(draw_size, {static_cast<double>(kSampleSize), std::numeric_limits<int>::max()},
+                        "ransac: draw_size (at least the estimator's sample size)");
 
   const std::size_t n = estimator.size();
   RansacResult<Model> result;

@@ -170,8 +170,12 @@ class Rbrief {
   /// would be undefined).
   BinaryDescriptor<kBits> describe(const LevelData& data, cv::Point2f pt, float angle) const {
     detail::require(std::isfinite(angle), "Rbrief::describe: the angle is not finite");
-    const float a = std::cos(angle);
-    const float b = std::sin(angle);
+    return describe_rotated(data, pt, std::cos(angle), std::sin(angle));
+  }
+
+  /// describe() with the rotation given by its cosine `a` and sine `b` (finite), for callers whose
+  /// reference computes them otherwise than std::cos and std::sin (stella_vslam's approximations).
+  BinaryDescriptor<kBits> describe_rotated(const LevelData& data, cv::Point2f pt, float a, float b) const {
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(data.smoothed.step[0]);
     const std::uint8_t* center = data.smoothed.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x);
     // Byte offsets of the rotated test points: offset = round(x sin + y cos)·step + round(x cos − y sin).

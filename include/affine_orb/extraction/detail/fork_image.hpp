@@ -197,13 +197,13 @@ inline void interior_maxima(const cv::Mat& scores, int y, int x0, int x1, std::v
   interior_maxima_scalar(scores, y, x0, x1, maxima);
 }
 
-/// Appends to `points` (level pixels relative to the region's corner) and `responses` the corners
-/// cv::FAST with non-maximum suppression finds on the image of one cell (`cell`: its scored pixels,
-/// level coordinates) at `initial_threshold`, or at `min_threshold` where that finds none, in
-/// raster order, from the level's score map `scores` (scores of at least min_threshold, 0
+/// Appends to `points` (level pixels relative to the region's corner `origin`) and `responses` the
+/// corners cv::FAST with non-maximum suppression finds on the image of one cell (`cell`: its scored
+/// pixels, level coordinates) at `initial_threshold`, or at `min_threshold` where that finds none,
+/// in raster order, from the level's score map `scores` (scores of at least min_threshold, 0
 /// elsewhere). `maxima` is a buffer for the cell's local maxima.
-inline void suppress_in_cell(const cv::Mat& scores, cv::Rect cell, int initial_threshold, int min_threshold,
-                             std::vector<Corner>& maxima, std::vector<cv::Point2f>& points,
+inline void suppress_in_cell(const cv::Mat& scores, cv::Rect cell, cv::Point origin, int initial_threshold,
+                             int min_threshold, std::vector<Corner>& maxima, std::vector<cv::Point2f>& points,
                              std::vector<float>& responses) {
   maxima.clear();
   const int last_x = cell.x + cell.width - 1;
@@ -222,7 +222,7 @@ inline void suppress_in_cell(const cv::Mat& scores, cv::Rect cell, int initial_t
   const int threshold = strong ? initial_threshold : min_threshold;
   for (const Corner& c : maxima) {
     if (c.score < threshold) continue;
-    points.emplace_back(static_cast<float>(c.x - kForkRegionBorder), static_cast<float>(c.y - kForkRegionBorder));
+    points.emplace_back(static_cast<float>(c.x - origin.x), static_cast<float>(c.y - origin.y));
     responses.push_back(static_cast<float>(c.score));
   }
 }
@@ -245,7 +245,8 @@ inline void detect_in_fork_cells(const cv::Mat& level, const ForkCells& cells, i
     for (int j = 0; j < cells.columns; ++j) {
       const cv::Rect cell = cells.scored(i, j);
       if (cell.width <= 0 || cell.height <= 0) continue;
-      suppress_in_cell(scores, cell, initial_threshold, min_threshold, maxima, points, responses);
+      suppress_in_cell(scores, cell, cv::Point(kForkRegionBorder, kForkRegionBorder), initial_threshold, min_threshold,
+                       maxima, points, responses);
     }
   }
 }
@@ -261,12 +262,16 @@ struct ForkImageWork {
   std::vector<int> kept;
 };
 
-/// Whether a descriptor policy gives the orientation in degrees too (Rbrief: the fork's angle).
+/// Whether a descriptor policy gives the orientation in degrees too and describes under a rotation
+/// given by its cosine and sine (Rbrief: the fork's angle and bits).
 template <class D, class = void>
 struct HasOrientationDegrees : std::false_type {};
 template <class D>
-struct HasOrientationDegrees<D, std::void_t<decltype(std::declval<const D&>().orientation_degrees(
-                                    std::declval<const typename D::LevelData&>(), cv::Point2f()))>>
+struct HasOrientationDegrees<
+    D, std::void_t<decltype(std::declval<const D&>().orientation_degrees(std::declval<const typename D::LevelData&>(),
+                                                                         cv::Point2f())),
+                   decltype(std::declval<const D&>().describe_rotated(std::declval<const typename D::LevelData&>(),
+                                                                      cv::Point2f(), 0.0f, 0.0f))>>
     : std::true_type {};
 
 /// Drops the candidates of level l whose level-0 position p·s^l the mask pixel nearest to it masks.
@@ -287,6 +292,52 @@ inline void drop_masked(const cv::Mat& mask, float factor, std::vector<cv::Point
   responses.resize(n);
 }
 
+/// ORB-SLAM's rotation of the rBRIEF pattern for a keypoint angle in degrees: the cosine and sine
+/// (std::cos, std::sin in float) of the angle in radians.
+struct OrbRotation {
+  std::pair<float, float> operator()(float degrees) const {
+    const float radians = degrees_to_steering(degrees);
+    return {std::cos(radians), std::sin(radians)};
+  }
+};
+
+/// Appends to `out` the keypoints `kept` (indices into `points`, level pixels relative to the
+/// level's `corner`, and `responses`) of pyramid level l (`level`, scale `factor`) as the forks
+/// return them: angle on the level, rBRIEF bits under `rotation` (the cosine and sine of an angle in
+/// degrees; other descriptors steer by the angle in radians), position p·s^l, size trunc(31·s^l),
+/// octave l. `describe_points` and `data` are the thread's buffers.
+template <class Descriptor, int Bits, class Rotation>
+void append_fork_keypoints(const Descriptor& descriptor, const cv::Mat& level, int l, float factor, cv::Point2f corner,
+                           const std::vector<int>& kept, const std::vector<cv::Point2f>& points,
+                           const std::vector<float>& responses, Rotation rotation,
+                           std::vector<cv::Point2f>& describe_points, typename Descriptor::LevelData& data,
+                           LevelWork<Bits>& out) {
+  describe_points.clear();
+  for (int k : kept) describe_points.push_back(points[static_cast<std::size_t>(k)] + corner);
+  descriptor.prepare(level, describe_points, data);
+  const float size = static_cast<float>(static_cast<int>(kForkPatchSize * factor));
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    const cv::Point2f p = describe_points[i];
+    float degrees = 0.0f;
+    if constexpr (HasOrientationDegrees<Descriptor>::value) {
+      degrees = descriptor.orientation_degrees(data, p);
+      const std::pair<float, float> r = rotation(degrees);
+      out.descriptors.push_back(descriptor.describe_rotated(data, p, r.first, r.second));
+    } else {
+      const float steering = descriptor.orientation(data, p);
+      degrees = radians_to_degrees_0_360(steering);
+      out.descriptors.push_back(descriptor.describe(data, p, steering));
+    }
+    const cv::Point2f position = l == 0 ? p : cv::Point2f(p.x * factor, p.y * factor);
+    const float response = responses[static_cast<std::size_t>(kept[i])];
+    out.keypoints.emplace_back(position, size, degrees, response, l);
+    out.original_points.push_back(position);
+    out.responses.push_back(response);
+  }
+  out.kept.resize(out.keypoints.size());
+  std::iota(out.kept.begin(), out.kept.end(), 0);
+}
+
 /// The fork's keypoints of pyramid level l (`level`) into `out`, in the octree's order, described
 /// by `descriptor` (file comment); `describe_points` and `data` are the thread's buffers.
 template <class Descriptor, int Bits>
@@ -303,31 +354,9 @@ void extract_fork_level(const Descriptor& descriptor, const cv::Mat& level, int 
   distribute_octree(work.points, work.responses, cells.width, cells.height, work.scales.budgets[li], flavour.ties,
                     work.octree, work.kept);
   if (work.kept.empty()) return;
-  describe_points.clear();
   const cv::Point2f corner(static_cast<float>(kForkRegionBorder), static_cast<float>(kForkRegionBorder));
-  for (int k : work.kept) describe_points.push_back(work.points[static_cast<std::size_t>(k)] + corner);
-  descriptor.prepare(level, describe_points, data);
-  const float size = static_cast<float>(static_cast<int>(kForkPatchSize * factor));
-  for (std::size_t i = 0; i < work.kept.size(); ++i) {
-    const cv::Point2f p = describe_points[i];
-    float degrees = 0.0f;
-    float steering = 0.0f;
-    if constexpr (HasOrientationDegrees<Descriptor>::value) {
-      degrees = descriptor.orientation_degrees(data, p);
-      steering = degrees_to_steering(degrees);
-    } else {
-      steering = descriptor.orientation(data, p);
-      degrees = radians_to_degrees_0_360(steering);
-    }
-    out.descriptors.push_back(descriptor.describe(data, p, steering));
-    const cv::Point2f position = l == 0 ? p : cv::Point2f(p.x * factor, p.y * factor);
-    const float response = work.responses[static_cast<std::size_t>(work.kept[i])];
-    out.keypoints.emplace_back(position, size, degrees, response, l);
-    out.original_points.push_back(position);
-    out.responses.push_back(response);
-  }
-  out.kept.resize(out.keypoints.size());
-  std::iota(out.kept.begin(), out.kept.end(), 0);
+  append_fork_keypoints(descriptor, level, l, factor, corner, work.kept, work.points, work.responses, OrbRotation{},
+                        describe_points, data, out);
 }
 
 /// The fork's flavour of ExtractorOptions::image_keypoints (kOrbSlam2 or kOrbSlam3).

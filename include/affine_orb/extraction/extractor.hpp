@@ -30,6 +30,7 @@
 #include "affine_orb/detection/pyramid.hpp"
 #include "affine_orb/extraction/detail/extractor.hpp"
 #include "affine_orb/extraction/detail/fork_image.hpp"
+#include "affine_orb/extraction/detail/stella_image.hpp"
 #include "affine_orb/extraction/detail/view_regions.hpp"
 #include "affine_orb/extraction/detail/view_schedule.hpp"
 #include "affine_orb/extraction/extractor_options.hpp"
@@ -92,13 +93,16 @@ class Extractor {
   /// matrix is fine), every view at once; see Features for the keypoint fields.
   ///
   /// `mask`: empty (everything allowed) or CV_8UC1 of the image size; a keypoint is kept only where
-  /// the mask pixel nearest to its original position is non-zero.
+  /// the mask pixel nearest to its original position is non-zero (under ImageKeypoints::kStellaVslam
+  /// the image's keypoints follow stella_vslam's own mask test, detail/stella_image.hpp, and without
+  /// a mask StellaVslamOptions::mask_rectangles is the mask).
   ///
   /// Throws std::invalid_argument for an empty image, a type other than CV_8UC1, or a mask of the
   /// wrong size or type. A valid image with no corners (flat, or smaller than the descriptor
   /// support on every level) gives an empty result.
   Features<kBits> extract(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
     begin(image, mask);
+    const cv::Mat& active_mask = effective_mask(image.size(), mask);
     const int n_views = static_cast<int>(view_work_.size());
     if (additive()) {
       budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
@@ -108,7 +112,7 @@ class Extractor {
     } else {
       budgets_.share(tilts_, 0, n_views, options_.features, -1.0, options_.pyramid.scale_factor);
     }
-    run_views(image, mask, 0, n_views);
+    run_views(image, active_mask, 0, n_views);
     return assemble(0, n_views);
   }
 
@@ -131,9 +135,10 @@ class Extractor {
   StagedFeatures<Descriptor> extract_image(const cv::Mat& image, const cv::Mat& mask = cv::Mat()) {
     detail::require(additive(), "Extractor::extract_image: views on demand need the AdditiveBudget view_budget");
     begin(image, mask);
+    const cv::Mat& active_mask = effective_mask(image.size(), mask);
     budgets_.set_view(0, options_.features, options_.pyramid.scale_factor);
-    run_views(image, mask, 0, 1);
-    return StagedFeatures<Descriptor>{assemble(0, 1), ViewSession<Descriptor>(this, image, mask)};
+    run_views(image, active_mask, 0, 1);
+    return StagedFeatures<Descriptor>{assemble(0, 1), ViewSession<Descriptor>(this, image, active_mask)};
   }
 
  private:
@@ -188,6 +193,16 @@ class Extractor {
                      options_.merge_duplicates->repeat_levels);
   }
 
+  /// The mask of an extraction: the caller's, or under ImageKeypoints::kStellaVslam without one
+  /// StellaVslamOptions::mask_rectangles' (detail::stella_rectangle_mask()), or none.
+  const cv::Mat& effective_mask(cv::Size size, const cv::Mat& mask) {
+    if (!mask.empty() || options_.image_keypoints != ImageKeypoints::kStellaVslam ||
+        options_.stella_vslam.mask_rectangles.empty()) {
+      return mask;
+    }
+    return detail::stella_rectangle_mask(options_.stella_vslam.mask_rectangles, size, stella_.rectangle_mask);
+  }
+
   /// Steps 1–5 for views [first, last), whose budgets are set: every view processed (in parallel,
   /// taking turns in view order), then the final selection of the shortlisted ones.
   void run_views(const cv::Mat& image, const cv::Mat& mask, int first, int last) {
@@ -229,12 +244,17 @@ class Extractor {
   }
 
   /// ExtractorOptions::image_keypoints of a fork: the image's keypoints as the fork extracts them
-  /// (detail::extract_fork_level()) on its pyramid, then, in view 0's turn, entered in the repeat
+  /// (detail::extract_fork_level(), detail::extract_stella_level()) on its pyramid, then, in view 0's turn, entered in the repeat
   /// grids for the views.
   void process_fork_image(const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
     try {
-      detail::extract_fork_image(descriptor_, image, mask, options_, image_pyramid_, fork_, work.describe_points,
-                                 work.descriptor_data, view_work_[0].levels);
+      if (options_.image_keypoints == ImageKeypoints::kStellaVslam) {
+        detail::extract_stella_image(descriptor_, image, mask, options_, image_pyramid_, fork_, stella_,
+                                     work.describe_points, work.descriptor_data, view_work_[0].levels);
+      } else {
+        detail::extract_fork_image(descriptor_, image, mask, options_, image_pyramid_, fork_, work.describe_points,
+                                   work.descriptor_data, view_work_[0].levels);
+      }
       if (!turns_->wait(0)) return;
       if (merging()) enter_kept(0);
       turns_->pass(0);
@@ -438,6 +458,8 @@ class Extractor {
   Pyramid image_pyramid_;
   /// ImageKeypoints of a fork: the buffers of the image's extraction.
   detail::ForkImageWork fork_;
+  /// ImageKeypoints::kStellaVslam: its grid and rectangle mask.
+  detail::StellaImageWork stella_;
   /// Per worker thread: the buffers views are processed in.
   std::vector<ThreadWork> thread_work_;
   std::unique_ptr<detail::ViewTurns> turns_;

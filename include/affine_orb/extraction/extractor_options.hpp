@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/detection/detector.hpp"
@@ -40,6 +41,45 @@ enum class ImageKeypoints {
   /// ORB-SLAM3's (v1.0, shanpenghui/ORB_SLAM3_Fixed 060181f): as kOrbSlam2 with 35-pixel cells and
   /// ORB-SLAM3's node order (left edge).
   kOrbSlam3,
+  /// stella_vslam's orb_extractor (stella-cv/stella_vslam b0e60d6), keypoint for keypoint in its
+  /// order, with its rBRIEF bits under Rbrief: cv::resize pyramid, FAST in 64-pixel cells, of each
+  /// grid cell of `stella_vslam.min_size` the strongest keypoint, positions p·s^l
+  /// (extraction/detail/stella_image.hpp). Uses `pyramid`, the detector's thresholds and
+  /// `stella_vslam`; `features` sets only what the views add (AdditiveBudget), and the other detector
+  /// fields, `spreading`, `carry_shortfalls` and `subpixel` do not apply to the image's keypoints.
+  kStellaVslam,
+};
+
+/// A rectangle in which stella_vslam finds no keypoint (its Preprocessing.mask_rectangles), in
+/// fractions of the image's width (x) and height (y): 0 <= min < max <= 1.
+struct MaskRectangle {
+  float x_min = 0.0f;
+  float x_max = 1.0f;
+  float y_min = 0.0f;
+  float y_max = 1.0f;
+};
+
+/// stella_vslam's own extraction parameters (ImageKeypoints::kStellaVslam only; ignored otherwise).
+/// Its scale factor, levels and FAST thresholds are `pyramid` and `detector`'s.
+struct StellaVslamOptions {
+  /// Its Preprocessing.min_size: area in level-0 pixels² of the grid cells each of which keeps its
+  /// strongest keypoint, cells of side trunc(√min_size) level-0 pixels; [1, 100000000]; default 800
+  /// (stella_vslam's).
+  int min_size = 800;
+  /// Its Preprocessing.mask_rectangles: no keypoint in them (filled with cv::rectangle, LINE_AA,
+  /// as stella_vslam does), nor in a FAST cell with a corner in them; used only when extract() gets
+  /// no mask, and then as the views' mask too. Default none.
+  std::vector<MaskRectangle> mask_rectangles;
+
+  void check() const {
+    detail::require_range(min_size, {1.0, 100000000.0}, "StellaVslamOptions: min_size");
+    for (const MaskRectangle& r : mask_rectangles) {
+      detail::require_range(r.x_min, {0.0, 1.0}, "StellaVslamOptions: mask_rectangles x_min");
+      detail::require_range(r.y_min, {0.0, 1.0}, "StellaVslamOptions: mask_rectangles y_min");
+      detail::require_range(r.x_max, {r.x_min, 1.0, true}, "StellaVslamOptions: mask_rectangles x_max");
+      detail::require_range(r.y_max, {r.y_min, 1.0, true}, "StellaVslamOptions: mask_rectangles y_max");
+    }
+  }
 };
 
 /// The additive view budget (ExtractorOptions::view_budget): the image is extracted exactly as
@@ -109,6 +149,8 @@ struct ExtractorOptions {
   /// Whose extraction the image's keypoints are; the views are affine_orb's either way. A fork's
   /// needs AdditiveBudget. Default kAffineOrb.
   ImageKeypoints image_keypoints = ImageKeypoints::kAffineOrb;
+  /// stella_vslam's parameters, used under ImageKeypoints::kStellaVslam only.
+  StellaVslamOptions stella_vslam;
   /// The scale pyramid of the image and of every view.
   PyramidOptions pyramid;
   /// FAST thresholds, cells and ranking.
@@ -162,10 +204,11 @@ struct ExtractorOptions {
     views.check();
     if (additive_budget()) additive_budget()->check();
     detail::require(image_keypoints == ImageKeypoints::kAffineOrb || image_keypoints == ImageKeypoints::kOrbSlam2 ||
-                        image_keypoints == ImageKeypoints::kOrbSlam3,
+                        image_keypoints == ImageKeypoints::kOrbSlam3 || image_keypoints == ImageKeypoints::kStellaVslam,
                     "ExtractorOptions: image_keypoints is invalid");
     detail::require(image_keypoints == ImageKeypoints::kAffineOrb || additive_budget(),
                     "ExtractorOptions: image_keypoints: a fork's keypoints need the AdditiveBudget view_budget");
+    stella_vslam.check();
     if (merge_duplicates) merge_duplicates->check();
     if (snap_to_corners) snap_to_corners->check();
     detail::require_range(shortlist, {1.0, 64.0}, "ExtractorOptions: shortlist");

@@ -5,6 +5,7 @@ set -euo pipefail
 packages=(cmake ninja-build g++ clang libclang-rt-14-dev pkg-config libopencv-dev libeigen3-dev doctest-dev opencv-doc
           pybind11-dev python3-dev python3-numpy python3-opencv python3-pytest
           libbenchmark-dev  # bench_stages (Google Benchmark)
+          libyaml-cpp-dev nlohmann-json3-dev libspdlog-dev  # stella_vslam's stock extractor (tests/stock)
           dpkg-dev file)  # the last two for cpack's Debian packages (dpkg-shlibdeps, file)
 missing=()
 for p in "${packages[@]}"; do

@@ -3,6 +3,9 @@
 // fork's ORBextractor compiled from ../shared/slam/stock_extractors, one thread, interleaved frame by
 // frame, on the KITTI 00 frames (every 10th of 160, 1241x376) at ORB-SLAM's KITTI budget (2000) and
 // its monocular initialiser's (2x, 5x), and on the six Oxford first images at 1000.
+// stella_vslam's rows (where its extractor was built, tests/stock/stock_stella.hpp) compare
+// ImageKeypoints::kStellaVslam with its orb_extractor on the same frames at its default min_size
+// (800) and smaller ones (more keypoints); its extraction does not depend on the heap.
 // Per row: median milliseconds per frame of each over the rounds, their ratio, and how many of the
 // fork's keypoints affine_orb returns identically (position, octave, angle, size, response, row, at
 // the same index) with the fork's octree ordering nodes of equal size by creation (tests/stock:
@@ -15,6 +18,7 @@
 #include <cstring>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -24,6 +28,9 @@
 #include "affine_orb/extraction/extractor.hpp"
 #include "bench_common.hpp"
 #include "stock_extractor.hpp"
+#if AFFINE_ORB_STOCK_STELLA
+#include "stock_stella.hpp"
+#endif
 
 namespace {
 
@@ -90,6 +97,33 @@ double elapsed_ms(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// Median milliseconds per frame of `stock` and `ours` over `rounds`, frame by frame interleaved.
+template <class Stock, class Ours>
+std::pair<double, double> time_interleaved(const std::vector<cv::Mat>& frames, int rounds, Stock stock, Ours ours) {
+  std::vector<double> stock_ms, ours_ms;
+  for (int r = 0; r < rounds; ++r) {
+    double s = 0.0, o = 0.0;
+    for (const cv::Mat& frame : frames) {
+      auto start = std::chrono::steady_clock::now();
+      stock(frame);
+      s += elapsed_ms(start);
+      start = std::chrono::steady_clock::now();
+      ours(frame);
+      o += elapsed_ms(start);
+    }
+    stock_ms.push_back(s / static_cast<double>(frames.size()));
+    ours_ms.push_back(o / static_cast<double>(frames.size()));
+  }
+  return {affine_orb::bench::median(stock_ms), affine_orb::bench::median(ours_ms)};
+}
+
+void print_row(const char* fork, const Workload& w, std::pair<double, double> ms, std::size_t total, std::size_t same,
+               std::size_t common, std::size_t self) {
+  const auto percent = [total](std::size_t n) { return 100.0 * static_cast<double>(n) / static_cast<double>(total); };
+  std::printf("| %s | %s, %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f |\n", fork, w.name.c_str(), w.features, ms.first,
+              ms.second, ms.second / ms.first, percent(same), percent(common), percent(self));
+}
+
 void run(Fork fork, const Workload& w, int rounds) {
   affine_orb::ExtractorOptions options;
   options.features = w.features;
@@ -111,27 +145,36 @@ void run(Fork fork, const Workload& w, int rounds) {
     common += shared(keys(system1.keypoints, system1.descriptors), mine);
     self += shared(keys(system1.keypoints, system1.descriptors), keys(system2.keypoints, system2.descriptors));
   }
-  std::vector<double> stock_ms, ours_ms;
-  for (int r = 0; r < rounds; ++r) {
-    double s = 0.0, o = 0.0;
-    for (const cv::Mat& frame : w.frames) {
-      auto start = std::chrono::steady_clock::now();
-      stock.extract(frame);
-      s += elapsed_ms(start);
-      start = std::chrono::steady_clock::now();
-      ours.extract(frame);
-      o += elapsed_ms(start);
-    }
-    stock_ms.push_back(s / static_cast<double>(w.frames.size()));
-    ours_ms.push_back(o / static_cast<double>(w.frames.size()));
-  }
-  const double s = affine_orb::bench::median(stock_ms);
-  const double o = affine_orb::bench::median(ours_ms);
-  const auto percent = [total](std::size_t n) { return 100.0 * static_cast<double>(n) / static_cast<double>(total); };
-  std::printf("| %s | %s, %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f |\n",
-              fork == Fork::kOrbSlam2 ? "ORB-SLAM2" : "ORB-SLAM3", w.name.c_str(), w.features, s, o, o / s,
-              percent(same), percent(common), percent(self));
+  const auto ms = time_interleaved(w.frames, rounds, [&](const cv::Mat& f) { stock.extract(f); },
+                                   [&](const cv::Mat& f) { ours.extract(f); });
+  print_row(fork == Fork::kOrbSlam2 ? "ORB-SLAM2" : "ORB-SLAM3", w, ms, total, same, common, self);
 }
+
+#if AFFINE_ORB_STOCK_STELLA
+/// stella_vslam's row: Workload::features is its min_size.
+void run_stella(const Workload& w, int rounds) {
+  affine_orb::ExtractorOptions options;
+  options.views.max_tilt = 1.0;
+  options.image_keypoints = affine_orb::ImageKeypoints::kStellaVslam;
+  options.stella_vslam.min_size = w.features;
+  affine_orb::Extractor<affine_orb::Rbrief> ours(options);
+  affine_orb::stock::StockStellaExtractor stock(1.2f, 8, 20, 7, static_cast<unsigned>(w.features));
+  std::size_t total = 0, same = 0, common = 0, self = 0;
+  for (const cv::Mat& frame : w.frames) {
+    const affine_orb::Features<256> f = ours.extract(frame);
+    const cv::Mat rows = affine_orb::descriptors_to_mat(f.descriptors);
+    const StockFrame first = stock.extract(frame);
+    const StockFrame second = stock.extract(frame);
+    total += first.keypoints.size();
+    same += identical(first, f.keypoints, rows);
+    common += shared(keys(first.keypoints, first.descriptors), keys(f.keypoints, rows));
+    self += shared(keys(first.keypoints, first.descriptors), keys(second.keypoints, second.descriptors));
+  }
+  const auto ms = time_interleaved(w.frames, rounds, [&](const cv::Mat& f) { stock.extract(f); },
+                                   [&](const cv::Mat& f) { ours.extract(f); });
+  print_row("stella_vslam", w, ms, total, same, common, self);
+}
+#endif
 
 }  // namespace
 
@@ -144,10 +187,15 @@ int main(int argc, char** argv) {
   const std::vector<cv::Mat> kitti = kitti00();
   const std::vector<Workload> workloads = {
       {"KITTI 00", kitti, 2000}, {"KITTI 00", kitti, 4000}, {"KITTI 00", kitti, 10000}, {"Oxford", oxford(), 1000}};
-  std::printf("| fork | frames, nfeatures | fork ms | affine_orb ms | ratio | identical %% | shared %% | stock vs itself %% |\n");
+  std::printf("| fork | frames, nfeatures (stella: min_size) | fork ms | affine_orb ms | ratio | identical %% | shared %% | stock vs itself %% |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const Fork fork : {Fork::kOrbSlam2, Fork::kOrbSlam3}) {
     for (const Workload& w : workloads) run(fork, w, rounds);
   }
+#if AFFINE_ORB_STOCK_STELLA
+  const std::vector<Workload> stella = {
+      {"KITTI 00", kitti, 800}, {"KITTI 00", kitti, 200}, {"KITTI 00", kitti, 50}, {"Oxford", oxford(), 800}};
+  for (const Workload& w : stella) run_stella(w, rounds);
+#endif
   return 0;
 }

@@ -261,6 +261,13 @@ int main(int argc, char** argv) {
   orbslam3.features = 5000;
   orbslam3.views.max_tilt = 2.83;
   hash_extraction<Rbrief>("ORB-SLAM3 keypoints 5000 + views", orbslam3, images);
+  ExtractorOptions stella = plain;
+  stella.image_keypoints = affine_orb::ImageKeypoints::kStellaVslam;
+  hash_extraction<Rbrief>("stella_vslam keypoints 800", stella, images);
+  hash_extraction<Rbrief>("stella_vslam keypoints 800, masked", stella, images, true);
+  stella.stella_vslam.mask_rectangles = {{0.0f, 1.0f, 0.8f, 1.0f}};
+  stella.views.max_tilt = 2.83;
+  hash_extraction<Rbrief>("stella_vslam 800, rect. + views", stella, images);
   hash_extraction<Brisk>("BRISK plain 1000", plain, images);
   hash_extraction<Brisk>("BRISK affine default", affine, images);
 

@@ -4,7 +4,7 @@
 // frame, on the KITTI 00 frames (every 10th of 160, 1241x376) at ORB-SLAM's KITTI budget (2000) and
 // its monocular initialiser's (2x, 5x), and on the six Oxford first images at 1000.
 // stella_vslam's rows (where its extractor was built, tests/stock/stock_stella.hpp) compare
-// ImageKeypoints::kStellaVslam with its orb_extractor on the same frames at its default min_size
+// StellaVslamKeypoints with its orb_extractor on the same frames at its default min_size
 // (800) and smaller ones (more keypoints); its extraction does not depend on the heap.
 // Per row: median milliseconds per frame of each over the rounds, their ratio, and how many of the
 // fork's keypoints affine_orb returns identically (position, octave, angle, size, response, row, at
@@ -128,8 +128,11 @@ void run(Fork fork, const Workload& w, int rounds) {
   affine_orb::ExtractorOptions options;
   options.features = w.features;
   options.views.max_tilt = 1.0;
-  options.image_keypoints =
-      fork == Fork::kOrbSlam2 ? affine_orb::ImageKeypoints::kOrbSlam2 : affine_orb::ImageKeypoints::kOrbSlam3;
+  if (fork == Fork::kOrbSlam2) {
+    options.image_keypoints = affine_orb::OrbSlam2Keypoints{};
+  } else {
+    options.image_keypoints = affine_orb::OrbSlam3Keypoints{};
+  }
   affine_orb::Extractor<affine_orb::Rbrief> ours(options);
   affine_orb::stock::StockExtractor stock(fork, w.features, 1.2f, 8, 20, 7);
   std::size_t total = 0, same = 0, common = 0, self = 0;
@@ -155,8 +158,9 @@ void run(Fork fork, const Workload& w, int rounds) {
 void run_stella(const Workload& w, int rounds) {
   affine_orb::ExtractorOptions options;
   options.views.max_tilt = 1.0;
-  options.image_keypoints = affine_orb::ImageKeypoints::kStellaVslam;
-  options.stella_vslam.min_size = w.features;
+  affine_orb::StellaVslamKeypoints stella;
+  stella.min_size = w.features;
+  options.image_keypoints = stella;
   affine_orb::Extractor<affine_orb::Rbrief> ours(options);
   affine_orb::stock::StockStellaExtractor stock(1.2f, 8, 20, 7, static_cast<unsigned>(w.features));
   std::size_t total = 0, same = 0, common = 0, self = 0;

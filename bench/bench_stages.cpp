@@ -420,13 +420,13 @@ void extract_fork_stock(benchmark::State& state, affine_orb::stock::Fork fork) {
   affine_orb::stock::StockExtractor extractor(fork, kPlainFeatures, 1.2f, 8, kThreshold, 7);
   for (auto _ : state) benchmark::DoNotOptimize(extractor.extract(image).keypoints.size());
 }
-BENCHMARK_CAPTURE(extract_fork_ours, orbslam2, affine_orb::ImageKeypoints::kOrbSlam2)
+BENCHMARK_CAPTURE(extract_fork_ours, orbslam2, affine_orb::ImageKeypoints{affine_orb::OrbSlam2Keypoints{}})
     ->Name("extract_orbslam2/ours")
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(extract_fork_stock, orbslam2, affine_orb::stock::Fork::kOrbSlam2)
     ->Name("extract_orbslam2/ORB_SLAM2::ORBextractor")
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(extract_fork_ours, orbslam3, affine_orb::ImageKeypoints::kOrbSlam3)
+BENCHMARK_CAPTURE(extract_fork_ours, orbslam3, affine_orb::ImageKeypoints{affine_orb::OrbSlam3Keypoints{}})
     ->Name("extract_orbslam3/ours")
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(extract_fork_stock, orbslam3, affine_orb::stock::Fork::kOrbSlam3)

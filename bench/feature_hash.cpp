@@ -253,19 +253,19 @@ int main(int argc, char** argv) {
   hash_extraction<Rbrief>("affine snapped to corners", snapped, images);
 
   ExtractorOptions orbslam2 = plain;
-  orbslam2.image_keypoints = affine_orb::ImageKeypoints::kOrbSlam2;
+  orbslam2.image_keypoints = affine_orb::OrbSlam2Keypoints{};
   hash_extraction<Rbrief>("ORB-SLAM2 keypoints 1000", orbslam2, images);
   hash_extraction<Rbrief>("ORB-SLAM2 keypoints 1000, masked", orbslam2, images, true);
   ExtractorOptions orbslam3 = orbslam2;
-  orbslam3.image_keypoints = affine_orb::ImageKeypoints::kOrbSlam3;
+  orbslam3.image_keypoints = affine_orb::OrbSlam3Keypoints{};
   orbslam3.features = 5000;
   orbslam3.views.max_tilt = 2.83;
   hash_extraction<Rbrief>("ORB-SLAM3 keypoints 5000 + views", orbslam3, images);
   ExtractorOptions stella = plain;
-  stella.image_keypoints = affine_orb::ImageKeypoints::kStellaVslam;
+  stella.image_keypoints = affine_orb::StellaVslamKeypoints{};
   hash_extraction<Rbrief>("stella_vslam keypoints 800", stella, images);
   hash_extraction<Rbrief>("stella_vslam keypoints 800, masked", stella, images, true);
-  stella.stella_vslam.mask_rectangles = {{0.0f, 1.0f, 0.8f, 1.0f}};
+  std::get<affine_orb::StellaVslamKeypoints>(stella.image_keypoints).mask_rectangles = {{0.0f, 1.0f, 0.8f, 1.0f}};
   stella.views.max_tilt = 2.83;
   hash_extraction<Rbrief>("stella_vslam 800, rect. + views", stella, images);
   hash_extraction<Brisk>("BRISK plain 1000", plain, images);

@@ -21,7 +21,6 @@ namespace {
 
 using affine_orb::Extractor;
 using affine_orb::ExtractorOptions;
-using affine_orb::ImageKeypoints;
 using affine_orb::Rbrief;
 using affine_orb::stock::Fork;
 using affine_orb::stock::Heap;
@@ -101,7 +100,11 @@ void check_identical(const std::vector<cv::Mat>& images) {
       ExtractorOptions options;
       options.features = nfeatures;
       options.views.max_tilt = 1.0;
-      options.image_keypoints = fork == Fork::kOrbSlam2 ? ImageKeypoints::kOrbSlam2 : ImageKeypoints::kOrbSlam3;
+      if (fork == Fork::kOrbSlam2) {
+        options.image_keypoints = affine_orb::OrbSlam2Keypoints{};
+      } else {
+        options.image_keypoints = affine_orb::OrbSlam3Keypoints{};
+      }
       Extractor<Rbrief> extractor(options);
       StockExtractor stock(fork, nfeatures, 1.2f, 8, 20, 7);
       std::size_t total = 0;
@@ -138,7 +141,7 @@ TEST_CASE("ORB-SLAM2 on the system heap: the keypoints its address order decides
     ExtractorOptions options;
     options.features = nfeatures;
     options.views.max_tilt = 1.0;
-    options.image_keypoints = ImageKeypoints::kOrbSlam2;
+    options.image_keypoints = affine_orb::OrbSlam2Keypoints{};
     Extractor<Rbrief> extractor(options);
     StockExtractor stock(Fork::kOrbSlam2, nfeatures, 1.2f, 8, 20, 7);
     std::size_t total = 0;

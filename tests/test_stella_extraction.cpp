@@ -1,4 +1,4 @@
-// ImageKeypoints::kStellaVslam against stella_vslam's own orb_extractor, compiled from
+// StellaVslamKeypoints against stella_vslam's own orb_extractor, compiled from
 // ../shared/slam/stock_extractors (tests/stock): the same keypoints (position, octave, angle, size,
 // response), in the same order, with the same descriptor rows and the same pyramid, on the frames
 // and photos of test_fork_extraction at several min_size, with its mask rectangles and with a mask.
@@ -21,7 +21,7 @@ namespace {
 
 using affine_orb::Extractor;
 using affine_orb::ExtractorOptions;
-using affine_orb::ImageKeypoints;
+using affine_orb::StellaVslamKeypoints;
 using affine_orb::MaskRectangle;
 using affine_orb::Rbrief;
 using affine_orb::stock::StockFrame;
@@ -102,9 +102,10 @@ struct Case {
 void check_identical(const std::vector<cv::Mat>& images, const Case& c) {
   ExtractorOptions options;
   options.views.max_tilt = 1.0;
-  options.image_keypoints = ImageKeypoints::kStellaVslam;
-  options.stella_vslam.min_size = static_cast<int>(c.min_size);
-  options.stella_vslam.mask_rectangles = c.rectangles;
+  StellaVslamKeypoints stella;
+  stella.min_size = static_cast<int>(c.min_size);
+  stella.mask_rectangles = c.rectangles;
+  options.image_keypoints = stella;
   Extractor<Rbrief> extractor(options);
   std::vector<std::vector<float>> rectangles;
   for (const MaskRectangle& r : c.rectangles) rectangles.push_back({r.x_min, r.x_max, r.y_min, r.y_max});
@@ -148,14 +149,20 @@ TEST_CASE("the same on KITTI and Oxford frames" * doctest::test_suite("data")) {
 
 TEST_CASE("stella_vslam's options are checked") {
   ExtractorOptions options;
-  options.image_keypoints = ImageKeypoints::kStellaVslam;
-  options.stella_vslam.min_size = 0;
+  StellaVslamKeypoints stella;
+  stella.min_size = 0;
+  options.image_keypoints = stella;
   CHECK_THROWS_AS(options.check(), std::invalid_argument);
-  options.stella_vslam.min_size = 800;
-  options.stella_vslam.mask_rectangles = {{0.5f, 0.4f, 0.0f, 1.0f}};
+  stella.min_size = 800;
+  stella.mask_rectangles = {{0.5f, 0.4f, 0.0f, 1.0f}};
+  options.image_keypoints = stella;
   CHECK_THROWS_AS(options.check(), std::invalid_argument);
-  options.stella_vslam.mask_rectangles = {{0.0f, 1.0f, -0.1f, 1.0f}};
+  stella.mask_rectangles = {{0.0f, 1.0f, -0.1f, 1.0f}};
+  options.image_keypoints = stella;
   CHECK_THROWS_AS(options.check(), std::invalid_argument);
-  options.stella_vslam.mask_rectangles = {{0.0f, 1.0f, 0.2f, 0.3f}};
+  stella.mask_rectangles = {{0.0f, 1.0f, 0.2f, 0.3f}};
+  options.image_keypoints = stella;
   CHECK_NOTHROW(options.check());
+  options.view_budget = affine_orb::AreaSplitBudget{};
+  CHECK_THROWS_AS(options.check(), std::invalid_argument);  // a fork's keypoints need the additive budget
 }

@@ -31,7 +31,7 @@ class ORBextractor::Impl : public affine_orb::adapters::AdapterCore {
 };
 
 ORBextractor::ORBextractor(int nfeatures, float scaleFactor, int nlevels, int iniThFAST, int minThFAST)
-    : impl_(new Impl(kWho, affine_orb::ImageKeypoints::kOrbSlam3, {nfeatures, scaleFactor, nlevels, iniThFAST, minThFAST},
+    : impl_(new Impl(kWho, affine_orb::OrbSlam3Keypoints{}, {nfeatures, scaleFactor, nlevels, iniThFAST, minThFAST},
                      affine_orb::adapters::apply_environment(defaults().get()))) {
   mvImagePyramid.resize(static_cast<std::size_t>(nlevels));
 }

@@ -6,7 +6,7 @@
 // The including test program defines a traits type T and instantiates the cases with
 // TEST_CASE_TEMPLATE_INVOKE(adapter_conformance, T). T provides:
 //   using Extractor = <ns>::ORBextractor;  using Options = <ns>::AffineOrbAdapterOptions;
-//   static constexpr affine_orb::ImageKeypoints kFork;  // kOrbSlam2 or kOrbSlam3
+//   using Fork = affine_orb::OrbSlam2Keypoints;  // or affine_orb::OrbSlam3Keypoints
 //   static constexpr int kInitialisationFactor;  // 2 for ORB-SLAM2, 5 for ORB-SLAM3
 //   static constexpr bool kReturnsCount;         // operator() returns a count (ORB-SLAM3)
 //   static int extract(Extractor&, const cv::Mat& image, const cv::Mat& mask,
@@ -24,7 +24,9 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -244,7 +246,7 @@ inline int nearest_octave(int level, double tilt) {
 // grouped by octave, the image's first; rows cut to the first 32 bytes. `from_views` receives the
 // number of view keypoints in the output.
 template <class Descriptor>
-Output expected_output(const cv::Mat& image, affine_orb::ImageKeypoints keypoints, double max_tilt,
+Output expected_output(const cv::Mat& image, const affine_orb::ImageKeypoints& keypoints, double max_tilt,
                        const std::vector<float>& factors, const std::vector<float>& inverse_factors,
                        int* from_views = nullptr) {
   affine_orb::ExtractorOptions options;
@@ -288,7 +290,7 @@ Output expected_output(const cv::Mat& image, affine_orb::ImageKeypoints keypoint
     if (!fits(kp, kp.octave)) continue;
     moved += features.views[i] != 0;
     kp.size = orbslam_size(factors[static_cast<std::size_t>(kp.octave)],
-                           keypoints != affine_orb::ImageKeypoints::kAffineOrb);
+                           !std::holds_alternative<affine_orb::AffineOrbKeypoints>(keypoints));
     out.keypoints.push_back(kp);
     descriptors.push_back(rows.row(static_cast<int>(i)).colRange(0, 32).clone());
   }
@@ -411,7 +413,7 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
     const conformance::Output got = conformance::run<T>(extractor, image);
     int from_views = -1;
     const conformance::Output want = conformance::expected_output<affine_orb::Rbrief>(
-        image, T::kFork, 1.0, extractor.GetScaleFactors(), extractor.GetInverseScaleFactors(), &from_views);
+        image, typename T::Fork{}, 1.0, extractor.GetScaleFactors(), extractor.GetInverseScaleFactors(), &from_views);
     CHECK(from_views == 0);
     CHECK(want.keypoints.size() >= static_cast<std::size_t>(conformance::kFeatures));  // nothing dropped
     conformance::check_same(got, want);
@@ -422,7 +424,7 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
                                     conformance::kIniFast, conformance::kMinFast);
     const conformance::Output got = conformance::run<T>(extractor, image);
     const conformance::Output want =
-        conformance::expected_output<affine_orb::Rbrief>(image, affine_orb::ImageKeypoints::kAffineOrb, 1.0,
+        conformance::expected_output<affine_orb::Rbrief>(image, affine_orb::AffineOrbKeypoints{}, 1.0,
                                                          extractor.GetScaleFactors(), extractor.GetInverseScaleFactors());
     CHECK(want.keypoints.size() == static_cast<std::size_t>(conformance::kFeatures));  // nothing dropped
     conformance::check_same(got, want);
@@ -435,7 +437,7 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
     const conformance::Output got = conformance::run<T>(extractor, image);
     int from_views = 0;
     const conformance::Output want =
-        conformance::expected_output<affine_orb::Rbrief>(image, T::kFork, conformance::kViewsTilt,
+        conformance::expected_output<affine_orb::Rbrief>(image, typename T::Fork{}, conformance::kViewsTilt,
                                                          extractor.GetScaleFactors(), extractor.GetInverseScaleFactors(),
                                                          &from_views);
     CHECK(from_views > 500);  // the tilted views add about kFeatures keypoints
@@ -462,7 +464,7 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
                                     conformance::kIniFast, conformance::kMinFast);
     const conformance::Output got = conformance::run<T>(extractor, image);
     const conformance::Output want =
-        conformance::expected_output<affine_orb::Brisk>(image, T::kFork, conformance::kViewsTilt,
+        conformance::expected_output<affine_orb::Brisk>(image, typename T::Fork{}, conformance::kViewsTilt,
                                                         extractor.GetScaleFactors(), extractor.GetInverseScaleFactors());
     conformance::check_same(got, want);
   }
@@ -914,7 +916,7 @@ TEST_CASE_TEMPLATE_DEFINE("by default, the fork's own keypoints and bits" *
                           T, fork_default) {
 #if AFFINE_ORB_HAVE_STOCK
   using affine_orb::stock::Fork;
-  const Fork fork = T::kFork == affine_orb::ImageKeypoints::kOrbSlam2 ? Fork::kOrbSlam2 : Fork::kOrbSlam3;
+  const Fork fork = std::is_same_v<typename T::Fork, affine_orb::OrbSlam2Keypoints> ? Fork::kOrbSlam2 : Fork::kOrbSlam3;
   std::vector<cv::Mat> images = conformance::frames();
   for (int i = 0; i < 160; i += 53) {
     char name[40];

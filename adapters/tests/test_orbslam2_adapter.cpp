@@ -14,7 +14,7 @@ namespace {
 struct Orbslam2 {
   using Extractor = ORB_SLAM2::ORBextractor;
   using Options = ORB_SLAM2::AffineOrbAdapterOptions;
-  static constexpr affine_orb::ImageKeypoints kFork = affine_orb::ImageKeypoints::kOrbSlam2;
+  using Fork = affine_orb::OrbSlam2Keypoints;
   /// Tracking::Tracking builds mpIniORBextractor with 2·nFeatures.
   static constexpr int kInitialisationFactor = 2;
   static constexpr bool kReturnsCount = false;

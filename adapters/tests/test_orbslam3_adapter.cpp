@@ -15,7 +15,7 @@ namespace {
 struct Orbslam3 {
   using Extractor = ORB_SLAM3::ORBextractor;
   using Options = ORB_SLAM3::AffineOrbAdapterOptions;
-  static constexpr affine_orb::ImageKeypoints kFork = affine_orb::ImageKeypoints::kOrbSlam3;
+  using Fork = affine_orb::OrbSlam3Keypoints;
   /// Tracking builds mpIniORBextractor with 5·nFeatures.
   static constexpr int kInitialisationFactor = 5;
   static constexpr bool kReturnsCount = true;

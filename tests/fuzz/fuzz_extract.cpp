@@ -36,7 +36,7 @@ void run(const cv::Mat& image, const cv::Mat& mask, const affine_orb::ExtractorO
   const affine_orb::AdditiveBudget* additive = options.additive_budget();
   const long views_budget = additive ? std::lround(additive->view_features * options.features) : 0;
   const long image_keypoints = std::count(a.views.begin(), a.views.end(), 0);
-  if (options.image_keypoints == affine_orb::ImageKeypoints::kAffineOrb) {
+  if (!options.fork_keypoints()) {
     require(static_cast<long>(a.size()) <= options.features + views_budget);
     require(image_keypoints <= options.features);
   } else {
@@ -82,10 +82,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::uint8_t shortlist = bytes.next();
   options.shortlist = 0.5 + (shortlist % 8) * 0.5;  // 0.5 is invalid
   // The image's keypoints: affine_orb's, ORB-SLAM2's or ORB-SLAM3's, the last two less often.
-  constexpr affine_orb::ImageKeypoints kImageKeypoints[] = {
-      affine_orb::ImageKeypoints::kAffineOrb, affine_orb::ImageKeypoints::kAffineOrb,
-      affine_orb::ImageKeypoints::kOrbSlam2, affine_orb::ImageKeypoints::kOrbSlam3};
-  options.image_keypoints = kImageKeypoints[(shortlist >> 3) & 3];
+  switch ((shortlist >> 3) & 3) {
+    case 2: options.image_keypoints = affine_orb::OrbSlam2Keypoints{}; break;
+    case 3: options.image_keypoints = affine_orb::OrbSlam3Keypoints{}; break;
+    default: break;
+  }
   // Two worker threads in one input of 32: glibc frees a finished thread's TLS lazily, so an input
   // that starts threads ends with more mallocs than frees, and libFuzzer then runs its leak check
   // (a scan of the whole heap, several ms). The thread pool is tested in ctest, also under TSan.

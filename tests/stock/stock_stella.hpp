@@ -1,7 +1,7 @@
 #pragma once
 // stella_vslam's own orb_extractor (../shared/slam/stock_extractors/stella_vslam_b0e60d6, compiled
 // from there by cmake/stock_extractors.cmake, never copied into this tree) behind a plain
-// interface, for the conformance test and the benchmark that compare ImageKeypoints::kStellaVslam
+// interface, for the conformance test and the benchmark that compare StellaVslamKeypoints
 // with it.
 
 #include <memory>

@@ -283,9 +283,10 @@ struct ForkParameters {
 /// shortfall, as ORB-SLAM's own extractor does: carried to level 0 of the monocular initialiser's
 /// frames it gave ORB-SLAM3 maps that drift in scale, docs/slam.md "Shortfalls"), the views adding
 /// to the image's keypoints.
-inline ExtractorOptions base_options(ImageKeypoints fork, const ForkParameters& p, const AdapterOptions& affine) {
+inline ExtractorOptions base_options(const ImageKeypoints& fork, const ForkParameters& p,
+                                     const AdapterOptions& affine) {
   ExtractorOptions options;
-  options.image_keypoints = affine.keypoints == AdapterKeypoints::kFork ? fork : ImageKeypoints::kAffineOrb;
+  options.image_keypoints = affine.keypoints == AdapterKeypoints::kFork ? fork : ImageKeypoints{AffineOrbKeypoints{}};
   options.pyramid.scale_factor = static_cast<double>(p.scale_factor);
   options.pyramid.levels = p.levels;
   options.detector.initial_threshold = p.ini_th_fast;
@@ -327,7 +328,7 @@ struct ExtractorPair {
 
 /// ORB-SLAM's five extractor parameters plus the affine options, checked, and the extractors built
 /// from them. `who` names the adapter class in error messages; `fork` is the fork's keypoints
-/// (ImageKeypoints::kOrbSlam2 or kOrbSlam3), which AdapterKeypoints::kFork returns.
+/// (OrbSlam2Keypoints or OrbSlam3Keypoints), which AdapterKeypoints::kFork returns.
 ///
 /// An affine_orb::Extractor with AdditiveBudget does the work: the image is extracted with
 /// ORB-SLAM's budget (nfeatures keypoints, geometric over the levels), and those keypoints are the
@@ -341,7 +342,8 @@ struct ExtractorPair {
 /// round(recovery.image_features · nfeatures) features and the recovery views.
 class AdapterCore {
  public:
-  AdapterCore(const char* who, ImageKeypoints fork, const ForkParameters& parameters, const AdapterOptions& affine)
+  AdapterCore(const char* who, const ImageKeypoints& fork, const ForkParameters& parameters,
+              const AdapterOptions& affine)
       : who_(who), affine_((affine.check(), affine)), parameters_((parameters.check(who), parameters)),
         scales_(make_scale_tables(parameters.scale_factor, parameters.levels)),
         extractors_(make_extractors(who, fork, parameters, affine)) {}
@@ -365,7 +367,7 @@ class AdapterCore {
  private:
   using Extractors = std::variant<ExtractorPair<Rbrief>, ExtractorPair<Brisk>>;
 
-  static Extractors make_extractors(const std::string& who, ImageKeypoints fork, const ForkParameters& p,
+  static Extractors make_extractors(const std::string& who, const ImageKeypoints& fork, const ForkParameters& p,
                                     const AdapterOptions& affine) {
     const ExtractionPlan normal = make_plan(p.nfeatures, affine.max_tilt, affine.view_features);
     const double recovery_features = std::round(affine.recovery.image_features * p.nfeatures);

@@ -14,6 +14,7 @@
 #include <numeric>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -93,9 +94,9 @@ class Extractor {
   /// matrix is fine), every view at once; see Features for the keypoint fields.
   ///
   /// `mask`: empty (everything allowed) or CV_8UC1 of the image size; a keypoint is kept only where
-  /// the mask pixel nearest to its original position is non-zero (under ImageKeypoints::kStellaVslam
+  /// the mask pixel nearest to its original position is non-zero (under StellaVslamKeypoints
   /// the image's keypoints follow stella_vslam's own mask test, detail/stella_image.hpp, and without
-  /// a mask StellaVslamOptions::mask_rectangles is the mask).
+  /// a mask its mask_rectangles are the mask).
   ///
   /// Throws std::invalid_argument for an empty image, a type other than CV_8UC1, or a mask of the
   /// wrong size or type. A valid image with no corners (flat, or smaller than the descriptor
@@ -193,14 +194,12 @@ class Extractor {
                      options_.merge_duplicates->repeat_levels);
   }
 
-  /// The mask of an extraction: the caller's, or under ImageKeypoints::kStellaVslam without one
-  /// StellaVslamOptions::mask_rectangles' (detail::stella_rectangle_mask()), or none.
+  /// The mask of an extraction: the caller's, or under StellaVslamKeypoints without one its
+  /// mask_rectangles' (detail::stella_rectangle_mask()), or none.
   const cv::Mat& effective_mask(cv::Size size, const cv::Mat& mask) {
-    if (!mask.empty() || options_.image_keypoints != ImageKeypoints::kStellaVslam ||
-        options_.stella_vslam.mask_rectangles.empty()) {
-      return mask;
-    }
-    return detail::stella_rectangle_mask(options_.stella_vslam.mask_rectangles, size, stella_.rectangle_mask);
+    const auto* stella = std::get_if<StellaVslamKeypoints>(&options_.image_keypoints);
+    if (!mask.empty() || !stella || stella->mask_rectangles.empty()) return mask;
+    return detail::stella_rectangle_mask(stella->mask_rectangles, size, stella_.rectangle_mask);
   }
 
   /// Steps 1–5 for views [first, last), whose budgets are set: every view processed (in parallel,
@@ -208,8 +207,9 @@ class Extractor {
   void run_views(const cv::Mat& image, const cv::Mat& mask, int first, int last) {
     prepare_range(first, last);
     turns_->reset(first);
-    for_each(last - first,
-             [&](int i, int w) { process_view(first + i, image, mask, thread_work_[static_cast<std::size_t>(w)]); });
+    detail::run_indexed(pool_, options_.threads, last - first, [&](int i, int w) {
+      process_view(first + i, image, mask, thread_work_[static_cast<std::size_t>(w)]);
+    });
     const int shortlisted = first == 0 && direct(0) ? 1 : first;
     if (shortlisted < last) select_shortlisted(image.size(), shortlisted, last);
   }
@@ -243,18 +243,13 @@ class Extractor {
     }
   }
 
-  /// ExtractorOptions::image_keypoints of a fork: the image's keypoints as the fork extracts them
-  /// (detail::extract_fork_level(), detail::extract_stella_level()) on its pyramid, then, in view 0's turn, entered in the repeat
+  /// ExtractorOptions::image_keypoints of a SLAM system: the image's keypoints as it extracts them
+  /// (detail::extract_slam_image()) on its pyramid, then, in view 0's turn, entered in the repeat
   /// grids for the views.
   void process_fork_image(const cv::Mat& image, const cv::Mat& mask, ThreadWork& work) {
     try {
-      if (options_.image_keypoints == ImageKeypoints::kStellaVslam) {
-        detail::extract_stella_image(descriptor_, image, mask, options_, image_pyramid_, fork_, stella_,
-                                     work.describe_points, work.descriptor_data, view_work_[0].levels);
-      } else {
-        detail::extract_fork_image(descriptor_, image, mask, options_, image_pyramid_, fork_, work.describe_points,
-                                   work.descriptor_data, view_work_[0].levels);
-      }
+      detail::extract_slam_image(descriptor_, image, mask, options_, image_pyramid_, fork_, stella_,
+                                 work.describe_points, work.descriptor_data, view_work_[0].levels);
       if (!turns_->wait(0)) return;
       if (merging()) enter_kept(0);
       turns_->pass(0);
@@ -325,7 +320,7 @@ class Extractor {
       available_.push_back(static_cast<int>(level_of(g / levels, g % levels).keypoints.size()));
     }
     budgets_.allocate(first * levels, last * levels, available_, options_.carry_shortfalls);
-    for_each(last - first, [&](int i, int w) {
+    detail::run_indexed(pool_, options_.threads, last - first, [&](int i, int w) {
       ThreadWork& work = thread_work_[static_cast<std::size_t>(w)];
       for (int l = 0; l < levels; ++l) {
         LevelWork& level = level_of(i + first, l);
@@ -350,7 +345,7 @@ class Extractor {
 
   bool additive() const { return options_.additive_budget() != nullptr; }
   bool merging() const { return options_.merge_duplicates.has_value(); }
-  bool fork() const { return options_.image_keypoints != ImageKeypoints::kAffineOrb; }
+  bool fork() const { return options_.fork_keypoints(); }
 
   /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the
   /// only view), rather than a shortlist chosen from once every view is done.
@@ -375,18 +370,12 @@ class Extractor {
     view_work_.resize(views.size());
     tilts_.clear();
     octave_shift_.clear();
-    cv::Size largest_tilted;
     for (std::size_t v = 0; v < views.size(); ++v) {
       view_work_[v].view = views[v];
-      if (v > 0) {
-        largest_tilted.width = std::max(largest_tilted.width, views[v].size.width);
-        largest_tilted.height = std::max(largest_tilted.height, views[v].size.height);
-      }
       tilts_.push_back(views[v].tilt);
-      // The level nearest (in log scale) to the scale s^l·√t is l + round(log √t / log s).
-      octave_shift_.push_back(
-          static_cast<int>(std::lround(0.5 * std::log(views[v].tilt) / std::log(options_.pyramid.scale_factor))));
+      octave_shift_.push_back(detail::octave_shift(views[v].tilt, options_.pyramid.scale_factor));
     }
+    const cv::Size largest_tilted = detail::largest_tilted(views);
     budgets_.resize(views.size(), options_.pyramid.levels);
     // Every thread's buffers sized for the largest tilted view now, so that which thread gets
     // which view in later frames never makes one allocate.
@@ -414,19 +403,6 @@ class Extractor {
     }
   }
 
-  /// Runs fn(i, w) for every i in [0, n), on options_.threads threads (the calling thread
-  /// included, the others kept in pool_ from the first call on); w in [0, threads) numbers the
-  /// thread, for per-thread scratch buffers. Indices are handed out in increasing order.
-  template <class Fn>
-  void for_each(int n, Fn fn) {
-    if (options_.threads <= 1 || n <= 1) {
-      for (int v = 0; v < n; ++v) fn(v, 0);
-      return;
-    }
-    if (!pool_) pool_ = std::make_unique<detail::WorkerPool>(options_.threads);
-    pool_->run(n, fn);
-  }
-
   /// Enters the final keypoints of view v (its kept ones, positions before snapping) in the repeat grids.
   void enter_kept(int v) {
     for (int l = 0; l < options_.pyramid.levels; ++l) {
@@ -449,7 +425,7 @@ class Extractor {
   detail::ViewBudgets budgets_;
   /// Per run: what each (view, level) of the groups being allocated offers.
   std::vector<int> available_;
-  /// DuplicatePolicy::kMerge: the keypoints chosen by the views processed so far.
+  /// merge_duplicates: the keypoints chosen by the views processed so far.
   detail::RepeatGrids repeats_;
   std::vector<int> octave_start_;  ///< buffer of assemble()
   cv::Size views_size_;
@@ -458,7 +434,7 @@ class Extractor {
   Pyramid image_pyramid_;
   /// ImageKeypoints of a fork: the buffers of the image's extraction.
   detail::ForkImageWork fork_;
-  /// ImageKeypoints::kStellaVslam: its grid and rectangle mask.
+  /// StellaVslamKeypoints: its grid and rectangle mask.
   detail::StellaImageWork stella_;
   /// Per worker thread: the buffers views are processed in.
   std::vector<ThreadWork> thread_work_;

@@ -25,30 +25,21 @@ enum class Spreading {
                ///< more repeatable, so more correct matches between two wide-baseline images.
 };
 
-/// Whose extraction the image's own keypoints (view 0) are: affine_orb's, or exactly those of a
-/// SLAM system's ORB extractor, so that a drop-in gives that system its own keypoints and bits.
-enum class ImageKeypoints {
-  /// affine_orb's: its pyramid, detect_candidates() and the `spreading`, `carry_shortfalls` and
-  /// `subpixel` options.
-  kAffineOrb,
-  /// ORB-SLAM2's ORBextractor (raulmur/ORB_SLAM2 f2e6f51), keypoint for keypoint in its order, with
-  /// its rBRIEF bits under Rbrief: cv::resize pyramid, FAST in 30-pixel cells, octree distribution,
-  /// positions p·s^l (extraction/detail/fork_image.hpp). The octree's order among nodes of equal
-  /// size, the heap address in ORB-SLAM2, is creation order here (detection/detail/octree.hpp).
-  /// Uses `features`, `pyramid` and the detector's thresholds; the other detector fields,
-  /// `spreading`, `carry_shortfalls` and `subpixel` do not apply to the image's keypoints.
-  kOrbSlam2,
-  /// ORB-SLAM3's (v1.0, shanpenghui/ORB_SLAM3_Fixed 060181f): as kOrbSlam2 with 35-pixel cells and
-  /// ORB-SLAM3's node order (left edge).
-  kOrbSlam3,
-  /// stella_vslam's orb_extractor (stella-cv/stella_vslam b0e60d6), keypoint for keypoint in its
-  /// order, with its rBRIEF bits under Rbrief: cv::resize pyramid, FAST in 64-pixel cells, of each
-  /// grid cell of `stella_vslam.min_size` the strongest keypoint, positions p·s^l
-  /// (extraction/detail/stella_image.hpp). Uses `pyramid`, the detector's thresholds and
-  /// `stella_vslam`; `features` sets only what the views add (AdditiveBudget), and the other detector
-  /// fields, `spreading`, `carry_shortfalls` and `subpixel` do not apply to the image's keypoints.
-  kStellaVslam,
-};
+/// The image's own keypoints (view 0) are affine_orb's: its pyramid, detect_candidates() and the
+/// `spreading`, `carry_shortfalls` and `subpixel` options.
+struct AffineOrbKeypoints {};
+
+/// The image's keypoints are ORB-SLAM2's ORBextractor's (raulmur/ORB_SLAM2 f2e6f51), keypoint for
+/// keypoint in its order, with its rBRIEF bits under Rbrief: cv::resize pyramid, FAST in 30-pixel
+/// cells, octree distribution, positions p·s^l (extraction/detail/fork_image.hpp). The octree's
+/// order among nodes of equal size, the heap address in ORB-SLAM2, is creation order here
+/// (detection/detail/octree.hpp). Uses `features`, `pyramid` and the detector's thresholds; the
+/// other detector fields, `spreading`, `carry_shortfalls` and `subpixel` do not apply to them.
+struct OrbSlam2Keypoints {};
+
+/// The image's keypoints are ORB-SLAM3's (v1.0, shanpenghui/ORB_SLAM3_Fixed 060181f): as
+/// OrbSlam2Keypoints with 35-pixel cells and ORB-SLAM3's node order (left edge).
+struct OrbSlam3Keypoints {};
 
 /// A rectangle in which stella_vslam finds no keypoint (its Preprocessing.mask_rectangles), in
 /// fractions of the image's width (x) and height (y): 0 <= min < max <= 1.
@@ -59,9 +50,13 @@ struct MaskRectangle {
   float y_max = 1.0f;
 };
 
-/// stella_vslam's own extraction parameters (ImageKeypoints::kStellaVslam only; ignored otherwise).
-/// Its scale factor, levels and FAST thresholds are `pyramid` and `detector`'s.
-struct StellaVslamOptions {
+/// The image's keypoints are stella_vslam's orb_extractor's (stella-cv/stella_vslam b0e60d6),
+/// keypoint for keypoint in its order, with its rBRIEF bits under Rbrief: cv::resize pyramid, FAST
+/// in 64-pixel cells, of each grid cell of `min_size` the strongest keypoint, positions p·s^l
+/// (extraction/detail/stella_image.hpp). Its scale factor, levels and FAST thresholds are
+/// `pyramid` and `detector`'s; `features` sets only what the views add (AdditiveBudget), and the
+/// other detector fields, `spreading`, `carry_shortfalls` and `subpixel` do not apply to them.
+struct StellaVslamKeypoints {
   /// Its Preprocessing.min_size: area in level-0 pixels² of the grid cells each of which keeps its
   /// strongest keypoint, cells of side trunc(√min_size) level-0 pixels; [1, 100000000]; default 800
   /// (stella_vslam's).
@@ -72,15 +67,19 @@ struct StellaVslamOptions {
   std::vector<MaskRectangle> mask_rectangles;
 
   void check() const {
-    detail::require_range(min_size, {1.0, 100000000.0}, "StellaVslamOptions: min_size");
+    detail::require_range(min_size, {1.0, 100000000.0}, "StellaVslamKeypoints: min_size");
     for (const MaskRectangle& r : mask_rectangles) {
-      detail::require_range(r.x_min, {0.0, 1.0}, "StellaVslamOptions: mask_rectangles x_min");
-      detail::require_range(r.y_min, {0.0, 1.0}, "StellaVslamOptions: mask_rectangles y_min");
-      detail::require_range(r.x_max, {r.x_min, 1.0, true}, "StellaVslamOptions: mask_rectangles x_max");
-      detail::require_range(r.y_max, {r.y_min, 1.0, true}, "StellaVslamOptions: mask_rectangles y_max");
+      detail::require_range(r.x_min, {0.0, 1.0}, "StellaVslamKeypoints: mask_rectangles x_min");
+      detail::require_range(r.y_min, {0.0, 1.0}, "StellaVslamKeypoints: mask_rectangles y_min");
+      detail::require_range(r.x_max, {r.x_min, 1.0, true}, "StellaVslamKeypoints: mask_rectangles x_max");
+      detail::require_range(r.y_max, {r.y_min, 1.0, true}, "StellaVslamKeypoints: mask_rectangles y_max");
     }
   }
 };
+
+/// Whose extraction the image's own keypoints (view 0) are: affine_orb's, or exactly those of a
+/// SLAM system's ORB extractor, so that a drop-in gives that system its own keypoints and bits.
+using ImageKeypoints = std::variant<AffineOrbKeypoints, OrbSlam2Keypoints, OrbSlam3Keypoints, StellaVslamKeypoints>;
 
 /// The additive view budget (ExtractorOptions::view_budget): the image is extracted exactly as
 /// with max_tilt = 1 (`features` keypoints, the same ones) and the tilted views add keypoints where
@@ -147,10 +146,8 @@ struct ExtractorOptions {
   /// holds); [1, 1000000]; default 1000 (ORB-SLAM2's configurations use 1000 to 2000).
   int features = 1000;
   /// Whose extraction the image's keypoints are; the views are affine_orb's either way. A fork's
-  /// needs AdditiveBudget. Default kAffineOrb.
-  ImageKeypoints image_keypoints = ImageKeypoints::kAffineOrb;
-  /// stella_vslam's parameters, used under ImageKeypoints::kStellaVslam only.
-  StellaVslamOptions stella_vslam;
+  /// needs AdditiveBudget. Default AffineOrbKeypoints.
+  ImageKeypoints image_keypoints = AffineOrbKeypoints{};
   /// The scale pyramid of the image and of every view.
   PyramidOptions pyramid;
   /// FAST thresholds, cells and ranking.
@@ -194,6 +191,8 @@ struct ExtractorOptions {
 
   /// The additive budget's parameters, or nullptr under AreaSplitBudget.
   const AdditiveBudget* additive_budget() const { return std::get_if<AdditiveBudget>(&view_budget); }
+  /// Whether the image's keypoints are a SLAM system's (any ImageKeypoints but AffineOrbKeypoints).
+  bool fork_keypoints() const { return !std::holds_alternative<AffineOrbKeypoints>(image_keypoints); }
 
   /// Throws std::invalid_argument for a value outside its range or a fork's keypoints without
   /// AdditiveBudget.
@@ -203,12 +202,9 @@ struct ExtractorOptions {
     detector.check();
     views.check();
     if (additive_budget()) additive_budget()->check();
-    detail::require(image_keypoints == ImageKeypoints::kAffineOrb || image_keypoints == ImageKeypoints::kOrbSlam2 ||
-                        image_keypoints == ImageKeypoints::kOrbSlam3 || image_keypoints == ImageKeypoints::kStellaVslam,
-                    "ExtractorOptions: image_keypoints is invalid");
-    detail::require(image_keypoints == ImageKeypoints::kAffineOrb || additive_budget(),
+    detail::require(!fork_keypoints() || additive_budget(),
                     "ExtractorOptions: image_keypoints: a fork's keypoints need the AdditiveBudget view_budget");
-    stella_vslam.check();
+    if (const auto* stella = std::get_if<StellaVslamKeypoints>(&image_keypoints)) stella->check();
     if (merge_duplicates) merge_duplicates->check();
     if (snap_to_corners) snap_to_corners->check();
     detail::require_range(shortlist, {1.0, 64.0}, "ExtractorOptions: shortlist");

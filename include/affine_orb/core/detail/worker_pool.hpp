@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <exception>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -115,5 +116,18 @@ class WorkerPool {
   unsigned long generation_ = 0;
   bool stop_ = false;
 };
+
+/// Runs fn(i, w) for every i in [0, n) on `threads` threads, the calling thread included: in order
+/// on the calling thread when threads <= 1 or n <= 1, else on `pool`, which it starts on first use
+/// and keeps for the later calls.
+template <class Fn>
+void run_indexed(std::unique_ptr<WorkerPool>& pool, int threads, int n, Fn fn) {
+  if (threads <= 1 || n <= 1) {
+    for (int i = 0; i < n; ++i) fn(i, 0);
+    return;
+  }
+  if (!pool) pool = std::make_unique<WorkerPool>(threads);
+  pool->run(n, fn);
+}
 
 }  // namespace affine_orb::detail

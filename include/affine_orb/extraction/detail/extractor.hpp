@@ -187,6 +187,22 @@ inline cv::Rect2f spread_region(const AffineView& view, const RowSpans& valid_pi
   return cv::Rect2f(tl, br);
 }
 
+/// The octave shift of a view of tilt t: its level l's keypoints have the octave l + shift, the
+/// level nearest (in log scale) to their scale s^l·√t, l + round(log √t / log s).
+inline int octave_shift(double tilt, double scale_factor) {
+  return static_cast<int>(std::lround(0.5 * std::log(tilt) / std::log(scale_factor)));
+}
+
+/// The smallest size that holds every tilted view of `views` (all but view 0); empty for none.
+inline cv::Size largest_tilted(const std::vector<AffineView>& views) {
+  cv::Size largest;
+  for (std::size_t v = 1; v < views.size(); ++v) {
+    largest.width = std::max(largest.width, views[v].size.width);
+    largest.height = std::max(largest.height, views[v].size.height);
+  }
+  return largest;
+}
+
 /// CornerSnapOptions: the strongest FAST corner of level o of the original image's pyramid within
 /// `radius` level-o pixels of `point` (original pixels), as a level-0 point, if one scores at
 /// least `min_threshold` and lies where the mask allows (ties: the nearer pixel, then raster

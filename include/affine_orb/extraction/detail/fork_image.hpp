@@ -29,6 +29,7 @@
 #include <numeric>
 #include <type_traits>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -359,10 +360,10 @@ void extract_fork_level(const Descriptor& descriptor, const cv::Mat& level, int 
                         describe_points, data, out);
 }
 
-/// The fork's flavour of ExtractorOptions::image_keypoints (kOrbSlam2 or kOrbSlam3).
-inline ForkFlavour fork_flavour(ImageKeypoints keypoints) {
-  return keypoints == ImageKeypoints::kOrbSlam3 ? ForkFlavour{35, OctreeTieOrder::kLeftEdge}
-                                                : ForkFlavour{30, OctreeTieOrder::kCreation};
+/// The fork's flavour of ExtractorOptions::image_keypoints (OrbSlam2Keypoints or OrbSlam3Keypoints).
+inline ForkFlavour fork_flavour(const ImageKeypoints& keypoints) {
+  return std::holds_alternative<OrbSlam3Keypoints>(keypoints) ? ForkFlavour{35, OctreeTieOrder::kLeftEdge}
+                                                              : ForkFlavour{30, OctreeTieOrder::kCreation};
 }
 
 /// The fork's keypoints of `image` (options.image_keypoints) into `levels`, one record per pyramid

@@ -2,7 +2,7 @@
 /// \file
 /// Internals (namespace detail): the image's own keypoints as stella_vslam's orb_extractor
 /// (stella-cv/stella_vslam b0e60d6, src/stella_vslam/feature/orb_extractor.cc, orb_impl.cc,
-/// orb_params.cc) extracts them (ImageKeypoints::kStellaVslam), so that a drop-in returns its
+/// orb_params.cc) extracts them (StellaVslamKeypoints), so that a drop-in returns its
 /// keypoints, in its order, with its descriptor bits. What it does, per pyramid level l of scale
 /// s^l (s^l in float by repeated multiplication, orb_params::calc_scale_factors):
 /// - the level is cv::resize (INTER_LINEAR) of level l − 1, of size std::round(W / s^l) x
@@ -31,6 +31,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -230,7 +231,7 @@ inline const cv::Mat& stella_rectangle_mask(const std::vector<MaskRectangle>& re
 /// frames.
 struct StellaImageWork {
   std::vector<int> best;     ///< per grid cell, its strongest candidate
-  cv::Mat rectangle_mask;    ///< StellaVslamOptions::mask_rectangles at the last image size
+  cv::Mat rectangle_mask;    ///< StellaVslamKeypoints::mask_rectangles at the last image size
 };
 
 /// stella's keypoints of pyramid level l (`level`) into `out`, in its order (file comment); `mask`
@@ -244,7 +245,8 @@ void extract_stella_level(const Descriptor& descriptor, const cv::Mat& level, in
   const StellaCells cells(level.size());
   detect_in_stella_cells(level, cells, factor, options.detector, mask, work.score_storage, work.maxima, work.points,
                          work.responses);
-  const int side = static_cast<int>(std::sqrt(static_cast<double>(options.stella_vslam.min_size)));
+  const int side =
+      static_cast<int>(std::sqrt(static_cast<double>(std::get<StellaVslamKeypoints>(options.image_keypoints).min_size)));
   select_stella_grid(work.points, work.responses, cells.width, cells.height, side, factor, stella.best, work.kept);
   if (work.kept.empty()) return;
   const cv::Point2f corner(static_cast<float>(kStellaRegionBorder), static_cast<float>(kStellaRegionBorder));
@@ -265,6 +267,21 @@ void extract_stella_image(const Descriptor& descriptor, const cv::Mat& image, co
     LevelWork<Bits>& level = levels[static_cast<std::size_t>(l)];
     level.clear();
     extract_stella_level(descriptor, pyramid.level(l), l, options, mask, work, stella, describe_points, data, level);
+  }
+}
+
+/// The image's keypoints of a SLAM system (options.image_keypoints: OrbSlam2Keypoints,
+/// OrbSlam3Keypoints or StellaVslamKeypoints) into `levels`, on `pyramid`, which it builds as that
+/// system does.
+template <class Descriptor, int Bits>
+void extract_slam_image(const Descriptor& descriptor, const cv::Mat& image, const cv::Mat& mask,
+                        const ExtractorOptions& options, Pyramid& pyramid, ForkImageWork& work,
+                        StellaImageWork& stella, std::vector<cv::Point2f>& describe_points,
+                        typename Descriptor::LevelData& data, std::vector<LevelWork<Bits>>& levels) {
+  if (std::holds_alternative<StellaVslamKeypoints>(options.image_keypoints)) {
+    extract_stella_image(descriptor, image, mask, options, pyramid, work, stella, describe_points, data, levels);
+  } else {
+    extract_fork_image(descriptor, image, mask, options, pyramid, work, describe_points, data, levels);
   }
 }
 

@@ -65,6 +65,16 @@ if(EXISTS ${affine_orb_stock_stella}/stella_vslam/feature/orb_extractor.cc)
                           PRIVATE yaml-cpp nlohmann_json::nlohmann_json spdlog::spdlog Eigen3::Eigen)
     target_compile_options(affine_orb_stock_stella PRIVATE -w -fno-sanitize=undefined)
     set_target_properties(affine_orb_stock_stella PROPERTIES POSITION_INDEPENDENT_CODE ON)
+    # The same in a renamed namespace, for the stella_vslam adapter's test, which links the adapter's
+    # stella_vslam::feature::orb_extractor beside it.
+    add_library(affine_orb_stock_stella_renamed STATIC ${PROJECT_SOURCE_DIR}/tests/stock/stock_stella.cpp
+                ${feature}/orb_extractor.cc ${feature}/orb_impl.cc ${feature}/orb_params.cc)
+    target_include_directories(affine_orb_stock_stella_renamed PUBLIC ${PROJECT_SOURCE_DIR}/tests/stock
+                               PRIVATE ${affine_orb_stock_stella})
+    target_compile_definitions(affine_orb_stock_stella_renamed PRIVATE stella_vslam=affine_orb_stock_stella)
+    target_link_libraries(affine_orb_stock_stella_renamed PUBLIC opencv_core opencv_imgproc opencv_features2d
+                          PRIVATE yaml-cpp nlohmann_json::nlohmann_json spdlog::spdlog Eigen3::Eigen)
+    target_compile_options(affine_orb_stock_stella_renamed PRIVATE -w -fno-sanitize=undefined)
   else()
     message(STATUS "affine_orb: stella_vslam's extractor needs the yaml-cpp, nlohmann-json, spdlog and Eigen "
                    "headers (libyaml-cpp-dev nlohmann-json3-dev libspdlog-dev libeigen3-dev): the conformance "

@@ -1,0 +1,181 @@
+// stella_vslam's feature::orb_extractor implemented by affine_orb: this file replaces stella's
+// src/stella_vslam/feature/orb_extractor.cc and keeps its unmodified orb_extractor.h
+// (adapters/README.md, "stella_vslam"). By default extract() returns stella's own keypoints, in
+// its order, its ORB rows and its image_pyramid_ bytes (ImageKeypoints::kStellaVslam); the
+// AFFINE_ORB_* variables of affine_orb_adapter/options.hpp turn on affine_orb's views or spreading.
+// stella's YAML `Feature:` section is not read here: stella passes orb_params and min_size only.
+#include "stella_vslam/feature/orb_extractor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "affine_orb/descriptors/brisk.hpp"
+#include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb_adapter/core.hpp"
+
+namespace stella_vslam {
+namespace feature {
+
+namespace {
+
+constexpr const char* kWho = "stella_vslam::feature::orb_extractor (affine_orb)";
+
+/// What an extractor keeps between frames: the affine options read at construction and, from the
+/// first frame on, affine_orb's extractor and the pyramid it fills in place.
+struct AdapterState {
+  using Engine = std::variant<std::monostate, affine_orb::Extractor<affine_orb::Rbrief>,
+                              affine_orb::Extractor<affine_orb::Brisk>>;
+  affine_orb::adapters::AdapterOptions affine;
+  unsigned min_area = 0;  ///< stella's Preprocessing.min_size
+  Engine engine;
+  std::vector<cv::Mat> levels;
+};
+
+/// Gives an AdapterState the lifetime of a cv::Mat: orb_extractor.h, which stays stella's, has no
+/// member for it, so the private rect_mask_ (stella's own rectangle mask, which affine_orb builds
+/// itself) holds a 1x1 header whose reference count owns the state, deleted with the last copy.
+class StateAllocator final : public cv::MatAllocator {
+ public:
+  cv::UMatData* allocate(int, const int*, int, void*, std::size_t*, cv::AccessFlag, cv::UMatUsageFlags) const override {
+    return nullptr;
+  }
+  bool allocate(cv::UMatData*, cv::AccessFlag, cv::UMatUsageFlags) const override { return false; }
+  void deallocate(cv::UMatData* u) const override {
+    delete static_cast<AdapterState*>(u->userdata);
+    delete u;
+  }
+};
+
+cv::Mat own_state(AdapterState* state) {
+  static StateAllocator allocator;
+  auto* u = new cv::UMatData(&allocator);
+  u->data = u->origdata = reinterpret_cast<uchar*>(state);
+  u->size = sizeof(AdapterState);
+  u->userdata = state;
+  u->refcount = 1;
+  cv::Mat handle(1, 1, CV_8UC1, u->data);
+  handle.u = u;
+  handle.allocator = &allocator;
+  return handle;
+}
+
+AdapterState& state_of(const cv::Mat& handle) { return *static_cast<AdapterState*>(handle.u->userdata); }
+
+/// stella's mask rectangles ([x_min, x_max, y_min, y_max], fractions of the image) as affine_orb's.
+std::vector<affine_orb::MaskRectangle> mask_rectangles(const std::vector<std::vector<float>>& rects) {
+  std::vector<affine_orb::MaskRectangle> out;
+  for (const std::vector<float>& r : rects) {
+    affine_orb::detail::require(r.size() == 4, std::string(kWho) + ": a mask rectangle needs 4 values, got " +
+                                                   std::to_string(r.size()));
+    out.push_back({r[0], r[1], r[2], r[3]});
+  }
+  return out;
+}
+
+/// The cells of stella's selection grid over every level for a `size` image: the most keypoints
+/// its own extraction keeps, and the budget of the views and of affine_orb's spreading.
+int grid_cells(const orb_params& p, unsigned min_area_sqrt, cv::Size size) {
+  constexpr int kPatchRadius = 19;  // stella's orb_patch_radius_: no keypoint nearer the border
+  double cells = 0.0;
+  for (unsigned l = 0; l < p.num_levels_; ++l) {
+    const double scale = p.scale_factors_.at(l);
+    const double side = min_area_sqrt / scale;
+    const double w = std::max(std::round(size.width / scale) - 2 * kPatchRadius, 0.0);
+    const double h = std::max(std::round(size.height / scale) - 2 * kPatchRadius, 0.0);
+    cells += std::ceil(w / side) * std::ceil(h / side);
+  }
+  return static_cast<int>(std::clamp(cells, 1.0, 1000000.0));
+}
+
+/// affine_orb's options for stella's parameters, the affine options and a `features` budget.
+affine_orb::ExtractorOptions extractor_options(const orb_params& p, unsigned min_area,
+                                               const std::vector<std::vector<float>>& rects,
+                                               const affine_orb::adapters::AdapterOptions& affine, int features) {
+  namespace ad = affine_orb::adapters;
+  const ad::ForkParameters fork{features, p.scale_factor_, static_cast<int>(p.num_levels_),
+                                static_cast<int>(p.ini_fast_thr_), static_cast<int>(p.min_fast_thr_)};
+  fork.check(kWho);
+  affine_orb::ExtractorOptions options = ad::plan_options(
+      ad::base_options(affine_orb::ImageKeypoints::kStellaVslam, fork, affine),
+      ad::make_plan(features, affine.max_tilt, affine.view_features), features);
+  options.stella_vslam.min_size = static_cast<int>(std::min(min_area, 2000000000u));  // check() refuses > 10^8
+  options.stella_vslam.mask_rectangles = mask_rectangles(rects);
+  options.check();
+  return options;
+}
+
+}  // namespace
+
+orb_extractor::orb_extractor(const orb_params* orb_params, const unsigned int min_area, const descriptor_type desc_type,
+                             const std::vector<std::vector<float>>& mask_rects)
+    : orb_params_(orb_params), mask_rects_(mask_rects), min_area_sqrt_(0), desc_type_(desc_type) {
+  affine_orb::detail::require(orb_params != nullptr, std::string(kWho) + ": orb_params is null");
+  affine_orb::detail::require(desc_type == descriptor_type::ORB,
+                              std::string(kWho) + ": descriptor_type " + descriptor_type_to_string(desc_type) +
+                                  " is not supported, only ORB (restore stella's extractor for HashSIFT)");
+  affine_orb::detail::require(min_area >= 1, std::string(kWho) + ": min_size must be at least 1");
+  min_area_sqrt_ = static_cast<unsigned>(std::sqrt(min_area));
+  auto* state = new AdapterState{affine_orb::adapters::apply_environment({}), min_area, {}, {}};
+  rect_mask_ = own_state(state);
+  extractor_options(*orb_params_, min_area, mask_rects_, state->affine, 1);  // refuses bad parameters now
+  image_pyramid_.resize(orb_params_->num_levels_);
+}
+
+/// Keypoints and ORB rows of `in_image` (CV_8UC1; empty: returns, outputs untouched), with
+/// `in_image_mask` (non-zero = allowed) or else mask_rects_; image_pyramid_ level 0 is the image,
+/// as stella's. affine_orb's extractor is built for the first image's size, as stella builds its
+/// rectangle mask then.
+void orb_extractor::extract(const cv::_InputArray& in_image, const cv::_InputArray& in_image_mask,
+                            std::vector<cv::KeyPoint>& keypts, const cv::_OutputArray& out_descriptors) {
+  if (in_image.empty()) return;
+  const cv::Mat image = in_image.getMat();
+  const cv::Mat mask = in_image_mask.getMat();
+  AdapterState& state = state_of(rect_mask_);
+  if (std::holds_alternative<std::monostate>(state.engine)) {
+    const affine_orb::ExtractorOptions options =
+        extractor_options(*orb_params_, state.min_area, mask_rects_, state.affine,
+                          grid_cells(*orb_params_, min_area_sqrt_, image.size()));
+    if (state.affine.descriptor == affine_orb::adapters::AdapterDescriptor::kRbrief) {
+      state.engine.emplace<affine_orb::Extractor<affine_orb::Rbrief>>(options);
+    } else {
+      state.engine.emplace<affine_orb::Extractor<affine_orb::Brisk>>(options);
+    }
+    mask_is_initialized_ = true;
+  }
+  std::visit(
+      [&](auto& extractor) {
+        if constexpr (!std::is_same_v<std::decay_t<decltype(extractor)>, std::monostate>) {
+          const auto features = extractor.extract(image, mask, state.levels);
+          keypts.assign(features.keypoints.begin(), features.keypoints.end());
+          const int n = static_cast<int>(features.size());
+          if (n == 0) {
+            out_descriptors.release();
+          } else {
+            out_descriptors.create(n, affine_orb::adapters::kDescriptorBytes, CV_8U);
+            cv::Mat rows = out_descriptors.getMat();
+            // BRISK's first 256 bits, as the ORB-SLAM adapters keep them.
+            for (int i = 0; i < n; ++i) {
+              std::memcpy(rows.ptr(i), features.descriptors[static_cast<std::size_t>(i)].data(),
+                          affine_orb::adapters::kDescriptorBytes);
+            }
+          }
+        }
+      },
+      state.engine);
+  image_pyramid_.resize(state.levels.size());
+  image_pyramid_[0] = image;
+  for (std::size_t l = 1; l < state.levels.size(); ++l) image_pyramid_[l] = state.levels[l];
+}
+
+}  // namespace feature
+}  // namespace stella_vslam

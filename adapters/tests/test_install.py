@@ -1,4 +1,5 @@
-"""Tests of adapters/orbslam2/install.sh and adapters/orbslam3/install.sh (common/install_adapter.py) on
+"""Tests of adapters/orbslam2/install.sh and adapters/orbslam3/install.sh (common/install_adapter.py), and of
+adapters/stella_vslam/install.sh (common/install_stella.py), on
 stand-in trees with the layout of each fork: install, reinstall, refresh, uninstall byte for byte,
 the refusals, the recovery lines in Tracking.cc, and the installed CMake lines compiling the adapter as
 C++17 in a C++11 project (and the recovery lines against the adapter's header).
@@ -502,6 +503,63 @@ class OrbSlam2(InstallTest, unittest.TestCase):
 
 class OrbSlam3(InstallTest, unittest.TestCase):
     fork, other_fork, name = "orbslam3", "orbslam2", "ORB-SLAM3"
+
+
+STELLA_HEADER = """\
+namespace stella_vslam {
+namespace feature {
+class orb_extractor {
+public:
+    std::vector<cv::Mat> image_pyramid_;
+};
+} // namespace feature
+} // namespace stella_vslam
+"""
+STELLA_SOURCE = "// stand-in\nstd::vector<cv::KeyPoint> orb_extractor::distribute_keypoints() {}\n"
+STELLA_CMAKE = "target_sources(${PROJECT_NAME}\n    PRIVATE\n    ${CMAKE_CURRENT_SOURCE_DIR}/orb_extractor.cc)\n"
+
+
+class StellaVslam(unittest.TestCase):
+    """adapters/stella_vslam/install.sh (common/install_stella.py) on a stand-in stella_vslam tree."""
+
+    def setUp(self):
+        self.root = Path(tempfile.mkdtemp(prefix="affine_orb_stella_"))
+        self.addCleanup(shutil.rmtree, str(self.root))
+        feature = self.root / "src/stella_vslam/feature"
+        write(feature / "orb_extractor.h", STELLA_HEADER)
+        write(feature / "orb_extractor.cc", STELLA_SOURCE)
+        write(feature / "CMakeLists.txt", STELLA_CMAKE)
+
+    def run_script(self, *args):
+        return subprocess.run(["sh", str(PROJECT / "adapters/stella_vslam/install.sh")] + list(args),
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                              env=SCRIPT_ENVIRONMENT)
+
+    def test_install_reinstall_uninstall(self):
+        before = snapshot(self.root)
+        self.assertEqual(self.run_script(str(self.root)).returncode, 0)
+        feature = self.root / "src/stella_vslam/feature"
+        self.assertEqual((feature / "orb_extractor.cc").read_bytes(),
+                         (PROJECT / "adapters/stella_vslam/orb_extractor.cc").read_bytes())
+        self.assertEqual((feature / "orb_extractor.h").read_text(), STELLA_HEADER)
+        self.assertIn(str(PROJECT / "adapters" / "common"), (feature / "CMakeLists.txt").read_text())
+        installed = snapshot(self.root)
+        again = self.run_script(str(self.root))
+        self.assertEqual(again.returncode, 0)
+        self.assertIn("nothing to do", again.stdout)
+        self.assertEqual(snapshot(self.root), installed)
+        self.assertEqual(self.run_script("--uninstall", str(self.root)).returncode, 0)
+        self.assertEqual(snapshot(self.root), before)
+
+    def test_refuses_what_it_does_not_know(self):
+        self.assertEqual(self.run_script(str(self.root / "src")).returncode, 1)
+        source = self.root / "src/stella_vslam/feature/orb_extractor.cc"
+        write(source, "// another extractor\n")
+        before = snapshot(self.root)
+        refused = self.run_script(str(self.root))
+        self.assertEqual(refused.returncode, 1)
+        self.assertIn("neither stella's own extractor", refused.stderr)
+        self.assertEqual(snapshot(self.root), before)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 // stella_vslam's feature::orb_extractor implemented by affine_orb: this file replaces stella's
 // src/stella_vslam/feature/orb_extractor.cc and keeps its unmodified orb_extractor.h
 // (adapters/README.md, "stella_vslam"). By default extract() returns stella's own keypoints, in
-// its order, its ORB rows and its image_pyramid_ bytes (ImageKeypoints::kStellaVslam); the
+// its order, its ORB rows and its image_pyramid_ bytes (StellaVslamKeypoints); the
 // AFFINE_ORB_* variables of affine_orb_adapter/options.hpp turn on affine_orb's views or spreading.
 // stella's YAML `Feature:` section is not read here: stella passes orb_params and min_size only.
 #include "stella_vslam/feature/orb_extractor.h"
@@ -105,11 +105,12 @@ affine_orb::ExtractorOptions extractor_options(const orb_params& p, unsigned min
   const ad::ForkParameters fork{features, p.scale_factor_, static_cast<int>(p.num_levels_),
                                 static_cast<int>(p.ini_fast_thr_), static_cast<int>(p.min_fast_thr_)};
   fork.check(kWho);
-  affine_orb::ExtractorOptions options = ad::plan_options(
-      ad::base_options(affine_orb::ImageKeypoints::kStellaVslam, fork, affine),
-      ad::make_plan(features, affine.max_tilt, affine.view_features), features);
-  options.stella_vslam.min_size = static_cast<int>(std::min(min_area, 2000000000u));  // check() refuses > 10^8
-  options.stella_vslam.mask_rectangles = mask_rectangles(rects);
+  affine_orb::StellaVslamKeypoints stella;
+  stella.min_size = static_cast<int>(std::min(min_area, 2000000000u));  // check() refuses > 10^8
+  stella.mask_rectangles = mask_rectangles(rects);
+  affine_orb::ExtractorOptions options =
+      ad::plan_options(ad::base_options(stella, fork, affine),
+                       ad::make_plan(features, affine.max_tilt, affine.view_features), features);
   options.check();
   return options;
 }

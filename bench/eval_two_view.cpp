@@ -1,16 +1,17 @@
 // eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b,...]
-//               [--methods SUBSTRING] [--asift-sequences a,b,...|all] [--peer-cache FILE] [--sweep]
+//               [--methods SUBSTRING,...] [--asift-sequences a,b,...|all] [--peer-cache FILE] [--sweep]
 //               [--placement] [--repeats N]
 //
 // Two-view matching judged where users feel it: on every Oxford pair 1->2 ... 1->6, opencv-doc's
 // graf 1->3 (subset "oxford") and every pair of ../shared/data/pairs/ (hpatches, homogr, evd), per
-// pair and method, whether the pair is solved (the homography that one judge, cv::findHomography
-// with RANSAC at 3 px, estimates from the method's matches puts image 1's corners within 5 px of
-// the ground truth's, mean of the four; on EVD a 20 x 20 grid of image-1 points that the ground
-// truth maps inside image 2), its distinct correct matches (within 3 px, image-1 points in
+// pair and method, whether the pair is solved (the homography that the RANSAC judge,
+// cv::findHomography with RANSAC at 3 px, 10 000 iterations, confidence 0.999, estimates from the
+// method's matches puts image 1's corners within 5 px of the ground truth's, mean of the four; on
+// EVD a 20 x 20 grid of image-1 points that the ground truth maps inside image 2), the same error
+// for the MAGSAC++ judge (cv::USAC_MAGSAC, 3 px) and for the method's own homography, its distinct
+// correct matches (within 3 px, image-1 points in
 // distinct 2-px cells) and the total time: both extractions, matching and verification by the
-// method's own select_model(), single thread, peers in the same run, pair after pair. The error of
-// the method's own homography is reported beside the judge's. The matcher's correspondences are
+// method's own select_model(), single thread, peers in the same run, pair after pair. The matcher's correspondences are
 // its query keypoints and TwoViewResult::points2 (the train keypoints' positions unless aligned).
 //
 // Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
@@ -34,8 +35,12 @@
 // methods are deterministic: the outcome is the last run's); one run by default. Rows read from
 // --peer-cache keep the time of the run that wrote them.
 //
+// --methods keeps the methods whose name contains one of the comma-separated substrings.
+//
 // Writes DIR/eval_two_view.md (per subset and method, pairs solved and seconds, and the union of
-// all methods; the summary over all pairs; then every pair) and DIR/eval_two_view.csv, and prints
+// all methods; AUC@3 / @5 / @10 of the corner error for the own model and both judges, per subset,
+// over all pairs and over the pairs of odd and even index in the run's list, the halves on which
+// a default change must win as well (docs/two_view.md); the summary over all pairs; then every pair) and DIR/eval_two_view.csv, and prints
 // the Markdown.
 #include <algorithm>
 #include <chrono>
@@ -211,30 +216,45 @@ Method peer(const std::string& name, cv::Ptr<cv::Feature2D> default_detector,
           false, true};
 }
 
-/// The judge, the same for every method: cv::findHomography (RANSAC, 3 px, 2000 iterations,
-/// confidence 0.995) on the method's matches; the mean corner error of its homography against the
-/// ground truth (1e9 when it finds none).
-/// EVD pairs are judged on the overlap grid instead of the corners (grid_error()).
-double judge_error(const PointPairs& matches, const affine_orb::bench::ViewpointPair& pair, cv::Size size1,
-                   cv::Size size2) {
-  if (matches.size() < 4) return 1e9;
+/// The corner error of homography `h` against the ground truth (1e9 when `h` is empty): the mean
+/// over image 1's four corners, on EVD over the overlap grid (grid_error()).
+double pair_error(const cv::Mat& h, const affine_orb::bench::ViewpointPair& pair, cv::Size size1, cv::Size size2) {
+  if (h.empty()) return 1e9;
+  return pair.judged_on_grid() ? affine_orb::bench::grid_error(cv::Matx33d(h), pair.h, size1, size2)
+                               : affine_orb::bench::corner_error(cv::Matx33d(h), pair.h, size1);
+}
+
+/// The two judges, the same for every method, re-estimating from the method's matches:
+/// cv::findHomography with RANSAC (3 px, 10 000 iterations, confidence 0.999) and with MAGSAC++
+/// (cv::USAC_MAGSAC, 3 px, the same iterations and confidence); their errors (pair_error()).
+struct JudgeErrors {
+  double ransac = 1e9;
+  double magsac = 1e9;
+};
+
+JudgeErrors judge_errors(const PointPairs& matches, const affine_orb::bench::ViewpointPair& pair, cv::Size size1,
+                         cv::Size size2) {
+  JudgeErrors e;
+  if (matches.size() < 4) return e;
   std::vector<cv::Point2f> p1, p2;
   for (const auto& [a, b] : matches) {
     p1.push_back(a);
     p2.push_back(b);
   }
-  const cv::Mat h = cv::findHomography(p1, p2, cv::RANSAC, 3.0, cv::noArray(), 2000, 0.995);
-  if (h.empty()) return 1e9;
-  return pair.judged_on_grid() ? affine_orb::bench::grid_error(cv::Matx33d(h), pair.h, size1, size2)
-                               : affine_orb::bench::corner_error(cv::Matx33d(h), pair.h, size1);
+  e.ransac = pair_error(cv::findHomography(p1, p2, cv::RANSAC, 3.0, cv::noArray(), 10000, 0.999), pair, size1, size2);
+  e.magsac =
+      pair_error(cv::findHomography(p1, p2, cv::USAC_MAGSAC, 3.0, cv::noArray(), 10000, 0.999), pair, size1, size2);
+  return e;
 }
 
 struct Row {
   std::string pair;
   std::string subset;
   std::string method;
-  bool solved = false;
-  double corner_error = 0.0;      ///< the judge's homography
+  std::size_t index = 0;  ///< the pair's place in the run's ordered list (the odd and even halves)
+  bool solved = false;           ///< by the RANSAC judge
+  double corner_error = 0.0;     ///< the RANSAC judge's homography
+  double magsac_error = 0.0;     ///< the MAGSAC++ judge's homography
   double own_corner_error = 0.0;  ///< the method's own (select_model()'s) homography
   affine_orb::bench::CorrectMatches correct;
   std::size_t matches = 0;
@@ -242,16 +262,17 @@ struct Row {
 };
 
 /// One cached peer row, tab-separated: pair, method, keypoints1, keypoints2, matches, correct,
-/// distinct correct, judge's error, own error, solved, ms.
+/// distinct correct, RANSAC judge's error, own error, solved, ms, MAGSAC++ judge's error.
 std::string cache_line(const Row& r) {
   std::ostringstream line;
   line << r.pair << '\t' << r.method << '\t' << r.outcome.keypoints1 << '\t' << r.outcome.keypoints2 << '\t'
        << r.matches << '\t' << r.correct.correct << '\t' << r.correct.distinct << '\t' << r.corner_error << '\t'
-       << r.own_corner_error << '\t' << r.solved << '\t' << r.outcome.ms << '\n';
+       << r.own_corner_error << '\t' << r.solved << '\t' << r.outcome.ms << '\t' << r.magsac_error << '\n';
   return line.str();
 }
 
-/// The rows of a --peer-cache file, by "pair\tmethod".
+/// The rows of a --peer-cache file, by "pair\tmethod"; lines without the MAGSAC++ judge's error
+/// (written before it was measured) are skipped, so that their peers run again.
 std::map<std::string, Row> read_cache(const std::string& path) {
   std::map<std::string, Row> rows;
   std::ifstream in(path);
@@ -263,7 +284,7 @@ std::map<std::string, Row> read_cache(const std::string& path) {
     std::getline(line, r.pair, '\t');
     std::getline(line, r.method, '\t');
     if (line >> r.outcome.keypoints1 >> r.outcome.keypoints2 >> r.matches >> r.correct.correct >> r.correct.distinct >>
-        r.corner_error >> r.own_corner_error >> r.solved >> r.outcome.ms) {
+        r.corner_error >> r.own_corner_error >> r.solved >> r.outcome.ms >> r.magsac_error) {
       rows[r.pair + '\t' + r.method] = r;
     }
   }
@@ -305,6 +326,58 @@ void placement_table(const std::string& method, const std::vector<Row>& rows,
     md << "| " << method << " | " << octave << " |" << stats(by1[octave]) << stats(by2[octave]) << "\n";
   }
   md << "| " << method << " | all |" << stats(all) << stats(all) << "\n";
+}
+
+/// AUC@k of errors `e` (pixels): the area under the share-of-pairs-below-error curve from 0 to k
+/// px, normalised by k, the HPatches homography metric of SuperGlue and LoFTR; the mean of
+/// max(0, 1 − e/k) over the pairs, which is that area exactly.
+double auc(const std::vector<double>& e, double k) {
+  double sum = 0.0;
+  for (const double x : e) sum += std::max(0.0, 1.0 - x / k);
+  return e.empty() ? 0.0 : sum / static_cast<double>(e.size());
+}
+
+/// The AUC tables: for the own model, the RANSAC judge and the MAGSAC++ judge, per method and per
+/// subset, over all pairs and over the pairs of odd and even index in the run's list, AUC@3 / @5 /
+/// @10 and, in brackets, the pairs within 5 px (solved).
+void auc_tables(const std::vector<Method>& methods, const std::vector<Row>& rows,
+                const std::vector<std::pair<std::string, std::string>>& subset_names, std::ostringstream& md) {
+  using Select = std::function<bool(const Row&)>;
+  std::vector<std::pair<std::string, Select>> groups;
+  for (const auto& [key, title] : subset_names) {
+    groups.emplace_back(title, [key = key](const Row& r) { return r.subset == key; });
+  }
+  groups.emplace_back("all", [](const Row&) { return true; });
+  groups.emplace_back("odd half", [](const Row& r) { return r.index % 2 == 1; });
+  groups.emplace_back("even half", [](const Row& r) { return r.index % 2 == 0; });
+  const std::vector<std::pair<std::string, std::function<double(const Row&)>>> estimates = {
+      {"own model", [](const Row& r) { return r.own_corner_error; }},
+      {"RANSAC judge", [](const Row& r) { return r.corner_error; }},
+      {"MAGSAC++ judge", [](const Row& r) { return r.magsac_error; }}};
+  for (const auto& [estimate, error] : estimates) {
+    md << "| " << estimate << ": AUC@3 / @5 / @10 (solved) |";
+    for (const auto& group : groups) md << " " << group.first << " |";
+    md << "\n|---|";
+    for (std::size_t i = 0; i < groups.size(); ++i) md << "---|";
+    md << "\n";
+    for (const Method& m : methods) {
+      md << "| " << m.name << " |";
+      for (const auto& [title, select] : groups) {
+        std::vector<double> e;
+        for (const Row& r : rows) {
+          if (r.method == m.name && select(r)) e.push_back(error(r));
+        }
+        const auto solved = std::count_if(e.begin(), e.end(),
+                                          [](double x) { return x <= affine_orb::bench::kSolvedCornerError; });
+        char cell[96];
+        std::snprintf(cell, sizeof(cell), e.empty() ? " |" : " %.2f / %.2f / %.2f (%td) |", auc(e, 3.0), auc(e, 5.0),
+                      auc(e, 10.0), solved);
+        md << cell;
+      }
+      md << "\n";
+    }
+    md << "\n";
+  }
 }
 
 /// `method` run `repeats` times on a pair: the last run's outcome with the median of the times (the
@@ -359,7 +432,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b] "
-                   "[--methods SUBSTRING] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement] "
+                   "[--methods SUBSTRING,...] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement] "
                    "[--repeats N]\n");
       return 2;
     }
@@ -459,8 +532,15 @@ int main(int argc, char** argv) {
     });
   }
   if (!method_filter.empty()) {
-    methods.erase(std::remove_if(methods.begin(), methods.end(),
-                                 [&](const Method& m) { return m.name.find(method_filter) == std::string::npos; }),
+    const auto wanted = [&](const Method& m) {
+      std::istringstream names(method_filter);
+      std::string name;
+      while (std::getline(names, name, ',')) {
+        if (!name.empty() && m.name.find(name) != std::string::npos) return true;
+      }
+      return false;
+    };
+    methods.erase(std::remove_if(methods.begin(), methods.end(), [&](const Method& m) { return !wanted(m); }),
                   methods.end());
   }
   const auto runs_on = [&](const Method& m, const std::string& sequence) {
@@ -478,7 +558,8 @@ int main(int argc, char** argv) {
   std::ofstream cache_out;
   if (!cache_path.empty()) cache_out.open(cache_path, std::ios::app);
   std::vector<Row> rows;
-  for (const auto& pair : pairs) {
+  for (std::size_t index = 0; index < pairs.size(); ++index) {
+    const affine_orb::bench::ViewpointPair& pair = pairs[index];
     const cv::Mat a = affine_orb::bench::read_gray(pair.path1);
     const cv::Mat b = affine_orb::bench::read_gray(pair.path2);
     for (const Method& method : methods) {
@@ -493,20 +574,22 @@ int main(int argc, char** argv) {
         row.outcome = run_repeated(method, a, b, pair, repeats);
         row.matches = row.outcome.matches.size();
         row.correct = affine_orb::bench::correct_matches(row.outcome.matches, pair.h);
-        row.corner_error = judge_error(row.outcome.matches, pair, a.size(), b.size());
-        row.own_corner_error = !row.outcome.homography_found ? 1e9
-                               : pair.judged_on_grid()
-                                   ? affine_orb::bench::grid_error(row.outcome.homography, pair.h, a.size(), b.size())
-                                   : affine_orb::bench::corner_error(row.outcome.homography, pair.h, a.size());
+        const JudgeErrors judged = judge_errors(row.outcome.matches, pair, a.size(), b.size());
+        row.corner_error = judged.ransac;
+        row.magsac_error = judged.magsac;
+        row.own_corner_error =
+            row.outcome.homography_found ? pair_error(cv::Mat(row.outcome.homography), pair, a.size(), b.size()) : 1e9;
         row.solved = row.corner_error <= affine_orb::bench::kSolvedCornerError;
         if (method.peer && cache_out.is_open()) cache_out << cache_line(row) << std::flush;
       }
       row.subset = pair.subset;
+      row.index = index;
       std::fprintf(stderr,
-                   "%-24s %-46s kp %5d/%5d matches %5zu distinct %5zu %s (%.1f px, own %.1f) stage %d %s%s %.0f ms\n",
+                   "%-24s %-46s kp %5d/%5d matches %5zu distinct %5zu %s (%.1f px, MAGSAC %.1f, own %.1f) stage %d "
+                   "%s%s %.0f ms\n",
                    row.pair.c_str(), method.name.c_str(), row.outcome.keypoints1, row.outcome.keypoints2, row.matches,
                    row.correct.distinct, row.solved ? "solved" : "------", std::min(row.corner_error, 9999.0),
-                   std::min(row.own_corner_error, 9999.0), row.outcome.stage, row.outcome.verified ? "verified" : "",
+                   std::min(row.magsac_error, 9999.0), std::min(row.own_corner_error, 9999.0), row.outcome.stage, row.outcome.verified ? "verified" : "",
                    row.outcome.stages.c_str(), row.outcome.ms);
       rows.push_back(std::move(row));
     }
@@ -555,6 +638,7 @@ int main(int argc, char** argv) {
     md << " " << count << " / " << solved.size() << " | |";
   }
   md << "\n\n";
+  auc_tables(methods, rows, subset_names, md);
 
   // Per method: pairs solved; total time over all pairs and over the pairs plain 2000 solves,
   // against plain 2000 and the affine default in the same run; pairs verified with a wrong model.
@@ -609,24 +693,25 @@ int main(int argc, char** argv) {
       placement_table(method, rows, pairs, md);
     }
   }
-  md << "\n| pair | method | kp1 | kp2 | matches | distinct correct | corner error px (judge / own) | solved | stage | "
-        "ms |\n"
+  md << "\n| pair | method | kp1 | kp2 | matches | distinct correct | corner error px (RANSAC judge / MAGSAC++ judge / "
+        "own) | solved | stage | ms |\n"
      << "|---|---|---:|---:|---:|---:|---:|---|---:|---:|\n";
   std::ofstream csv(out_dir + "/eval_two_view.csv");
   csv << "pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,corner_error,own_corner_error,solved,"
-         "stage,verified,ms\n";
+         "stage,verified,ms,magsac_corner_error,pair_index\n";
   for (const Row& r : rows) {
     char line[512];
-    std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f | %s | %s | %.0f |\n",
+    std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f / %.1f | %s | %s | %.0f |\n",
                   r.pair.c_str(), r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches,
-                  r.correct.distinct, std::min(r.corner_error, 9999.0), std::min(r.own_corner_error, 9999.0),
+                  r.correct.distinct, std::min(r.corner_error, 9999.0), std::min(r.magsac_error, 9999.0),
+                  std::min(r.own_corner_error, 9999.0),
                   r.solved ? "yes" : "no", r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "",
                   r.outcome.ms);
     md << line;
-    std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f\n", r.pair.c_str(),
+    std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f,%.2f,%zu\n", r.pair.c_str(),
                   r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches, r.correct.correct,
                   r.correct.distinct, std::min(r.corner_error, 1e6), std::min(r.own_corner_error, 1e6), r.solved,
-                  r.outcome.stage, r.outcome.verified, r.outcome.ms);
+                  r.outcome.stage, r.outcome.verified, r.outcome.ms, std::min(r.magsac_error, 1e6), r.index);
     csv << line;
   }
   std::ofstream(out_dir + "/eval_two_view.md") << md.str();

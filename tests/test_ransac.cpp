@@ -1,5 +1,5 @@
-// Generic RANSAC (ransac.hpp) and the minimal/least-squares geometric estimators (homography.hpp,
-// fundamental.hpp), against independent references: a toy line model whose truth is known, exact
+// Generic RANSAC (ransac.hpp), the minimal/least-squares geometric estimators (homography.hpp,
+// fundamental.hpp) and the final homography fit (homography_refinement.hpp), against independent references: a toy line model whose truth is known, exact
 // correspondences generated from known cameras, and naive re-implementations of the scores.
 
 #include <doctest/doctest.h>
@@ -23,6 +23,7 @@
 #include "affine_orb/geometry/detail/ransac_sampler.hpp"
 #include "affine_orb/geometry/fundamental.hpp"
 #include "affine_orb/geometry/homography.hpp"
+#include "affine_orb/geometry/homography_refinement.hpp"
 #include "affine_orb/geometry/ransac.hpp"
 
 namespace {
@@ -630,4 +631,124 @@ TEST_CASE("geometric estimators at their minimal sizes: 3, 4 and 5 correspondenc
     CHECK(r.success == (count == 8));
     if (r.success) CHECK(r.inlier_count == 8);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// refine_homography() against the maximum-likelihood estimate on synthetic planes with known
+// Gaussian noise: the Levenberg–Marquardt minimum of the symmetric transfer error over the true
+// inliers, computed here independently (8 parameters, H(2, 2) = 1, numeric Jacobian).
+
+namespace {
+
+/// The residuals of the symmetric transfer error of `h` on the correspondences a[i] ↔ b[i].
+Eigen::VectorXd symmetric_residuals(const Eigen::Matrix3d& h, const std::vector<Eigen::Vector2d>& a,
+                                    const std::vector<Eigen::Vector2d>& b) {
+  const Eigen::Matrix3d inverse = h.inverse();
+  Eigen::VectorXd r(4 * static_cast<Eigen::Index>(a.size()));
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Eigen::Index k = 4 * static_cast<Eigen::Index>(i);
+    r.segment<2>(k) = (h * a[i].homogeneous()).hnormalized() - b[i];
+    r.segment<2>(k + 2) = (inverse * b[i].homogeneous()).hnormalized() - a[i];
+  }
+  return r;
+}
+
+/// Levenberg–Marquardt on the symmetric transfer error from `start`.
+Eigen::Matrix3d symmetric_transfer_minimum(Eigen::Matrix3d start, const std::vector<Eigen::Vector2d>& a,
+                                           const std::vector<Eigen::Vector2d>& b) {
+  const auto matrix = [](const Eigen::Matrix<double, 8, 1>& p) {
+    Eigen::Matrix3d h;
+    h << p(0), p(1), p(2), p(3), p(4), p(5), p(6), p(7), 1.0;
+    return h;
+  };
+  start /= start(2, 2);
+  Eigen::Matrix<double, 8, 1> p;
+  p << start(0, 0), start(0, 1), start(0, 2), start(1, 0), start(1, 1), start(1, 2), start(2, 0), start(2, 1);
+  double lambda = 1e-3;
+  Eigen::VectorXd r = symmetric_residuals(matrix(p), a, b);
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    Eigen::MatrixXd j(r.size(), 8);
+    for (int c = 0; c < 8; ++c) {
+      const double step = 1e-6 * std::max(1.0, std::abs(p(c)));
+      Eigen::Matrix<double, 8, 1> plus = p, minus = p;
+      plus(c) += step;
+      minus(c) -= step;
+      j.col(c) = (symmetric_residuals(matrix(plus), a, b) - symmetric_residuals(matrix(minus), a, b)) / (2 * step);
+    }
+    const Eigen::Matrix<double, 8, 8> jtj = j.transpose() * j;
+    const Eigen::Matrix<double, 8, 1> g = j.transpose() * r;
+    Eigen::Matrix<double, 8, 8> damped = jtj;
+    damped.diagonal() *= 1.0 + lambda;
+    const Eigen::Matrix<double, 8, 1> delta = damped.ldlt().solve(-g);
+    const Eigen::VectorXd next = symmetric_residuals(matrix(p + delta), a, b);
+    if (next.squaredNorm() < r.squaredNorm()) {
+      p += delta;
+      r = next;
+      lambda *= 0.3;
+      if (delta.norm() < 1e-12 * (1.0 + p.norm())) break;
+    } else {
+      lambda *= 10.0;
+    }
+  }
+  return matrix(p);
+}
+
+/// Mean distance over the corners of a 640 x 480 image 1 between their images under h and g.
+double corner_distance(const Eigen::Matrix3d& h, const Eigen::Matrix3d& g) {
+  double sum = 0.0;
+  for (const Eigen::Vector2d& c :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 0), Eigen::Vector2d(0, 479), Eigen::Vector2d(639, 479)}) {
+    sum += ((h * c.homogeneous()).hnormalized() - (g * c.homogeneous()).hnormalized()).norm();
+  }
+  return sum / 4.0;
+}
+
+}  // namespace
+
+TEST_CASE("refine_homography: as precise as the maximum-likelihood estimate, more than local optimisation") {
+  // A plane seen under perspective, its points in the left two fifths of image 1 so that the far
+  // corners extrapolate; Gaussian noise of 0.7 px in both images (a median transfer error of about
+  // 1.2 px, as correct keypoint matches have on the Oxford pairs), 30 % outliers.
+  Eigen::Matrix3d truth;
+  truth << 0.9, 0.12, 35.0, -0.06, 1.05, 12.0, 2e-4, 1e-4, 1.0;
+  double refined_to_ml = 0.0, optimised_to_ml = 0.0, refined_error = 0.0, optimised_error = 0.0, ml_error = 0.0;
+  const int trials = 20;
+  for (int trial = 0; trial < trials; ++trial) {
+    std::mt19937_64 rng(100 + static_cast<std::uint64_t>(trial));
+    std::uniform_real_distribution<double> px(0.0, 255.0), py(0.0, 479.0), ox(0.0, 639.0), unit01(0.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.7);
+    std::vector<Eigen::Vector2d> x1, x2, inlier1, inlier2;
+    while (x1.size() < 300) {
+      const Eigen::Vector2d p(px(rng), py(rng));
+      if (unit01(rng) < 0.3) {
+        x1.push_back(p);
+        x2.emplace_back(ox(rng), py(rng));
+        continue;
+      }
+      x1.push_back(p + Eigen::Vector2d(noise(rng), noise(rng)));
+      x2.push_back((truth * p.homogeneous()).hnormalized() + Eigen::Vector2d(noise(rng), noise(rng)));
+      inlier1.push_back(x1.back());
+      inlier2.push_back(x2.back());
+    }
+    // The matcher's model before the final fit: LO-RANSAC at σ = 1 px.
+    const auto optimised = affine_orb::ransac(affine_orb::HomographyEstimator(to_cv(x1), to_cv(x2)));
+    REQUIRE(optimised.success);
+    const affine_orb::RefinedHomography refined = affine_orb::refine_homography(to_cv(x1), to_cv(x2), optimised.model.h);
+    REQUIRE(refined.success);
+    const Eigen::Matrix3d ml = symmetric_transfer_minimum(truth, inlier1, inlier2);
+    refined_to_ml += corner_distance(refined.homography, ml) / trials;
+    optimised_to_ml += corner_distance(optimised.model.h, ml) / trials;
+    refined_error += corner_distance(refined.homography, truth) / trials;
+    optimised_error += corner_distance(optimised.model.h, truth) / trials;
+    ml_error += corner_distance(ml, truth) / trials;
+  }
+  MESSAGE("corner distance to the ML estimate: refined " << refined_to_ml << " px, LO-RANSAC " << optimised_to_ml
+                                                         << " px; to the truth: refined " << refined_error
+                                                         << " px, LO-RANSAC " << optimised_error << " px, ML "
+                                                         << ml_error << " px");
+  // LO-RANSAC's hard inlier set at 2.4 px leaves out a fifth of the inliers; the refinement takes
+  // them back, weighted.
+  CHECK(refined_to_ml < 0.7 * optimised_to_ml);
+  CHECK(refined_error < 1.1 * ml_error);
+  CHECK(optimised_error > 1.1 * ml_error);  // the test tells the two apart
 }

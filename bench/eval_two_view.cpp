@@ -19,8 +19,8 @@
 // defaults; with sub-pixel keypoints; with aligned correspondences (TwoViewOptions::align_correspondences), with
 // and without sub-pixel keypoints; with stages to tilt 4√2; with the precision test
 // max_half_disagreement at 5 px and off; without guided matching, with and without the
-// precision test),
-// cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
+// precision test; with the final fit of the homography (TwoViewOptions::final_fit), with and
+// without guided matching), cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
 // 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
 // unless --asift-sequences says otherwise: its float matching takes minutes a pair). Every method
 // but the matcher is verified by select_model() with the matcher's ModelSelectionOptions, so the
@@ -476,6 +476,12 @@ int main(int argc, char** argv) {
     o.guided_matching.reset();
     return o;
   };
+  // With the final fit of the homography (TwoViewOptions::final_fit), and without it.
+  const auto final_fit = [](affine_orb::TwoViewOptions o, bool on) {
+    o.final_fit = on ? std::optional<affine_orb::HomographyRefinementOptions>(affine_orb::HomographyRefinementOptions{})
+                     : std::nullopt;
+    return o;
+  };
   // The default stages and two more to extreme tilts (4 and 4√2, as MODS and ASIFT's maxTilt 5),
   // run only while the pair is not verified.
   affine_orb::TwoViewOptions extreme = defaults;
@@ -500,6 +506,8 @@ int main(int argc, char** argv) {
       two_view("ours views on demand, no precision test", precise(defaults, std::nullopt)),
       two_view("ours views on demand, no guided matching", unguided(defaults)),
       two_view("ours views on demand, no guided matching, no precision test", precise(unguided(defaults), std::nullopt)),
+      two_view("ours views on demand, final fit", final_fit(defaults, true)),
+      two_view("ours views on demand, final fit, no guided matching", final_fit(unguided(defaults), true)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),
       peer("cv::SIFT", cv::SIFT::create(), model),

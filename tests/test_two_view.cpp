@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -325,6 +326,57 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
   CHECK(guided.inlier_count == std::count(guided.inliers.begin(), guided.inliers.end(), 1));
   CHECK(guided.model.homography_inlier_count == guided.inlier_count);
   CHECK(guided.model.fundamental_inliers.empty());
+}
+
+TEST_CASE("the final fit keeps every unguided match, returns only guided matches it accepts, flags them") {
+  // The turned, noisy plane of the guided-matching case: the guided rounds feed the final fit,
+  // whose matches hold the stage's own (unguided) ones and whose inliers are those within
+  // max_error of its homography.
+  const cv::Mat image = affine_orb::test::graf(1);
+  const cv::Matx33d truth = turned_camera(35.0, image.size());
+  cv::Mat turned;
+  cv::warpPerspective(image, turned, cv::Mat(truth), image.size());
+  cv::GaussianBlur(turned, turned, cv::Size(3, 3), 0.8);
+  cv::Mat noise(turned.size(), CV_16SC1);
+  cv::RNG random(11);
+  random.fill(noise, cv::RNG::NORMAL, 0.0, 4.0);
+  cv::Mat noisy;
+  turned.convertTo(noisy, CV_16SC1);
+  noisy += noise;
+  noisy.convertTo(turned, CV_8UC1);
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 1000;
+  options.stages.clear();
+  options.model.sigma = 4.0;
+  options.guided_matching.reset();
+  const auto unguided = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
+  options.guided_matching = affine_orb::GuidedMatchingOptions{};
+  options.final_fit = affine_orb::HomographyRefinementOptions{};
+  const auto fitted = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
+  REQUIRE(fitted.verified);
+  REQUIRE(fitted.model.model == affine_orb::GeometricModel::kHomography);
+  CHECK(fitted.stages[0].guided_rounds == 2);
+  std::set<std::pair<int, int>> returned;
+  for (const affine_orb::Match& m : fitted.matches) returned.insert({m.query, m.train});
+  for (const affine_orb::Match& m : unguided.matches) CHECK(returned.count({m.query, m.train}) == 1);
+  CHECK(fitted.matches.size() > unguided.matches.size());
+  const auto model = affine_orb::HomographyModel::from_pixels(fitted.model.homography);
+  REQUIRE(model);
+  const double bound = options.final_fit->max_error;
+  for (std::size_t i = 0; i < fitted.matches.size(); ++i) {
+    const cv::Point2f& p1 = fitted.features1.keypoints[static_cast<std::size_t>(fitted.matches[i].query)].pt;
+    const Eigen::Vector2d x1(p1.x, p1.y), x2(fitted.points2[i].x, fitted.points2[i].y);
+    const bool accepted = ((model->h * x1.homogeneous()).hnormalized() - x2).norm() <= bound &&
+                          ((model->inverse * x2.homogeneous()).hnormalized() - x1).norm() <= bound;
+    CHECK(accepted == (fitted.inliers[i] != 0));
+  }
+  CHECK(fitted.inlier_count == std::count(fitted.inliers.begin(), fitted.inliers.end(), 1));
+  CHECK(fitted.model.homography_inlier_count == fitted.inlier_count);
+  const double error_unguided = affine_orb::test::corner_error(unguided.model.homography, truth, image.size());
+  const double error_fitted = affine_orb::test::corner_error(fitted.model.homography, truth, image.size());
+  CAPTURE(error_unguided);
+  CAPTURE(error_fitted);
+  CHECK(error_fitted < error_unguided);
 }
 
 TEST_CASE("a stage-0 homography with imprecise corners escalates under the default precision test" *

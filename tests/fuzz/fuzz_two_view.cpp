@@ -2,7 +2,8 @@
 // two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
 // min_inlier_ratio, all_stages, the precision test (max_half_disagreement), guided matching
-// (rounds, gate radius, ratio), the aligned correspondences (align_correspondences), stages to the extreme
+// (rounds, gate radius, ratio), the aligned correspondences (align_correspondences), the final fit
+// (final_fit: Cauchy scale, max_error, iterations, some invalid), stages to the extreme
 // tilts 4 and 4√2, given or from stages_up_to(). Invalid options must end in
 // std::invalid_argument, valid ones in a result that keeps every documented invariant: stage
 // reports, the stopping rule, inlier flags, match indices, keypoints inside their image and mask,
@@ -88,6 +89,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if ((verification & 64) && (verification & 128)) options.align_correspondences->max_shift = 0.0;
   options.model.ransac.min_iterations =
       std::min(options.model.ransac.min_iterations, options.model.ransac.max_iterations);
+  // The final fit off or on; Cauchy scale 0 (invalid) to 3 px, max_error 0 (invalid) to 6 px,
+  // iterations 0 (invalid) to 3.
+  const std::uint8_t fit = bytes.next();
+  if (fit & 1) {
+    options.final_fit = affine_orb::HomographyRefinementOptions{};
+    options.final_fit->cauchy_scale = 1.5 * ((fit >> 1) & 3);
+    options.final_fit->max_error = 3.0 * ((fit >> 3) & 3);
+    options.final_fit->iterations = (fit >> 5) & 3;
+  }
 
   const int width1 = 1 + bytes.next() % 48;
   const int height1 = 1 + bytes.next() % 40;

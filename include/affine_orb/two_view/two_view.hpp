@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/homography.hpp"
+#include "affine_orb/geometry/homography_refinement.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/geometry/ransac.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
@@ -73,7 +75,8 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 /// (match_features()), and select_model() estimates H and F and chooses one; a chosen homography
 /// is put to the precision test (max_half_disagreement) and, with min_inliers inliers making up
 /// min_inlier_ratio of the matches, refined by TwoViewOptions::guided_matching, then by
-/// TwoViewOptions::align_correspondences; the escalation stops when the
+/// TwoViewOptions::align_correspondences, then fitted by TwoViewOptions::final_fit; the
+/// escalation stops when the
 /// chosen model has min_inliers inliers and min_inlier_ratio of the matches and, for a homography,
 /// passed the precision test, or when the stages run out. Stage k's keypoints and descriptors are
 /// a superset of stage k − 1's.
@@ -163,9 +166,10 @@ class TwoViewMatcher {
   /// select_model() on the matches; the chosen model's inlier flags and count; for a chosen
   /// homography under the precision test, the disagreement of its two half estimates; a chosen
   /// homography with enough support refined by guided matching and then by aligned
-  /// correspondences. Neither runs on a homography that failed the precision test unless the
-  /// stage is `reported` (the last one, or every one with all_stages): the next stage matches
-  /// everything again and its result replaces this one.
+  /// correspondences, and every chosen homography fitted by the final fit. None runs on a
+  /// homography that failed the precision test unless the stage is `reported` (the last one, or
+  /// every one with all_stages): the next stage matches everything again and its result replaces
+  /// this one.
   StageModel verify(const Features<kBits>& features1, const Features<kBits>& features2, std::vector<Match> matches,
                     const cv::Mat& image1, const cv::Mat& image2, bool reported) const {
     StageModel stage;
@@ -182,9 +186,51 @@ class TwoViewMatcher {
                                                   stage.model.homography, image1.size());
     }
     const bool refinable = homography && (reported || precise(stage));
+    const std::vector<Match> unguided = refinable && options_.final_fit ? stage.matches : std::vector<Match>{};
     if (refinable && options_.guided_matching && supported(stage)) match_guided_rounds(features1, features2, stage);
     if (refinable && options_.align_correspondences && supported(stage)) align(features1, image1, image2, stage);
+    if (refinable && options_.final_fit) fit_final(features1, features2, unguided, stage);
     return stage;
+  }
+
+  /// TwoViewOptions::final_fit on the chosen homography of `stage`: refine_homography() on the
+  /// stage's matches (the last guided round's, with their aligned points) and the `unguided`
+  /// matches not among them; the stage keeps the unguided matches and the others that the fitted
+  /// homography accepts, its homography becomes the fit and its inliers the matches the fit
+  /// accepts (HomographyRefinementOptions::max_error). Unchanged when the fit fails.
+  void fit_final(const Features<kBits>& features1, const Features<kBits>& features2,
+                 const std::vector<Match>& unguided, StageModel& stage) const {
+    const auto key = [](const Match& m) { return std::make_pair(m.query, m.train); };
+    std::set<std::pair<int, int>> own, present;
+    for (const Match& m : unguided) own.insert(key(m));
+    std::vector<Match> candidates = stage.matches;
+    MatchedPoints points = stage.points;
+    for (const Match& m : candidates) present.insert(key(m));
+    for (const Match& m : unguided) {
+      if (present.count(key(m)) != 0) continue;
+      candidates.push_back(m);
+      points.points1.push_back(features1.keypoints[static_cast<std::size_t>(m.query)].pt);
+      points.points2.push_back(features2.keypoints[static_cast<std::size_t>(m.train)].pt);
+    }
+    if (candidates.size() < 4) return;
+    const RefinedHomography fitted =
+        refine_homography(points.points1, points.points2, stage.model.homography, *options_.final_fit);
+    if (!fitted.success) return;
+    stage.matches.clear();
+    stage.points = MatchedPoints{};
+    stage.inliers.clear();
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      if (fitted.inliers[i] == 0 && own.count(key(candidates[i])) == 0) continue;
+      stage.matches.push_back(candidates[i]);
+      stage.points.points1.push_back(points.points1[i]);
+      stage.points.points2.push_back(points.points2[i]);
+      stage.inliers.push_back(fitted.inliers[i]);
+    }
+    stage.inlier_count = fitted.inlier_count;
+    stage.model.homography = fitted.homography;
+    stage.model.homography_inliers = stage.inliers;
+    stage.model.homography_inlier_count = fitted.inlier_count;
+    stage.model.fundamental_inliers.clear();
   }
 
   /// `result`'s matches, model, inliers and positions become `stage`'s, and `report` counts them.

@@ -14,6 +14,7 @@
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/extraction/extractor_options.hpp"
+#include "affine_orb/geometry/homography_refinement.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/two_view/alignment.hpp"
@@ -127,6 +128,15 @@ struct TwoViewOptions {
   std::optional<CorrespondenceAlignmentOptions> align_correspondences;
   /// The re-estimation of guided matching and of aligned correspondences.
   RefitOptions refit;
+  /// The final fit of a chosen homography, after guided matching and alignment: refine_homography()
+  /// (IRLS of the Sampson error, Cauchy weights, over every correspondence within max_error, 3 px
+  /// by default) on the stage's own matches and the last guided round's. The result's homography
+  /// is the fit; its matches are the stage's own (unguided) matches and the guided matches the fit
+  /// accepts, so that they are never looser than the unguided ones; its inliers are the matches
+  /// the fit accepts (both transfer errors within max_error). The guided rounds then only feed
+  /// the estimate. nullopt: the homography, matches and inliers of the last guided round (or of
+  /// the local optimisation) as they are.
+  std::optional<HomographyRefinementOptions> final_fit;
   /// Run every stage whatever stage 0 verified (the views on for every pair); the result is then
   /// that of the last stage.
   bool all_stages = false;
@@ -151,6 +161,7 @@ struct TwoViewOptions {
     if (guided_matching) guided_matching->check();
     if (align_correspondences) align_correspondences->check();
     refit.check();
+    if (final_fit) final_fit->check();
     detail::require(extractor.additive_budget() != nullptr,
                     "TwoViewOptions: views on demand need the AdditiveBudget extractor.view_budget");
     double previous = 1.0;
@@ -243,6 +254,8 @@ struct TwoViewResult {
   Features<Bits> features1;
   Features<Bits> features2;
   /// Correspondences of the last stage: Match::query indexes features1, Match::train features2.
+  /// After guided rounds, the last round's; with TwoViewOptions::final_fit, the stage's own matches
+  /// and the guided ones the final homography accepts.
   std::vector<Match> matches;
   /// Per match, image 2's point of the correspondence, pixels of image 2: aligned with image 1's
   /// patch around the query keypoint where TwoViewOptions::align_correspondences accepted it, else the train
@@ -258,7 +271,9 @@ struct TwoViewResult {
   /// Both estimates and the choice of the last stage: x2 ~ H x1 and x2ᵀ F x1 = 0, pixels. After
   /// guided rounds (TwoViewOptions::guided_matching) the homography, its score, inlier flags and count are
   /// the last round's, on `matches`; fundamental_inliers is then empty (its flags indexed the
-  /// stage's own matches), the fundamental matrix and its inlier count stay the stage's.
+  /// stage's own matches), the fundamental matrix and its inlier count stay the stage's. After
+  /// the final fit (TwoViewOptions::final_fit) the homography, inlier flags and count are the
+  /// fit's; the score stays the local optimisation's.
   ModelSelectionResult model;
   /// One report per stage run, stage 0 first.
   std::vector<TwoViewStageReport> stages;

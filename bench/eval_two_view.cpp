@@ -19,14 +19,15 @@
 // defaults; with sub-pixel keypoints; with aligned correspondences (TwoViewOptions::align_correspondences), with
 // and without sub-pixel keypoints; with stages to tilt 4√2; with the precision test
 // max_half_disagreement at 5 px and off; without guided matching, with and without the
-// precision test; with the final fit of the homography (TwoViewOptions::final_fit), with and
+// precision test; without the final fit of the homography (TwoViewOptions::final_fit), with and
 // without guided matching), cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
 // 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
 // unless --asift-sequences says otherwise: its float matching takes minutes a pair). Every method
 // but the matcher is verified by select_model() with the matcher's ModelSelectionOptions, so the
 // own homographies come from the same estimator. --peer-cache FILE reads the OpenCV peers' rows
 // from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
-// --sweep adds matcher variants (stages, min_inliers, min_inlier_ratio), the measurement behind
+// --sweep adds matcher variants (stages, min_inliers, min_inlier_ratio, the final fit's Cauchy
+// scale and max_error), the measurement behind
 // TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
 // demand, with and without sub-pixel positions, per octave of the keypoint in image 1 and in image
 // 2, the residuals |H·x1 − x2| (ground truth H, pixels of image 2, level-0 coordinates) of the
@@ -476,7 +477,7 @@ int main(int argc, char** argv) {
     o.guided_matching.reset();
     return o;
   };
-  // With the final fit of the homography (TwoViewOptions::final_fit), and without it.
+  // With the final fit of the homography (TwoViewOptions::final_fit), or without it.
   const auto final_fit = [](affine_orb::TwoViewOptions o, bool on) {
     o.final_fit = on ? std::optional<affine_orb::HomographyRefinementOptions>(affine_orb::HomographyRefinementOptions{})
                      : std::nullopt;
@@ -506,8 +507,8 @@ int main(int argc, char** argv) {
       two_view("ours views on demand, no precision test", precise(defaults, std::nullopt)),
       two_view("ours views on demand, no guided matching", unguided(defaults)),
       two_view("ours views on demand, no guided matching, no precision test", precise(unguided(defaults), std::nullopt)),
-      two_view("ours views on demand, final fit", final_fit(defaults, true)),
-      two_view("ours views on demand, final fit, no guided matching", final_fit(unguided(defaults), true)),
+      two_view("ours views on demand, no final fit", final_fit(defaults, false)),
+      two_view("ours views on demand, no guided matching, no final fit", final_fit(unguided(defaults), false)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),
       peer("cv::SIFT", cv::SIFT::create(), model),
@@ -534,6 +535,16 @@ int main(int argc, char** argv) {
     for (int n : {10, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
     for (double r : {0.0, 0.05, 0.2})
       variant("min_inlier_ratio " + std::to_string(r).substr(0, 4), [r](auto& o) { o.min_inlier_ratio = r; });
+    for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{
+             {1.0, 2.0}, {1.0, 2.4}, {1.5, 2.4}, {1.0, 3.0}, {1.5, 3.0}, {3.0, 3.0}, {2.0, 4.0}, {3.0, 4.0}, {5.0, 3.0}}) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "final fit, Cauchy %.1f px, max_error %.1f px", scale, bound);
+      variant(name, [scale = scale, bound = bound](auto& o) {
+        o.final_fit = affine_orb::HomographyRefinementOptions{};
+        o.final_fit->cauchy_scale = scale;
+        o.final_fit->max_error = bound;
+      });
+    }
     variant("plain 1000 first", [](auto& o) {
       o.extractor.features = 1000;
       o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}};

@@ -301,6 +301,7 @@ TEST_CASE("guided matching adds correct matches and brings the homography closer
   options.stages.clear();
   options.model.sigma = 4.0;
   options.guided_matching.reset();
+  options.final_fit.reset();  // the guided rounds alone; the final fit has its own case
   const auto plain = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
   options.guided_matching = affine_orb::GuidedMatchingOptions{};
   REQUIRE(options.guided_matching->rounds == 2);
@@ -349,6 +350,7 @@ TEST_CASE("the final fit keeps every unguided match, returns only guided matches
   options.stages.clear();
   options.model.sigma = 4.0;
   options.guided_matching.reset();
+  options.final_fit.reset();
   const auto unguided = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image, turned);
   options.guided_matching = affine_orb::GuidedMatchingOptions{};
   options.final_fit = affine_orb::HomographyRefinementOptions{};
@@ -396,6 +398,7 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   REQUIRE(defaults.guided_matching.has_value());
   affine_orb::TwoViewOptions untested = defaults;
   untested.max_half_disagreement.reset();
+  untested.final_fit.reset();  // the guided model as it comes, which the test does not judge
   const auto loose = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(untested).match(image1, image2);
   REQUIRE(loose.verified);
   REQUIRE(loose.stage == 0);
@@ -429,6 +432,7 @@ TEST_CASE("a stage-0 homography with imprecise corners escalates under the defau
   // With all_stages every stage's report is kept, so stage 0 gets its guided rounds as without the test.
   affine_orb::TwoViewOptions every = defaults;
   every.all_stages = true;
+  every.final_fit.reset();
   const auto all = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(every).match(image1, image2);
   CHECK(all.stages[0].guided_rounds == loose.stages[0].guided_rounds);
   CHECK(all.stages[0].inliers == loose.stages[0].inliers);
@@ -524,7 +528,8 @@ TEST_CASE("a plane at tilt 8 is out of the default stages' reach and verified by
   const double error = affine_orb::test::corner_error(r.model.homography, truth, image1.size());
   CAPTURE(error);
   CHECK(error < 2.0);
-  CHECK(inlier_precision(r, truth) > 0.95);
+  // The final fit flags inliers within its 4 px; correct is counted within 3 px of the truth.
+  CHECK(inlier_precision(r, truth) > 0.85);
   CHECK(correct_inliers(r, truth) >= 100);
 
   // The views of one corner describe it several times with nearly equal descriptors a few pixels

@@ -166,7 +166,7 @@ class TwoViewMatcher {
   /// select_model() on the matches; the chosen model's inlier flags and count; for a chosen
   /// homography under the precision test, the disagreement of its two half estimates; a chosen
   /// homography with enough support refined by guided matching and then by aligned
-  /// correspondences, and every chosen homography fitted by the final fit. None runs on a
+  /// correspondences, and then, when it passed the precision test, by the final fit. None runs on a
   /// homography that failed the precision test unless the stage is `reported` (the last one, or
   /// every one with all_stages): the next stage matches everything again and its result replaces
   /// this one.
@@ -189,7 +189,9 @@ class TwoViewMatcher {
     const std::vector<Match> unguided = refinable && options_.final_fit ? stage.matches : std::vector<Match>{};
     if (refinable && options_.guided_matching && supported(stage)) match_guided_rounds(features1, features2, stage);
     if (refinable && options_.align_correspondences && supported(stage)) align(features1, image1, image2, stage);
-    if (refinable && options_.final_fit) fit_final(features1, features2, unguided, stage);
+    if (refinable && options_.final_fit && precise(stage) && supported(stage)) {
+      fit_final(features1, features2, unguided, stage);
+    }
     return stage;
   }
 

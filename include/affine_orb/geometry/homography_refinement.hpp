@@ -30,7 +30,7 @@ namespace affine_orb {
 struct HomographyRefinementOptions {
   /// Scale c of the Cauchy weight 1 / (1 + d²/c²) of a correspondence with Sampson distance d,
   /// pixels; (0, inf); default 2, about twice the spread of correct keypoint matches (median
-  /// residual 1.1–1.3 px, docs/two_view.md, "Where keypoints land"): on synthetic planes at that
+  /// residual 1.1–1.3 px, docs/two_view.md, "Reading"): on synthetic planes at that
   /// noise it comes closer to the maximum-likelihood estimate than 1 or 1.5 (test_ransac).
   double cauchy_scale = 2.0;
   /// A correspondence takes part, and is an inlier of the result, when both its transfer errors

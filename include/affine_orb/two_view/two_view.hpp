@@ -75,10 +75,10 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 /// (match_features()), and select_model() estimates H and F and chooses one; a chosen homography
 /// is put to the precision test (max_half_disagreement) and, with min_inliers inliers making up
 /// min_inlier_ratio of the matches, refined by TwoViewOptions::guided_matching, then by
-/// TwoViewOptions::align_correspondences, then fitted by TwoViewOptions::final_fit; the
-/// escalation stops when the
-/// chosen model has min_inliers inliers and min_inlier_ratio of the matches and, for a homography,
-/// passed the precision test, or when the stages run out. Stage k's keypoints and descriptors are
+/// TwoViewOptions::align_correspondences, then, when it passed the precision test, fitted by
+/// TwoViewOptions::final_fit; the escalation stops when the chosen model has min_inliers inliers
+/// and min_inlier_ratio of the matches and, for a homography, passed the precision test, or when
+/// the stages run out. Stage k's keypoints and descriptors are
 /// a superset of stage k − 1's.
 ///
 /// Holds one Extractor per image with its workspace: reuse one matcher for many pairs. Not for use
@@ -166,10 +166,10 @@ class TwoViewMatcher {
   /// select_model() on the matches; the chosen model's inlier flags and count; for a chosen
   /// homography under the precision test, the disagreement of its two half estimates; a chosen
   /// homography with enough support refined by guided matching and then by aligned
-  /// correspondences, and then, when it passed the precision test, by the final fit. None runs on a
-  /// homography that failed the precision test unless the stage is `reported` (the last one, or
-  /// every one with all_stages): the next stage matches everything again and its result replaces
-  /// this one.
+  /// correspondences, and then, when it passed the precision test and still has that support, by
+  /// the final fit. Guided matching and alignment run on a homography that failed the precision
+  /// test only when the stage is `reported` (the last one, or every one with all_stages): the
+  /// next stage matches everything again and its result replaces this one.
   StageModel verify(const Features<kBits>& features1, const Features<kBits>& features2, std::vector<Match> matches,
                     const cv::Mat& image1, const cv::Mat& image2, bool reported) const {
     StageModel stage;

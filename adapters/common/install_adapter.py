@@ -154,11 +154,12 @@ def check_project(project, fork):
                       "would not read back as this path: move or link the checkout elsewhere" % project)
 
 
-def classify(data):
-    """'adapter' (affine_orb's), 'stock' (ORB-SLAM's own) or 'other', from a file's bytes."""
+def classify(data, stock_identifier=STOCK_IDENTIFIER):
+    """'adapter' (affine_orb's), 'stock' (the fork's own: `stock_identifier` matches, ORB-SLAM's by
+    default) or 'other', from a file's bytes."""
     if ADAPTER_INCLUDE.search(data):
         return "adapter"
-    if STOCK_IDENTIFIER.search(data):
+    if stock_identifier.search(data):
         return "stock"
     return "other"
 

@@ -22,6 +22,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import install_adapter  # noqa: E402
 from install_adapter import BACKUP_DIR, BEGIN_MARKER, END_MARKER, PROJECT, Refusal, write_file  # noqa: E402
 
 SCRIPT = "adapters/stella_vslam/install.sh"
@@ -29,7 +30,6 @@ FEATURE = "src/stella_vslam/feature"
 SOURCE = FEATURE + "/orb_extractor.cc"
 HEADER = FEATURE + "/orb_extractor.h"
 CMAKE = FEATURE + "/CMakeLists.txt"
-ADAPTER_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*["<]affine_orb_adapter/', re.MULTILINE)
 STOCK_IDENTIFIER = re.compile(rb"\borb_extractor::distribute_keypoints\b")
 HEADER_CLASS = re.compile(rb"\bclass[ \t]+orb_extractor\s*\{.*\bstd::vector<cv::Mat>[ \t]+image_pyramid_;", re.DOTALL)
 TARGET_SOURCES = re.compile(rb"target_sources\s*\(\s*(\$\{PROJECT_NAME\}|[\w.-]+)[^)]*orb_extractor\.cc", re.DOTALL)
@@ -37,11 +37,7 @@ TARGET_SOURCES = re.compile(rb"target_sources\s*\(\s*(\$\{PROJECT_NAME\}|[\w.-]+
 
 def classify(data):
     """'adapter' (affine_orb's), 'stock' (stella's own) or 'other', from a file's bytes."""
-    if ADAPTER_INCLUDE.search(data):
-        return "adapter"
-    if STOCK_IDENTIFIER.search(data):
-        return "stock"
-    return "other"
+    return install_adapter.classify(data, STOCK_IDENTIFIER)
 
 
 def check_tree(tree):

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -108,6 +109,27 @@ inline cv::Mat kitti_frame(int index) {
   char name[32];
   std::snprintf(name, sizeof(name), "/kitti06/image_0/%06d.png", index);
   return load_gray(data_dir() + name);
+}
+
+/// KITTI 00 frame `index` (0..159), grey 1241x376.
+inline cv::Mat kitti00_frame(int index) {
+  char name[40];
+  std::snprintf(name, sizeof(name), "/kitti00/image_0/%06d.png", index);
+  return load_gray(data_dir() + name);
+}
+
+/// The frames the conformance tests compare a SLAM system's extraction on in every clone:
+/// opencv-doc's graf img1 and img3 and Middlebury's aloeL.
+inline std::vector<cv::Mat> conformance_sample_frames() { return {graf(1), graf(3), textured_photo()}; }
+
+/// The evaluation data's frames the conformance tests compare on: KITTI 00 and 06, and the Oxford
+/// sequences' first images.
+inline std::vector<cv::Mat> conformance_data_frames() {
+  std::vector<cv::Mat> out;
+  for (int i = 0; i < 160; i += 20) out.push_back(kitti00_frame(i));
+  for (int i = 0; i <= 50; i += 25) out.push_back(kitti_frame(i));
+  for (const char* sequence : {"boat", "bark", "bikes", "trees", "leuven"}) out.push_back(oxford_image(sequence, 1));
+  return out;
 }
 
 /// Maps a point through a homography (x2 ~ H x1).

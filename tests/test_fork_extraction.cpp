@@ -69,29 +69,6 @@ Agreement compare(const affine_orb::stock::StockFrame& stock, const affine_orb::
   return a;
 }
 
-/// KITTI 00 frame `index` (0..159), grey 1241x376.
-cv::Mat kitti00_frame(int index) {
-  char name[40];
-  std::snprintf(name, sizeof(name), "/kitti00/image_0/%06d.png", index);
-  return affine_orb::test::load_gray(affine_orb::test::data_dir() + name);
-}
-
-/// opencv-doc's photos: Oxford's graf img1 and img3 and Middlebury's aloeL.
-std::vector<cv::Mat> sample_frames() {
-  return {affine_orb::test::graf(1), affine_orb::test::graf(3), affine_orb::test::textured_photo()};
-}
-
-/// The evaluation data's frames: KITTI 00 and 06, and the Oxford sequences' first images.
-std::vector<cv::Mat> data_frames() {
-  std::vector<cv::Mat> out;
-  for (int i = 0; i < 160; i += 20) out.push_back(kitti00_frame(i));
-  for (int i = 0; i <= 50; i += 25) out.push_back(affine_orb::test::kitti_frame(i));
-  for (const char* sequence : {"boat", "bark", "bikes", "trees", "leuven"}) {
-    out.push_back(affine_orb::test::oxford_image(sequence, 1));
-  }
-  return out;
-}
-
 /// Each fork's keypoints at ORB-SLAM's budgets and its initialisers' against the fork's own
 /// extractor on `images`: the same keypoints in the same order with the same rows.
 void check_identical(const std::vector<cv::Mat>& images) {
@@ -126,16 +103,18 @@ void check_identical(const std::vector<cv::Mat>& images) {
 }  // namespace
 
 TEST_CASE("a fork's image keypoints equal its own extractor's, in order and bit for bit, on opencv-doc's photos") {
-  check_identical(sample_frames());
+  check_identical(affine_orb::test::conformance_sample_frames());
 }
 
-TEST_CASE("the same on KITTI and Oxford frames" * doctest::test_suite("data")) { check_identical(data_frames()); }
+TEST_CASE("the same on KITTI and Oxford frames" * doctest::test_suite("data")) {
+  check_identical(affine_orb::test::conformance_data_frames());
+}
 
 TEST_CASE("ORB-SLAM2 on the system heap: the keypoints its address order decides are few") {
   // Inside ORB-SLAM2 its octree orders nodes of equal size by heap address, which changes from run
   // to run; the nodes that order decides are a small share of the keypoints (two runs of the fork
   // on one frame share 98.6–99.8 % of theirs, bench_fork_extraction).
-  std::vector<cv::Mat> images = sample_frames();
+  std::vector<cv::Mat> images = affine_orb::test::conformance_sample_frames();
   images.push_back(affine_orb::test::panning_frame(4, cv::Size(1241, 376)));
   for (const int nfeatures : {1000, 5000}) {
     ExtractorOptions options;

@@ -61,28 +61,6 @@ bool same_pyramid(const std::vector<cv::Mat>& a, const std::vector<cv::Mat>& b) 
   return true;
 }
 
-cv::Mat kitti00_frame(int index) {
-  char name[40];
-  std::snprintf(name, sizeof(name), "/kitti00/image_0/%06d.png", index);
-  return affine_orb::test::load_gray(affine_orb::test::data_dir() + name);
-}
-
-/// opencv-doc's photos: Oxford's graf img1 and img3 and Middlebury's aloeL.
-std::vector<cv::Mat> sample_frames() {
-  return {affine_orb::test::graf(1), affine_orb::test::graf(3), affine_orb::test::textured_photo()};
-}
-
-/// The evaluation data's frames: KITTI 00 and 06, and the Oxford sequences' first images.
-std::vector<cv::Mat> data_frames() {
-  std::vector<cv::Mat> out;
-  for (int i = 0; i < 160; i += 20) out.push_back(kitti00_frame(i));
-  for (int i = 0; i <= 50; i += 25) out.push_back(affine_orb::test::kitti_frame(i));
-  for (const char* sequence : {"boat", "bark", "bikes", "trees", "leuven"}) {
-    out.push_back(affine_orb::test::oxford_image(sequence, 1));
-  }
-  return out;
-}
-
 /// A mask of `size` that hides a disc and a slanted band, edges at no cell boundary.
 cv::Mat sample_mask(cv::Size size) {
   cv::Mat mask(size, CV_8UC1, cv::Scalar(255));
@@ -142,10 +120,12 @@ void check_cases(const std::vector<cv::Mat>& images) {
 }  // namespace
 
 TEST_CASE("stella_vslam's image keypoints equal its own extractor's, in order and bit for bit, on opencv-doc's photos") {
-  check_cases(sample_frames());
+  check_cases(affine_orb::test::conformance_sample_frames());
 }
 
-TEST_CASE("the same on KITTI and Oxford frames" * doctest::test_suite("data")) { check_cases(data_frames()); }
+TEST_CASE("the same on KITTI and Oxford frames" * doctest::test_suite("data")) {
+  check_cases(affine_orb::test::conformance_data_frames());
+}
 
 TEST_CASE("stella_vslam's options are checked") {
   ExtractorOptions options;

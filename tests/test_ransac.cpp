@@ -260,6 +260,61 @@ TEST_CASE("index sampler: distinct indices in range, seeded, roughly uniform") {
   CHECK(std::set<int>(x, x + 8).size() == 8);
 }
 
+TEST_CASE("progressive sampler: PROSAC's schedule, against its recursion written out") {
+  // Chum & Matas 2005, Sec. 2.3: T_m = T_N C(m, m) / C(N, m), T_{n+1} = T_n (n + 1) / (n + 1 − m),
+  // T'_m = 1, T'_{n+1} = T'_n + ceil(T_{n+1} − T_n); sample t comes from the first n_t, where n_t
+  // grows by one whenever t reaches T'_{n_t}; it holds correspondence n_t (index n_t − 1) while
+  // t <= T'_{n_t}.
+  const int n = 300, m = 4, growth = 500;
+  affine_orb::detail::ProgressiveSampler sampler(n, m, growth, 3);
+  double t_n = growth;
+  for (int i = 0; i < m; ++i) t_n *= static_cast<double>(m - i) / (n - i);
+  long t_prime = 1;
+  int subset = m;
+  bool uniform_seen = false;
+  for (long t = 1; t <= 2000; ++t) {
+    if (t == t_prime && subset < n) {
+      const double next = t_n * (subset + 1) / (subset + 1 - m);
+      t_prime += static_cast<long>(std::ceil(next - t_n));
+      t_n = next;
+      ++subset;
+    }
+    int drawn[m];
+    sampler.draw(drawn, m);
+    REQUIRE(std::set<int>(drawn, drawn + m).size() == static_cast<std::size_t>(m));
+    for (const int d : drawn) REQUIRE((d >= 0 && d < subset));
+    if (t <= t_prime) {
+      REQUIRE(drawn[0] == subset - 1);
+    } else {
+      uniform_seen = true;
+    }
+  }
+  CHECK(subset == n);   // all correspondences reached by T_N samples
+  CHECK(uniform_seen);  // then uniform over all of them
+}
+
+TEST_CASE("ransac: progressive sampling finds a model whose few inliers rank first, where uniform draws do not") {
+  // 20 points on the line among 1000 (2 %), ranked among the first 40: PROSAC draws them together
+  // within its first samples; a uniform draw holds two of them with probability 0.0004.
+  std::vector<int> truth;
+  LineEstimator data = make_line_data(1000, 1.0, 5, truth);  // all outliers first
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> noise(0.0, 0.2);
+  for (int i = 0; i < 40; i += 2) {
+    const double x = 2.5 * i;
+    data.points[static_cast<std::size_t>(i)] = {x + noise(rng), 0.5 * x + 10.0 + noise(rng)};
+  }
+  affine_orb::RansacOptions options;
+  options.max_iterations = 100;
+  const auto uniform = affine_orb::ransac(data, options);
+  options.progressive_sampling = true;
+  const auto progressive = affine_orb::ransac(data, options);
+  REQUIRE(progressive.success);
+  CHECK(progressive.inlier_count >= 20);
+  CHECK(line_error(progressive.model) < 1.0);
+  CHECK(line_error(uniform.model) > 5.0);  // a chance line through the outliers
+}
+
 TEST_CASE("ransac: recovers a line through 50 % outliers; result equals a naive re-scoring") {
   std::vector<int> truth;
   const RefinedLineEstimator e{make_line_data(400, 0.5, 3, truth)};

@@ -55,6 +55,12 @@ struct RansacOptions {
   /// size s (Fischler & Bolles 1981; Hartley & Zisserman eq. 4.18). 0.99 is the customary value
   /// (Hartley & Zisserman Sec. 4.7.1).
   double confidence = 0.99;
+  /// PROSAC (Chum & Matas, CVPR 2005): the correspondences come ordered best first (e.g. by
+  /// descriptor distance), and the samples are drawn from a leading subset that grows to all of
+  /// them by max_iterations (detail::ProgressiveSampler), so that a model whose inliers are a few
+  /// percent of the correspondences but rank high is drawn within hundreds of samples where a
+  /// uniform draw needs ~1/w⁴. Default false: uniform draws (any order).
+  bool progressive_sampling = false;
   /// Seed of the std::mt19937_64 that draws the samples: the same data, options and seed give the
   /// same result.
   std::uint64_t seed = 0x5eed;
@@ -269,8 +275,8 @@ inline int needed_iterations(const RansacOptions& options, int sample_size, doub
 
 /// The models of one ransac() iteration: draws drawn.size() distinct indices into `drawn` and
 /// hands the first Estimator::kSampleSize of them to estimator.generate().
-template <class Estimator>
-auto sample_models(const Estimator& estimator, IndexSampler& sampler, std::vector<int>& drawn) {
+template <class Estimator, class Sampler>
+auto sample_models(const Estimator& estimator, Sampler& sampler, std::vector<int>& drawn) {
   std::array<int, static_cast<std::size_t>(Estimator::kSampleSize)> sample{};
   sampler.draw(drawn.data(), static_cast<int>(drawn.size()));
   std::copy_n(drawn.begin(), Estimator::kSampleSize, sample.begin());
@@ -303,11 +309,57 @@ void adopt_candidate(RansacResult<Model>& candidate, RansacResult<Model>& result
   result.inliers.swap(candidate.inliers);
 }
 
+/// ransac()'s search with the samples `sampler` draws (IndexSampler or ProgressiveSampler).
+template <class Estimator, class Sampler>
+RansacResult<typename Estimator::Model> search(const Estimator& estimator, const RansacOptions& options,
+                                               Sampler& sampler, int draw_size) {
+  using Model = typename Estimator::Model;
+  constexpr int kSampleSize = Estimator::kSampleSize;
+  const std::size_t n = estimator.size();
+  RansacResult<Model> result;
+  result.inliers.assign(n, 0);
+  std::vector<int> drawn(static_cast<std::size_t>(draw_size));
+  std::vector<std::uint8_t> mask(n, 0);
+  int needed = needed_iterations(options, kSampleSize, 0.0);
+
+  // Minimal-sample models compete with each other (best_sample_score); each new best one is
+  // locally optimised (LO-RANSAC, Chum, Matas & Kittler, DAGM 2003): re-estimated from its
+  // inliers and re-scored while the score improves. The best optimised model is the result, and
+  // termination counts its inliers, which noisy minimal samples underestimate. Comparing samples
+  // with samples keeps a sample near the optimum from being shadowed by an optimised mediocre one.
+  RansacResult<Model> candidate;
+  candidate.inliers.assign(n, 0);
+  double best_sample_score = -std::numeric_limits<double>::infinity();
+  bool found = false;
+
+  int iteration = 0;
+  while (iteration < options.max_iterations && (iteration < options.min_iterations || iteration < needed)) {
+    ++iteration;
+    const auto models = sample_models(estimator, sampler, drawn);
+    for (int m = 0; m < models.count; ++m) {
+      const Model& model = models.models[static_cast<std::size_t>(m)];
+      const auto scored = score_model(estimator, model, best_sample_score, mask);
+      if (!scored || !(scored->first > best_sample_score)) continue;
+      best_sample_score = scored->first;
+      candidate = optimised_sample(estimator, model, *scored, mask, std::move(candidate), options.refinement_passes);
+      if (found && !(candidate.score > result.score)) continue;
+      found = true;
+      adopt_candidate(candidate, result);
+      needed = needed_iterations(options, kSampleSize,
+                                 static_cast<double>(result.inlier_count) / static_cast<double>(n));
+    }
+  }
+  result.iterations = iteration;
+  if (!found) return result;
+  result.success = result.inlier_count >= kSampleSize;
+  return result;
+}
+
 }  // namespace detail
 
 /// RANSAC with the estimator's score (MSAC-style when the score is the truncated χ² one):
 /// draws `draw_size` distinct correspondence indices per iteration from a std::mt19937_64 seeded
-/// with options.seed, hands the first Estimator::kSampleSize of them to estimator.generate(),
+/// with options.seed (uniformly, or progressively: RansacOptions::progressive_sampling), hands the first Estimator::kSampleSize of them to estimator.generate(),
 /// locally optimises every model that beats all earlier sample models (see
 /// RansacOptions::refinement_passes), keeps the optimised model of highest score and stops
 /// adaptively (see RansacOptions).
@@ -335,43 +387,12 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
     return result;
   }
 
-  detail::IndexSampler sampler(n, options.seed);
-  std::vector<int> drawn(static_cast<std::size_t>(draw_size));
-  std::vector<std::uint8_t> mask(n, 0);
-  int needed = detail::needed_iterations(options, kSampleSize, 0.0);
-
-  // Minimal-sample models compete with each other (best_sample_score); each new best one is
-  // locally optimised (LO-RANSAC, Chum, Matas & Kittler, DAGM 2003): re-estimated from its
-  // inliers and re-scored while the score improves. The best optimised model is the result, and
-  // termination counts its inliers, which noisy minimal samples underestimate. Comparing samples
-  // with samples keeps a sample near the optimum from being shadowed by an optimised mediocre one.
-  RansacResult<Model> candidate;
-  candidate.inliers.assign(n, 0);
-  double best_sample_score = -std::numeric_limits<double>::infinity();
-  bool found = false;
-
-  int iteration = 0;
-  while (iteration < options.max_iterations && (iteration < options.min_iterations || iteration < needed)) {
-    ++iteration;
-    const auto models = detail::sample_models(estimator, sampler, drawn);
-    for (int m = 0; m < models.count; ++m) {
-      const Model& model = models.models[static_cast<std::size_t>(m)];
-      const auto scored = detail::score_model(estimator, model, best_sample_score, mask);
-      if (!scored || !(scored->first > best_sample_score)) continue;
-      best_sample_score = scored->first;
-      candidate =
-          detail::optimised_sample(estimator, model, *scored, mask, std::move(candidate), options.refinement_passes);
-      if (found && !(candidate.score > result.score)) continue;
-      found = true;
-      detail::adopt_candidate(candidate, result);
-      needed = detail::needed_iterations(options, kSampleSize,
-                                         static_cast<double>(result.inlier_count) / static_cast<double>(n));
-    }
+  if (options.progressive_sampling) {
+    detail::ProgressiveSampler sampler(n, draw_size, options.max_iterations, options.seed);
+    return detail::search(estimator, options, sampler, draw_size);
   }
-  result.iterations = iteration;
-  if (!found) return result;
-  result.success = result.inlier_count >= kSampleSize;
-  return result;
+  detail::IndexSampler sampler(n, options.seed);
+  return detail::search(estimator, options, sampler, draw_size);
 }
 
 /// ransac() drawing exactly the estimator's minimal sample size per iteration.

@@ -8,6 +8,7 @@
 /// correspondence within a wider bound (4 px by default), weighs it by how well it agrees, and accounts for the noise
 /// of both images, so that its estimate comes close to the maximum-likelihood one.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -70,6 +71,14 @@ inline bool within_transfer(const NormalizedCorrespondences& data, std::size_t i
   const Eigen::Vector2d forward = (model.h * data.pixels1[i].homogeneous()).hnormalized() - data.pixels2[i];
   const Eigen::Vector2d backward = (model.inverse * data.pixels2[i].homogeneous()).hnormalized() - data.pixels1[i];
   return forward.squaredNorm() <= bound * bound && backward.squaredNorm() <= bound * bound;
+}
+
+/// Per correspondence of `data`, 1 when within_transfer() at `bound`.
+inline std::vector<std::uint8_t> transfer_inliers(const NormalizedCorrespondences& data, const HomographyModel& model,
+                                                  double bound) {
+  std::vector<std::uint8_t> inliers(data.pixels1.size(), 0);
+  for (std::size_t i = 0; i < data.pixels1.size(); ++i) inliers[i] = within_transfer(data, i, model, bound) ? 1 : 0;
+  return inliers;
 }
 
 /// The normal matrix Σ wᵢ Aᵢᵀ Mᵢ Aᵢ of one reweighting step, for Hn (`model` in normalised
@@ -144,12 +153,24 @@ inline RefinedHomography refine_homography(const std::vector<cv::Point2f>& point
     result.iterations = step + 1;
   }
   result.homography = current->h;
-  result.inliers.assign(data.pixels1.size(), 0);
-  for (std::size_t i = 0; i < data.pixels1.size(); ++i) {
-    result.inliers[i] = detail::within_transfer(data, i, *current, options.max_error) ? 1 : 0;
-    result.inlier_count += result.inliers[i];
-  }
+  result.inliers = detail::transfer_inliers(data, *current, options.max_error);
+  result.inlier_count = static_cast<int>(std::count(result.inliers.begin(), result.inliers.end(), 1));
   return result;
+}
+
+/// Per correspondence points1[i] ↔ points2[i] (pixels), 1 when both its transfer errors under
+/// `homography` (x2 against H x1, x1 against H⁻¹ x2) are at most `max_error` pixels: the inliers
+/// refine_homography() reports, for a homography found otherwise. Throws std::invalid_argument
+/// when the lists differ in length, a coordinate is not finite, `homography` is not an invertible
+/// finite homography, or max_error is not positive and finite.
+inline std::vector<std::uint8_t> transfer_inliers(const std::vector<cv::Point2f>& points1,
+                                                  const std::vector<cv::Point2f>& points2,
+                                                  const Eigen::Matrix3d& homography, double max_error) {
+  detail::require_range(max_error, detail::kPositive, "transfer_inliers: max_error");
+  const detail::NormalizedCorrespondences data = detail::normalize_correspondences(points1, points2, "transfer_inliers");
+  const std::optional<HomographyModel> model = HomographyModel::from_pixels(homography);
+  detail::require(model.has_value(), "transfer_inliers: the homography must be finite and invertible");
+  return detail::transfer_inliers(data, *model, max_error);
 }
 
 }  // namespace affine_orb

@@ -76,6 +76,23 @@ std::pair<cv::Matx33d, cv::Size> tilted_plane(double tilt, double phi, double ps
   return {shift * a, cv::Size(static_cast<int>(x1 - x0 + 2 * margin), static_cast<int>(y1 - y0 + 2 * margin))};
 }
 
+/// Image 2 of a scene of known geometry in which correct matches are few, as between day and
+/// night: image 1 under `truth`, cut into an 8 × 6 grid of cells, inverted (255 − grey) but for
+/// the even cells of a checkerboard outside row 2. FAST finds the same corners in an inverted
+/// cell, but every binary test of their descriptors flips, so their nearest neighbours are random.
+cv::Mat inverted_cells(const cv::Mat& image, const cv::Matx33d& truth) {
+  cv::Mat out;
+  cv::warpPerspective(image, out, cv::Mat(truth), image.size());
+  const int cols = 8, rows = 6, w = image.cols / cols, h = image.rows / rows;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const cv::Mat cell = out(cv::Rect(c * w, r * h, w, h));
+      if ((c + r) % 2 != 0 || r == 2) cv::subtract(cv::Scalar(255), cell, cell);
+    }
+  }
+  return out;
+}
+
 /// Options that run every stage, with `features` image keypoints.
 affine_orb::TwoViewOptions every_stage(int features) {
   affine_orb::TwoViewOptions options;
@@ -111,10 +128,7 @@ TEST_CASE("a wide-baseline pair escalates to the views and is solved there" * do
   const cv::Matx33d truth = affine_orb::test::oxford_homography("graf", 5);
   const auto r = affine_orb::match_images(image1, image2);
   REQUIRE(r.verified);
-  CHECK(r.stage >= 1);
-  const affine_orb::TwoViewStageReport& first = r.stages.front();
-  const bool first_verified = first.inliers >= 15 && first.inliers >= 0.1 * first.matches;
-  CHECK_FALSE(first_verified);  // stage 0 did not verify it
+  CHECK(r.stage >= 1);  // stage 0 did not verify it
   CHECK(std::count_if(r.features1.views.begin(), r.features1.views.end(), [](int v) { return v > 0; }) > 0);
   CHECK(affine_orb::test::corner_error(r.model.homography, truth, image1.size()) < 5.0);
   CHECK(correct_inliers(r, truth) >= 20);
@@ -182,6 +196,60 @@ TEST_CASE("the escalation stops only on enough inliers making up enough of the m
     CHECK(r.stage == 0);
     CHECK(r.stages.size() == 1);
   }
+}
+
+TEST_CASE("a correct model supported by a few percent of the matches is verified, as the inlier ratio did not") {
+  // Half the cells of image 2 but a row show the plane under a known rotation of the camera, the
+  // others its negative, whose descriptors match at random; image 1 has a strip of another photo
+  // that image 2 does not show. Matched without a ratio test, as descriptors that changed (day and
+  // night) match, the correct homography's inliers are under 10 % of the matches. The a-contrario
+  // test verifies it, the earlier 10 % bound did not.
+  const cv::Mat image = affine_orb::test::graf(1);
+  const cv::Matx33d truth = turned_camera(8.0, image.size());
+  const cv::Mat view = inverted_cells(image, truth);
+  cv::Mat strip, widened;
+  cv::resize(affine_orb::test::textured_photo(), strip, cv::Size(600, image.rows), 0, 0, cv::INTER_AREA);
+  cv::hconcat(image, strip, widened);
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 800;
+  options.extractor.spreading = affine_orb::Spreading::kQuadtree;  // keypoints in every cell
+  options.stages.clear();
+  options.matching.matcher.ratio = 1.0f;
+  // PROSAC: the correct matches have the smallest descriptor distances, and are drawn first.
+  options.model.ransac.progressive_sampling = true;
+  const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view);
+  REQUIRE(r.model.model == affine_orb::GeometricModel::kHomography);
+  CHECK(r.verified);
+  CHECK(affine_orb::test::corner_error(r.model.homography, truth, image.size()) < 3.0);
+  REQUIRE(r.stages[0].log10_false_alarms.has_value());
+  CHECK(*r.stages[0].log10_false_alarms < 0.0);
+  const double ratio = r.stages[0].inliers / static_cast<double>(r.stages[0].matches);
+  CHECK(ratio < 0.1);
+  options.min_inlier_ratio = 0.1;
+  options.max_false_alarms.reset();
+  CHECK_FALSE(affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view).verified);
+}
+
+TEST_CASE("a chance consensus, bark 1 -> 6's F on 16 of 79 matches, is not verified" * doctest::test_suite("data")) {
+  // bark 1 -> 6 (zoom and rotation of a plane): after the last stage, select_model() chooses an F
+  // whose 16 inliers an 8-point sample explains by chance (an epipolar band holds a wrong match
+  // with a few percent probability); its homography is hundreds of pixels off. The a-contrario
+  // test refuses it; the earlier support tests (15 inliers, 10 % of the matches) verified it.
+  const cv::Mat image1 = affine_orb::test::oxford_image("bark", 1);
+  const cv::Mat image6 = affine_orb::test::oxford_image("bark", 6);
+  const cv::Matx33d truth = affine_orb::test::oxford_homography("bark", 6);
+  affine_orb::TwoViewOptions options;
+  const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image6);
+  REQUIRE(r.model.model == affine_orb::GeometricModel::kFundamental);
+  CHECK_FALSE(r.verified);
+  REQUIRE(r.log10_false_alarms.has_value());
+  CHECK(*r.log10_false_alarms > 0.0);
+  CHECK(affine_orb::test::corner_error(r.model.homography, truth, image1.size()) > 50.0);
+  options.max_false_alarms.reset();
+  options.min_inlier_ratio = 0.1;
+  const auto earlier = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image6);
+  CHECK(earlier.verified);
+  CHECK(earlier.model.model == affine_orb::GeometricModel::kFundamental);
 }
 
 TEST_CASE("two-view matching honours masks and refuses bad input") {
@@ -384,7 +452,7 @@ TEST_CASE("the final fit keeps every unguided match, returns only guided matches
 TEST_CASE("a stage-0 homography with imprecise corners escalates under the default precision test" *
           doctest::test_suite("data")) {
   // graf 1 -> 4 (40° of viewpoint change): stage 0's RANSAC homography has min_inliers inliers
-  // making up min_inlier_ratio of the matches but misses the ground truth's corners by far more
+  // and passes the support test but misses the ground truth's corners by far more
   // than the judge's 5 px. Without the precision test the guided rounds grow it into a model that
   // its own guided matches confirm (their two halves agree within the test's bound), and the
   // matcher stops there. The default test judges the RANSAC model before those rounds: its two

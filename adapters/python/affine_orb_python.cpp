@@ -247,6 +247,7 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
     stage["fundamental_inlier_count"] = s.fundamental_inlier_count;
     stage["model"] = affine_orb::model_name(s.model);
     stage["half_disagreement"] = s.half_disagreement ? py::object(py::float_(*s.half_disagreement)) : py::none();
+    stage["log10_false_alarms"] = s.log10_false_alarms ? py::object(py::float_(*s.log10_false_alarms)) : py::none();
     stage["guided_rounds"] = s.guided_rounds;
     stage["aligned"] = s.aligned;
     stage["extract_ms"] = s.extract_ms;
@@ -408,9 +409,11 @@ PYBIND11_MODULE(affine_orb, m) {
   m.def(
       "match_images",
       [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
-         const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers, double min_inlier_ratio,
-         int guided_rounds, std::optional<double> max_half_disagreement, bool align_correspondences, bool all_stages, const std::string& descriptor,
-         const std::string& spreading, int threads, const py::handle& mask1, const py::handle& mask2) {
+         const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers,
+         std::optional<double> max_false_alarms, std::optional<double> min_inlier_ratio, int guided_rounds,
+         std::optional<double> max_half_disagreement, bool align_correspondences, bool final_fit,
+         bool progressive_sampling, bool all_stages, const std::string& descriptor, const std::string& spreading,
+         int threads, const py::handle& mask1, const py::handle& mask2) {
         affine_orb::TwoViewOptions options;
         options.extractor.features = features;
         options.extractor.views.max_tilt = max_tilt;
@@ -424,6 +427,7 @@ PYBIND11_MODULE(affine_orb, m) {
           options.stages = affine_orb::stages_up_to(options.extractor.views);
         }
         options.min_inliers = min_inliers;
+        options.max_false_alarms = max_false_alarms;
         options.min_inlier_ratio = min_inlier_ratio;
         if (guided_rounds == 0) {
           options.guided_matching.reset();
@@ -432,6 +436,8 @@ PYBIND11_MODULE(affine_orb, m) {
         }
         options.max_half_disagreement = max_half_disagreement;
         if (align_correspondences) options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
+        if (!final_fit) options.final_fit.reset();
+        options.model.ransac.progressive_sampling = progressive_sampling;
         options.all_stages = all_stages;
         options.check();
         py::array_t<std::uint8_t> s1, s2, s3, s4;
@@ -445,30 +451,38 @@ PYBIND11_MODULE(affine_orb, m) {
       },
       py::arg("image1"), py::arg("image2"), py::arg("features") = two_view.extractor.features,
       py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = py::none(),
-      py::arg("min_inliers") = two_view.min_inliers, py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
+      py::arg("min_inliers") = two_view.min_inliers, py::arg("max_false_alarms") = two_view.max_false_alarms,
+      py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
       py::arg("guided_rounds") = two_view.guided_matching->rounds,
       py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("align_correspondences") = false,
+      py::arg("final_fit") = two_view.final_fit.has_value(),
+      py::arg("progressive_sampling") = two_view.model.ransac.progressive_sampling,
       py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
       py::arg("threads") = two_view.extractor.threads, py::arg("mask1") = py::none(), py::arg("mask2") = py::none(),
       "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
-      "`features` keypoints; while the pair is not verified (min_inliers inliers of the chosen model, at least "
-      "min_inlier_ratio of the matches), each stage (max_tilt, view_features) adds the views of tilts up to "
-      "max_tilt with view_features x features keypoints per image, and matching and H/F selection run again. "
-      "stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
-      "stage of 0.5 per further factor sqrt(2), e.g. (4, 0.5) and (5.66, 0.5) for max_tilt=5.66). A "
-      "chosen homography verifies only when homographies fitted to the two halves of its RANSAC inliers map image "
-      "1's corners within max_half_disagreement pixels of each other (None = no precision test; 10 by default, "
-      "twice the 5 px a solved pair may be off); a supported one is then refined by guided_rounds rounds of "
-      "matching within a gate around its predictions and re-estimation (0 = off); with align_correspondences, "
-      "image 2's point "
-      "of every match is aligned with image 1's patch under the verified "
-      "homography (sub-pixel correspondences) and the homography re-estimated on them. "
+      "`features` keypoints; while the pair is not verified, each stage (max_tilt, view_features) adds the views of "
+      "tilts up to max_tilt with view_features x features keypoints per image, and matching and H/F selection run "
+      "again. stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
+      "stage of 0.5 per further factor sqrt(2), e.g. (4, 0.5) and (5.66, 0.5) for max_tilt=5.66). A stage verifies "
+      "the pair when its chosen model has min_inliers inliers, chance explains it at most max_false_alarms times "
+      "(the a-contrario test: number of false alarms among the matches; None = no test), at least min_inlier_ratio "
+      "of the matches are its inliers (None, the default = no bound) and, for a homography, homographies fitted to "
+      "the two halves of its RANSAC inliers map image 1's corners within max_half_disagreement pixels of each other "
+      "(None = no precision test; 10 by default, twice the 5 px a solved pair may be off). A supported homography is "
+      "refined by guided_rounds rounds of matching within a gate around its predictions and re-estimation (0 = "
+      "off); with align_correspondences, image 2's point of every match is aligned with image 1's patch under it "
+      "(sub-pixel correspondences) and the homography re-estimated on them; with final_fit (the default), a "
+      "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
+      "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
+      "accepts, never looser than the unguided ones. progressive_sampling: RANSAC draws from the matches of "
+      "smallest descriptor distance first (PROSAC), for pairs whose correct matches are a few percent. "
       "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
       "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image 2's "
-      "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model (\"homography\", \"fundamental\" "
-      "or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, or None) and stages (one "
-      "dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement (pixels, or None when "
-      "not measured), guided_rounds, aligned (matches aligned), milliseconds). Invalid options raise "
+      "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model "
+      "(\"homography\", \"fundamental\" or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, "
+      "or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement "
+      "(pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned (matches aligned), "
+      "milliseconds). Invalid options raise "
       "ValueError, wrong types TypeError.");
 }

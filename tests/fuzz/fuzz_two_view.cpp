@@ -1,7 +1,7 @@
 // libFuzzer target: two-view matching with views on demand (TwoViewMatcher). The input bytes choose
 // two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
-// masks and the options: image keypoints, stages (tilts and budgets), min_inliers,
-// min_inlier_ratio, all_stages, the precision test (max_half_disagreement), guided matching
+// masks and the options: image keypoints, stages (tilts and budgets), min_inliers, the support
+// tests (max_false_alarms, min_inlier_ratio), PROSAC (progressive_sampling), all_stages, the precision test (max_half_disagreement), guided matching
 // (rounds, gate radius, ratio), the aligned correspondences (align_correspondences), the final fit
 // (final_fit: Cauchy scale, max_error, iterations, some invalid), stages to the extreme
 // tilts 4 and 4√2, given or from stages_up_to(). Invalid options must end in
@@ -67,7 +67,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   }
   options.min_inliers = bytes.next() % 40;               // < 8 is invalid
-  options.min_inlier_ratio = (bytes.next() % 12) * 0.1;  // > 1 is invalid
+  // The support tests: the a-contrario bound (default 1, off, 1e-6, or 0: invalid) and the inlier
+  // share (off, or 0 to 1.1: > 1 is invalid); PROSAC on or off.
+  const std::uint8_t support = bytes.next();
+  constexpr std::optional<double> kFalseAlarms[] = {1.0, std::nullopt, 1e-6, 0.0};
+  options.max_false_alarms = kFalseAlarms[support & 3];
+  if (support & 4) options.min_inlier_ratio = ((support >> 3) % 12) * 0.1;
+  options.model.ransac.progressive_sampling = (support & 128) != 0;
   options.all_stages = (flags & 1) != 0;
   // The precision test: the default, off, at 3 px, or at 0 (invalid).
   constexpr std::optional<double> kHalfDisagreements[] = {10.0, std::nullopt, 3.0, 0.0};
@@ -135,10 +141,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!r.verified || options.all_stages) require(r.stage == n_stages);
     if (r.verified) {
       require(r.inlier_count >= options.min_inliers);
-      require(r.inlier_count >= options.min_inlier_ratio * static_cast<double>(r.matches.size()));
+      if (options.min_inlier_ratio)
+        require(r.inlier_count >= *options.min_inlier_ratio * static_cast<double>(r.matches.size()));
+      if (options.max_false_alarms)
+        require(r.log10_false_alarms && *r.log10_false_alarms <= std::log10(*options.max_false_alarms));
       if (options.max_half_disagreement && r.model.model == affine_orb::GeometricModel::kHomography)
         require(r.half_disagreement && *r.half_disagreement <= *options.max_half_disagreement);
     }
+    // The number of false alarms is measured only when the test is on and a model was chosen.
+    require(r.log10_false_alarms.has_value() ==
+            (options.max_false_alarms.has_value() && r.model.model != affine_orb::GeometricModel::kNone));
     // The precision test is measured only when on and a homography was chosen.
     if (!options.max_half_disagreement || r.model.model != affine_orb::GeometricModel::kHomography)
       require(!r.half_disagreement);

@@ -134,6 +134,36 @@ def test_match_images_guided_matching_and_precision_test_are_reported():
 
 
 @pytest.mark.data
+def test_match_images_support_test_final_fit_and_progressive_sampling_reach_the_matcher():
+    """max_false_alarms, min_inlier_ratio, final_fit and progressive_sampling reach the C++ options: on
+    graf 1->2 the stage reports the chosen homography's log10 number of false alarms (far below 0;
+    None without the test); an unreachable min_inlier_ratio leaves the pair unverified; the final fit
+    (on by default) changes the homography, keeps the matches' count at least that of the stage's own
+    matches, and flags as inliers exactly the matches within 4 px both ways; PROSAC verifies the
+    pair too."""
+    image1 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img1.png"), cv2.IMREAD_GRAYSCALE)
+    image2 = cv2.imread(os.path.join(DATA, "oxford", "graf", "img2.png"), cv2.IMREAD_GRAYSCALE)
+    r = affine_orb.match_images(image1, image2)
+    assert r["verified"] and r["stage"] == 0
+    assert r["stages"][0]["log10_false_alarms"] < -100
+    assert affine_orb.match_images(image1, image2, max_false_alarms=None)["stages"][0]["log10_false_alarms"] is None
+    assert not affine_orb.match_images(image1, image2, min_inlier_ratio=1.0, stages=[])["verified"]
+    unfitted = affine_orb.match_images(image1, image2, final_fit=False)
+    assert unfitted["verified"] and not np.allclose(unfitted["homography"], r["homography"])
+    h = r["homography"]
+    p1 = np.array([[*r["keypoints1"][m.queryIdx].pt, 1.0] for m in r["matches"]]).T
+    p2 = np.array([[*r["keypoints2"][m.trainIdx].pt, 1.0] for m in r["matches"]]).T
+    forward = h @ p1
+    backward = np.linalg.inv(h) @ p2
+    within = (np.linalg.norm(forward[:2] / forward[2] - p2[:2], axis=0) <= 4.0) & (
+        np.linalg.norm(backward[:2] / backward[2] - p1[:2], axis=0) <= 4.0)
+    assert np.array_equal(np.asarray(r["inliers"], bool), within)
+    assert affine_orb.match_images(image1, image2, progressive_sampling=True)["verified"]
+    with pytest.raises(ValueError):
+        affine_orb.match_images(image1, image2, max_false_alarms=0.0)
+
+
+@pytest.mark.data
 def test_match_images_align_correspondences_aligns_image_2_points():
     """align_correspondences reaches the C++ option: without it points2 are the train keypoints' positions; with it
     the inliers' image-2 points lie closer to where the ground truth maps their image-1 keypoints."""

@@ -7,6 +7,7 @@
 /// geometric model, so that an easy pair costs one plain extraction per image and only a hard
 /// (wide-baseline) pair pays for the views.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -25,6 +26,8 @@
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/geometry/a_contrario.hpp"
+#include "affine_orb/geometry/fundamental.hpp"
 #include "affine_orb/geometry/homography.hpp"
 #include "affine_orb/geometry/homography_refinement.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
@@ -73,12 +76,12 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 /// stage (stage 0: Extractor::extract_image(); then ViewSession::extend() with the stage's tilts
 /// and budget), every keypoint so far of image 1 is matched against every keypoint so far of image 2
 /// (match_features()), and select_model() estimates H and F and chooses one; a chosen homography
-/// is put to the precision test (max_half_disagreement) and, with min_inliers inliers making up
-/// min_inlier_ratio of the matches, refined by TwoViewOptions::guided_matching, then by
-/// TwoViewOptions::align_correspondences, then, when it passed the precision test, fitted by
-/// TwoViewOptions::final_fit; the escalation stops when the chosen model has min_inliers inliers
-/// and min_inlier_ratio of the matches and, for a homography, passed the precision test, or when
-/// the stages run out. Stage k's keypoints and descriptors are
+/// is put to the precision test (max_half_disagreement) and, with min_inliers inliers that pass
+/// the support test (max_false_alarms, min_inlier_ratio), refined by
+/// TwoViewOptions::guided_matching, then by TwoViewOptions::align_correspondences, then, when it
+/// passed the precision test, fitted by TwoViewOptions::final_fit; the escalation stops when the
+/// chosen model has that support and, for a homography, passed the precision test, or when the
+/// stages run out. Stage k's keypoints and descriptors are
 /// a superset of stage k − 1's.
 ///
 /// Holds one Extractor per image with its workspace: reuse one matcher for many pairs. Not for use
@@ -159,6 +162,8 @@ class TwoViewMatcher {
     std::vector<std::uint8_t> inliers;  ///< of the chosen model, per match
     int inlier_count = 0;
     std::optional<double> half_disagreement;
+    /// The chance that a wrong match is an inlier of the chosen model (the support test).
+    double inlier_probability = 1.0;
     int guided_rounds = 0;
     int aligned_count = 0;
   };
@@ -174,6 +179,10 @@ class TwoViewMatcher {
                     const cv::Mat& image1, const cv::Mat& image2, bool reported) const {
     StageModel stage;
     stage.matches = std::move(matches);
+    if (options_.model.ransac.progressive_sampling) {  // PROSAC draws from the best matches first
+      std::stable_sort(stage.matches.begin(), stage.matches.end(),
+                       [](const Match& a, const Match& b) { return a.distance < b.distance; });
+    }
     matched_points(features1.keypoints, features2.keypoints, stage.matches, stage.points);
     stage.inliers.assign(stage.matches.size(), 0);
     if (stage.points.points1.size() < 8) return stage;
@@ -181,6 +190,7 @@ class TwoViewMatcher {
     stage.inliers = stage.model.chosen_inliers();
     stage.inlier_count = stage.model.chosen_inlier_count();
     const bool homography = stage.model.model == GeometricModel::kHomography;
+    stage.inlier_probability = inlier_probability(homography, image1.size(), image2.size());
     if (homography && options_.max_half_disagreement) {
       stage.half_disagreement = half_disagreement(stage.points.points1, stage.points.points2, stage.inliers,
                                                   stage.model.homography, image1.size());
@@ -189,19 +199,22 @@ class TwoViewMatcher {
     const std::vector<Match> unguided = refinable && options_.final_fit ? stage.matches : std::vector<Match>{};
     if (refinable && options_.guided_matching && supported(stage)) match_guided_rounds(features1, features2, stage);
     if (refinable && options_.align_correspondences && supported(stage)) align(features1, image1, image2, stage);
-    if (refinable && options_.final_fit && precise(stage) && supported(stage)) {
-      fit_final(features1, features2, unguided, stage);
+    if (refinable && options_.final_fit && supported(stage) && (precise(stage) || stage.guided_rounds > 0)) {
+      fit_final(features1, features2, unguided, stage, precise(stage));
     }
     return stage;
   }
 
-  /// TwoViewOptions::final_fit on the chosen homography of `stage`: refine_homography() on the
-  /// stage's matches (the last guided round's, with their aligned points) and the `unguided`
-  /// matches not among them; the stage keeps the unguided matches and the others that the fitted
-  /// homography accepts, its homography becomes the fit and its inliers the matches the fit
-  /// accepts (HomographyRefinementOptions::max_error). Unchanged when the fit fails.
+  /// TwoViewOptions::final_fit on the chosen homography of `stage`: with `fit`, refine_homography()
+  /// on the stage's matches (the last guided round's, with their aligned points) and the `unguided`
+  /// matches not among them, and its homography becomes the fit (unchanged when the fit fails);
+  /// without (a homography that failed the precision test, reported as the last stage's), the
+  /// homography stays. Either way the stage keeps the unguided matches and the others that the
+  /// homography accepts, and its inliers become the matches it accepts
+  /// (HomographyRefinementOptions::max_error), so that the returned matches are never looser than
+  /// the unguided ones.
   void fit_final(const Features<kBits>& features1, const Features<kBits>& features2,
-                 const std::vector<Match>& unguided, StageModel& stage) const {
+                 const std::vector<Match>& unguided, StageModel& stage, bool fit) const {
     const auto key = [](const Match& m) { return std::make_pair(m.query, m.train); };
     std::set<std::pair<int, int>> own, present;
     for (const Match& m : unguided) own.insert(key(m));
@@ -215,9 +228,15 @@ class TwoViewMatcher {
       points.points2.push_back(features2.keypoints[static_cast<std::size_t>(m.train)].pt);
     }
     if (candidates.size() < 4) return;
-    const RefinedHomography fitted =
-        refine_homography(points.points1, points.points2, stage.model.homography, *options_.final_fit);
-    if (!fitted.success) return;
+    RefinedHomography fitted;
+    if (fit) {
+      fitted = refine_homography(points.points1, points.points2, stage.model.homography, *options_.final_fit);
+      if (!fitted.success) return;
+    } else {
+      fitted.homography = stage.model.homography;
+      fitted.inliers = transfer_inliers(points.points1, points.points2, fitted.homography, options_.final_fit->max_error);
+      fitted.inlier_count = static_cast<int>(std::count(fitted.inliers.begin(), fitted.inliers.end(), 1));
+    }
     stage.matches.clear();
     stage.points = MatchedPoints{};
     stage.inliers.clear();
@@ -236,7 +255,8 @@ class TwoViewMatcher {
   }
 
   /// `result`'s matches, model, inliers and positions become `stage`'s, and `report` counts them.
-  static void take_stage(TwoViewResult<kBits>& result, StageModel stage, TwoViewStageReport& report) {
+  void take_stage(TwoViewResult<kBits>& result, StageModel stage, TwoViewStageReport& report) const {
+    result.log10_false_alarms = false_alarms(stage);
     result.matches = std::move(stage.matches);
     result.points2 = std::move(stage.points.points2);
     result.model = std::move(stage.model);
@@ -250,6 +270,7 @@ class TwoViewMatcher {
     report.fundamental_inlier_count = result.model.fundamental_inlier_count;
     report.model = result.model.model;
     report.half_disagreement = result.half_disagreement;
+    report.log10_false_alarms = result.log10_false_alarms;
     report.guided_rounds = stage.guided_rounds;
     report.aligned = stage.aligned_count;
   }
@@ -322,10 +343,33 @@ class TwoViewMatcher {
     }
   }
 
-  /// The chosen model has min_inliers inliers making up min_inlier_ratio of the matches.
+  /// The chance that a wrong match falls within model selection's inlier bound σ·√χ² of a model's
+  /// prediction in the smaller image: near a point for a homography, a line for F.
+  double inlier_probability(bool homography, cv::Size size1, cv::Size size2) const {
+    const cv::Size smaller = size1.area() <= size2.area() ? size1 : size2;
+    const ModelSelectionOptions& m = options_.model;
+    return homography ? point_inlier_probability(m.sigma * std::sqrt(m.homography_chi2), smaller)
+                      : line_inlier_probability(m.sigma * std::sqrt(m.fundamental_chi2), smaller);
+  }
+
+  /// log10 of the chosen model's number of false alarms among the stage's matches (nullopt when no
+  /// model was chosen or TwoViewOptions::max_false_alarms is off).
+  std::optional<double> false_alarms(const StageModel& stage) const {
+    if (!options_.max_false_alarms || stage.model.model == GeometricModel::kNone) return std::nullopt;
+    const int sample = stage.model.model == GeometricModel::kHomography ? HomographyEstimator::kSampleSize
+                                                                        : FundamentalEstimator::kSampleSize;
+    return log10_false_alarms(static_cast<int>(stage.matches.size()), stage.inlier_count, sample,
+                              stage.inlier_probability);
+  }
+
+  /// The chosen model has min_inliers inliers and passes the support tests (max_false_alarms,
+  /// min_inlier_ratio).
   bool supported(const StageModel& stage) const {
+    const double matches = static_cast<double>(stage.matches.size());
+    const std::optional<double> log10_nfa = false_alarms(stage);
     return stage.inlier_count >= options_.min_inliers &&
-           stage.inlier_count >= options_.min_inlier_ratio * static_cast<double>(stage.matches.size());
+           (!log10_nfa || *log10_nfa <= std::log10(*options_.max_false_alarms)) &&
+           (!options_.min_inlier_ratio || stage.inlier_count >= *options_.min_inlier_ratio * matches);
   }
 
   /// The chosen model passes the precision test (TwoViewOptions::max_half_disagreement; an F model

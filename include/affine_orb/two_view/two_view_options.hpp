@@ -96,16 +96,25 @@ struct TwoViewOptions {
   /// Verification after each stage: RANSAC for H and F and the choice between them
   /// (select_model()).
   ModelSelectionOptions model;
-  /// A stage whose chosen model has at least this many inliers ends the escalation: the pair is
-  /// verified. Range [8, 1000000]. 15 as MODS (10–15 verified inliers); 10 lets wrong stage-0
-  /// models through and solves fewer pairs, 20 and 30 solve the same (bench/eval_two_view
-  /// --sweep). Larger values (200, say) buy more matches for the time of the views.
+  /// A stage whose chosen model has at least this many inliers, and passes the support and
+  /// precision tests below, ends the escalation: the pair is verified. Range [8, 1000000]. 15 as
+  /// MODS (10–15 verified inliers); 10 lets wrong stage-0 models through and solves fewer pairs,
+  /// 20 and 30 solve the same (bench/eval_two_view --sweep). Larger values (200, say) buy more
+  /// matches for the time of the views.
   int min_inliers = 15;
-  /// And at least this share of the stage's matches must be inliers of the chosen model, so that a
-  /// random consensus among mostly wrong matches (repetitive texture) does not end the
-  /// escalation. Range [0, 1]; values from 0 to 0.2 verify the same pairs of bench/eval_two_view
-  /// --sweep, 0.1 is a guard, not a tuned value.
-  double min_inlier_ratio = 0.1;
+  /// The a-contrario support test (log10_false_alarms(), geometry/a_contrario.hpp): the chosen
+  /// model's number of false alarms among the stage's matches, with model selection's inlier bound
+  /// (σ·√χ², 4.9 px by default: a point within that of a homography's prediction, or of an epipolar
+  /// line, in the smaller image), must be at most this, so that a chance consensus among wrong
+  /// matches (repetitive texture) does not end the escalation, while a correct model supported by a
+  /// few percent of many matches does. (0, inf); default 1, the meaningful models of Moisan &
+  /// Stival; nullopt: no test. It refuses F models with few inliers, e.g. 16 of 79, which an 8-point
+  /// sample explains by chance (docs/two_view.md, "How the matcher decides to stop").
+  std::optional<double> max_false_alarms = 1.0;
+  /// The earlier support test, a bound on the share of the stage's matches that are inliers of the
+  /// chosen model; [0, 1]; default nullopt (no bound): 0.1 refused correct models supported by a
+  /// few percent of the matches (day/night pairs) and changed no outcome of bench/eval_two_view.
+  std::optional<double> min_inlier_ratio;
   /// Precision test of a chosen homography, pixels of image 2: the stage verifies only when two
   /// homographies fitted to alternate halves of its inliers map image 1's four corners within this
   /// mean distance of each other (half_disagreement()). Two half-data estimates differ by about
@@ -115,8 +124,8 @@ struct TwoViewOptions {
   /// right or wrong); F models are not tested. (0, inf); default 10 (e ≈ the judge's 5 px,
   /// docs/two_view.md, "Reading"); nullopt: no test.
   std::optional<double> max_half_disagreement = 10.0;
-  /// Guided matching of a homography that has min_inliers inliers making up min_inlier_ratio of the
-  /// matches, after the precision test and before the stopping rule counts its inliers; default
+  /// Guided matching of a homography that has min_inliers inliers and passes the support test,
+  /// after the precision test and before the stopping rule counts its inliers; default
   /// GuidedMatchingOptions{} (on); nullopt: off.
   std::optional<GuidedMatchingOptions> guided_matching = GuidedMatchingOptions{};
   /// Sub-pixel correspondences for such a homography, after guided matching: image 2's point of
@@ -129,7 +138,7 @@ struct TwoViewOptions {
   /// The re-estimation of guided matching and of aligned correspondences.
   RefitOptions refit;
   /// The final fit of a chosen homography that passed the precision test and has min_inliers
-  /// inliers making up min_inlier_ratio of the matches, after guided matching and alignment:
+  /// inliers and passes the support test, after guided matching and alignment:
   /// refine_homography() (IRLS of the Sampson error, Cauchy weights, over every correspondence
   /// within max_error, 4 px by default) on the stage's own matches and the last guided round's.
   /// The result's homography is the fit; its matches are the stage's own (unguided) matches and
@@ -155,8 +164,8 @@ struct TwoViewOptions {
 
   /// Throws std::invalid_argument for invalid extractor, matching or model options, stages whose
   /// max_tilt does not increase from above 1 or exceeds extractor.views.max_tilt, a view_features
-  /// outside [0, 16], a ViewBudget other than kAdditive, or min_inliers / min_inlier_ratio out of
-  /// range.
+  /// outside [0, 16], a ViewBudget other than kAdditive, or min_inliers, max_false_alarms,
+  /// min_inlier_ratio or max_half_disagreement out of range.
   void check() const {
     extractor.check();
     matching.check();
@@ -175,7 +184,10 @@ struct TwoViewOptions {
       previous = stage.max_tilt;
     }
     detail::require_range(min_inliers, {8.0, 1000000.0}, "TwoViewOptions: min_inliers");
-    detail::require_range(min_inlier_ratio, {0.0, 1.0}, "TwoViewOptions: min_inlier_ratio");
+    if (max_false_alarms) {
+      detail::require_range(*max_false_alarms, detail::kPositive, "TwoViewOptions: max_false_alarms");
+    }
+    if (min_inlier_ratio) detail::require_range(*min_inlier_ratio, {0.0, 1.0}, "TwoViewOptions: min_inlier_ratio");
     if (max_half_disagreement) {
       detail::require_range(*max_half_disagreement, detail::kPositive, "TwoViewOptions: max_half_disagreement");
     }
@@ -233,6 +245,9 @@ struct TwoViewStageReport {
   /// (TwoViewOptions::max_half_disagreement); measured only when the test is on and a homography
   /// was chosen.
   std::optional<double> half_disagreement;
+  /// log10 of the chosen model's number of false alarms among the stage's matches
+  /// (TwoViewOptions::max_false_alarms; nullopt when no model was chosen or the test is off).
+  std::optional<double> log10_false_alarms;
   /// Rounds of guided matching run on the stage's homography (TwoViewOptions::guided_matching; 0 when none,
   /// and on a homography that failed the precision test when a further stage follows).
   int guided_rounds = 0;
@@ -248,7 +263,8 @@ struct TwoViewStageReport {
 template <int Bits>
 struct TwoViewResult {
   /// True when the last stage run verified the pair: its chosen model has at least
-  /// TwoViewOptions::min_inliers inliers making up at least min_inlier_ratio of the matches.
+  /// TwoViewOptions::min_inliers inliers, passes the support tests (max_false_alarms,
+  /// min_inlier_ratio) and, for a homography, the precision test (max_half_disagreement).
   bool verified = false;
   /// The last stage run: 0 = the images alone, k = after TwoViewOptions::stages[k − 1].
   int stage = 0;
@@ -271,6 +287,8 @@ struct TwoViewResult {
   int inlier_count = 0;
   /// The last stage's TwoViewStageReport::half_disagreement, pixels (nullopt when not measured).
   std::optional<double> half_disagreement;
+  /// The last stage's TwoViewStageReport::log10_false_alarms (nullopt when not measured).
+  std::optional<double> log10_false_alarms;
   /// Both estimates and the choice of the last stage: x2 ~ H x1 and x2ᵀ F x1 = 0, pixels. After
   /// guided rounds (TwoViewOptions::guided_matching) the homography, its score, inlier flags and count are
   /// the last round's, on `matches`; fundamental_inliers is then empty (its flags indexed the

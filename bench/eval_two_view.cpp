@@ -26,7 +26,7 @@
 // but the matcher is verified by select_model() with the matcher's ModelSelectionOptions, so the
 // own homographies come from the same estimator. --peer-cache FILE reads the OpenCV peers' rows
 // from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
-// --sweep adds matcher variants (stages, min_inliers, min_inlier_ratio, the final fit's Cauchy
+// --sweep adds matcher variants (stages, min_inliers, the support tests, the final fit's Cauchy
 // scale and max_error), the measurement behind
 // TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
 // demand, with and without sub-pixel positions, per octave of the keypoint in image 1 and in image
@@ -36,7 +36,8 @@
 // methods are deterministic: the outcome is the last run's); one run by default. Rows read from
 // --peer-cache keep the time of the run that wrote them.
 //
-// --methods keeps the methods whose name contains one of the comma-separated substrings.
+// --methods keeps the methods whose name contains one of the comma-separated substrings, or, for an
+// entry that starts with '=', whose name is the rest of it.
 //
 // Writes DIR/eval_two_view.md (per subset and method, pairs solved and seconds, and the union of
 // all methods; AUC@3 / @5 / @10 of the corner error for the own model and both judges, per subset,
@@ -171,6 +172,7 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
                                                                                  : "-");
               if (s.guided_rounds > 0) o.stages += "/g" + std::to_string(s.guided_rounds);
               if (s.half_disagreement) o.stages += "/" + std::to_string(*s.half_disagreement).substr(0, 5) + "px";
+              if (s.log10_false_alarms) o.stages += "/nfa" + std::to_string(*s.log10_false_alarms).substr(0, 5);
             }
             return o;
           },
@@ -381,6 +383,31 @@ void auc_tables(const std::vector<Method>& methods, const std::vector<Row>& rows
   }
 }
 
+/// The matcher's verification against the ground truth, per matcher method: pairs verified; false
+/// accepts, verified with the own homography more than 5 px off; false refusals, not verified
+/// with the own homography within 5 px; and the pairs not verified whose returned matches hold a
+/// homography within 5 px that the matcher did not find (the MAGSAC++ judge's).
+void verification_table(const std::vector<Method>& methods, const std::vector<Row>& rows, std::ostringstream& md) {
+  md << "| method | pairs | verified | false accepts: verified, own > 5 px | false refusals: not verified, own "
+        "≤ 5 px | not verified, own > 5 px, MAGSAC++ judge ≤ 5 px |\n|---|---:|---:|---:|---:|---:|\n";
+  const double line = affine_orb::bench::kSolvedCornerError;
+  for (const Method& m : methods) {
+    if (!m.matcher) continue;
+    int pairs = 0, verified = 0, accepts = 0, refusals = 0, missed = 0;
+    for (const Row& r : rows) {
+      if (r.method != m.name) continue;
+      ++pairs;
+      verified += r.outcome.verified;
+      accepts += r.outcome.verified && r.own_corner_error > line;
+      refusals += !r.outcome.verified && r.own_corner_error <= line;
+      missed += !r.outcome.verified && r.own_corner_error > line && r.magsac_error <= line;
+    }
+    md << "| " << m.name << " | " << pairs << " | " << verified << " | " << accepts << " | " << refusals << " | "
+       << missed << " |\n";
+  }
+  md << "\n";
+}
+
 /// `method` run `repeats` times on a pair: the last run's outcome with the median of the times (the
 /// upper of the two middle ones for an even count).
 Outcome run_repeated(const Method& method, const cv::Mat& a, const cv::Mat& b,
@@ -533,8 +560,14 @@ int main(int argc, char** argv) {
       o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}, {4.0, 0.5}};
     });
     for (int n : {10, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
-    for (double r : {0.0, 0.05, 0.2})
-      variant("min_inlier_ratio " + std::to_string(r).substr(0, 4), [r](auto& o) { o.min_inlier_ratio = r; });
+    for (double r : {0.05, 0.1, 0.2}) {
+      variant("min_inlier_ratio " + std::to_string(r).substr(0, 4) + ", no false-alarm test", [r](auto& o) {
+        o.min_inlier_ratio = r;
+        o.max_false_alarms.reset();
+      });
+    }
+    variant("no support test", [](auto& o) { o.max_false_alarms.reset(); });
+    variant("max_false_alarms 0.01", [](auto& o) { o.max_false_alarms = 0.01; });
     for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{
              {1.0, 2.0}, {1.0, 2.4}, {1.5, 2.4}, {1.0, 3.0}, {1.5, 3.0}, {3.0, 3.0}, {2.0, 4.0}, {3.0, 4.0}, {5.0, 3.0}}) {
       char name[64];
@@ -545,6 +578,16 @@ int main(int argc, char** argv) {
         o.final_fit->max_error = bound;
       });
     }
+    variant("PROSAC", [](auto& o) { o.model.ransac.progressive_sampling = true; });
+    variant("PROSAC, up to 2000 iterations", [](auto& o) {
+      o.model.ransac.progressive_sampling = true;
+      o.model.ransac.max_iterations = 2000;
+    });
+    variant("RANSAC up to 2000 iterations", [](auto& o) { o.model.ransac.max_iterations = 2000; });
+    variant("RANSAC up to 10000 iterations, confidence 0.999", [](auto& o) {
+      o.model.ransac.max_iterations = 10000;
+      o.model.ransac.confidence = 0.999;
+    });
     variant("plain 1000 first", [](auto& o) {
       o.extractor.features = 1000;
       o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}};
@@ -555,7 +598,8 @@ int main(int argc, char** argv) {
       std::istringstream names(method_filter);
       std::string name;
       while (std::getline(names, name, ',')) {
-        if (!name.empty() && m.name.find(name) != std::string::npos) return true;
+        if (name.size() > 1 && name[0] == '=' && m.name == name.substr(1)) return true;
+        if (!name.empty() && name[0] != '=' && m.name.find(name) != std::string::npos) return true;
       }
       return false;
     };
@@ -658,6 +702,7 @@ int main(int argc, char** argv) {
   }
   md << "\n\n";
   auc_tables(methods, rows, subset_names, md);
+  verification_table(methods, rows, md);
 
   // Per method: pairs solved; total time over all pairs and over the pairs plain 2000 solves,
   // against plain 2000 and the affine default in the same run; pairs verified with a wrong model.

@@ -8,8 +8,11 @@ What an install does to the checkout (STELLA below), and what --uninstall undoes
 - stella's own src/stella_vslam/feature/orb_extractor.cc is saved in STELLA/.affine_orb_backup/ and
   replaced by adapters/stella_vslam/orb_extractor.cc; stella's orb_extractor.h stays;
 - src/stella_vslam/feature/CMakeLists.txt gets, at its end, a block between two marker comments
-  adding the affine_orb checkout's include/ and adapters/common/ to the include path of the
-  library target that file adds its sources to (C++17 is stella's own standard).
+  giving orb_extractor.cc alone, in the library target that file adds its sources to, the affine_orb
+  checkout's include/ and adapters/common/ and -std=gnu++17 (set_source_files_properties with
+  TARGET_DIRECTORY, CMake 3.18 or later). stella sets CMAKE_CXX_STANDARD 11 and compiles as the
+  highest standard its dependencies ask for: C++14 with g2o 20230223 (the g2o of stella's
+  Dockerfiles), too old for the adapter. Stella's other files keep their compile lines.
 
 Recognition (the files are read, nothing is built): orb_extractor.h declares stella's
 `class orb_extractor` with its public image_pyramid_; orb_extractor.cc is stella's own when it
@@ -65,7 +68,8 @@ def strip_block(text):
 
 
 def block(target, project):
-    return ("\n%s\ntarget_include_directories(%s PRIVATE \"%s\" \"%s\")\n%s\n"
+    return ("\n%s\nset_source_files_properties(${CMAKE_CURRENT_SOURCE_DIR}/orb_extractor.cc TARGET_DIRECTORY %s\n"
+            "  PROPERTIES INCLUDE_DIRECTORIES \"%s;%s\" COMPILE_OPTIONS -std=gnu++17)\n%s\n"
             % (BEGIN_MARKER, target, project / "include", project / "adapters" / "common", END_MARKER))
 
 

@@ -561,6 +561,38 @@ class StellaVslam(unittest.TestCase):
         self.assertIn("neither stella's own extractor", refused.stderr)
         self.assertEqual(snapshot(self.root), before)
 
+    @unittest.skipUnless(os.environ.get("AFFINE_ORB_CMAKE") and os.environ.get("AFFINE_ORB_CXX"),
+                         "AFFINE_ORB_CMAKE and AFFINE_ORB_CXX name no CMake and compiler")
+    def test_installed_tree_compiles_the_adapter_alone_as_cxx17(self):
+        # stella's layout: CMAKE_CXX_STANDARD 11 at the top, the library target made in
+        # src/stella_vslam/ and raised to C++14 by what it links (g2o 20230223's targets ask for
+        # cxx_std_14), feature/ a subdirectory adding orb_extractor.cc to it.
+        write(self.root / "CMakeLists.txt", "cmake_minimum_required(VERSION 3.18)\nproject(stella_vslam CXX)\n"
+              "set(CMAKE_CXX_STANDARD 11)\nadd_subdirectory(src/stella_vslam)\n")
+        write(self.root / "src/stella_vslam/CMakeLists.txt",
+              "add_library(${PROJECT_NAME} SHARED ${CMAKE_CURRENT_SOURCE_DIR}/system.cc)\n"
+              "target_compile_features(${PROJECT_NAME} PUBLIC cxx_std_14)\nadd_subdirectory(feature)\n")
+        write(self.root / "src/stella_vslam/system.cc", "int system_stand_in() { return 0; }\n")
+        self.assertEqual(self.run_script(str(self.root)).returncode, 0)
+        build = self.root / "build"
+        configure = [os.environ["AFFINE_ORB_CMAKE"], "-S", str(self.root), "-B", str(build),
+                     "-DCMAKE_CXX_COMPILER=" + os.environ["AFFINE_ORB_CXX"], "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"]
+        if os.environ.get("AFFINE_ORB_CMAKE_GENERATOR"):
+            configure += ["-G", os.environ["AFFINE_ORB_CMAKE_GENERATOR"]]
+        result = subprocess.run(configure, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                universal_newlines=True)
+        self.assertEqual(result.returncode, 0, result.stdout)
+        commands = {Path(entry["file"]).name: entry
+                    for entry in json.loads((build / "compile_commands.json").read_text())}
+        common = str(PROJECT / "adapters" / "common")
+        for name, standard, adapter_includes in (("orb_extractor.cc", "-std=gnu++17", True),
+                                                 ("system.cc", "-std=gnu++14", False)):
+            entry = commands[name]
+            arguments = entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
+            line = " ".join(arguments)
+            self.assertEqual([argument for argument in arguments if argument.startswith("-std=")][-1], standard, line)
+            self.assertEqual(common in line, adapter_includes, line)
+
 
 if __name__ == "__main__":
     unittest.main()

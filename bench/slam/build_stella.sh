@@ -182,9 +182,9 @@ echo "stella_vslam tree $TREE at $(git -C "$TREE" rev-parse --short HEAD)"
 REF=$HERE/../../../shared/slam/stock_extractors/stella_vslam_b0e60d6/stella_vslam/feature/orb_extractor.cc
 if [ -z "$AFFINE" ] && [ -f "$REF" ]; then
   if cmp -s "$REF" "$TREE/src/stella_vslam/feature/orb_extractor.cc"; then
-    echo "feature/orb_extractor.cc: the same as ${REF#"$HERE/"}"
+    echo "feature/orb_extractor.cc: the same as ${REF#"$HERE/../../"}"
   else
-    echo "WARNING: feature/orb_extractor.cc differs from ${REF#"$HERE/"}" >&2
+    echo "WARNING: feature/orb_extractor.cc differs from ${REF#"$HERE/../../"}" >&2
   fi
 fi
 step "stella_vslam ($NAME)"

@@ -191,6 +191,23 @@ def mtimes(root):
     return {path: path.stat().st_mtime_ns for path in root.rglob("*") if path.is_file()}
 
 
+def compile_commands(test, source, build):
+    """Configures `source` into `build` with the CMake, compiler and generator of AFFINE_ORB_CMAKE,
+    AFFINE_ORB_CXX and AFFINE_ORB_CMAKE_GENERATOR, and returns its compile commands by file name:
+    (arguments, directory) each."""
+    configure = [os.environ["AFFINE_ORB_CMAKE"], "-S", str(source), "-B", str(build),
+                 "-DCMAKE_CXX_COMPILER=" + os.environ["AFFINE_ORB_CXX"], "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"]
+    if os.environ.get("AFFINE_ORB_CMAKE_GENERATOR"):
+        configure += ["-G", os.environ["AFFINE_ORB_CMAKE_GENERATOR"]]
+    result = subprocess.run(configure, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+    test.assertEqual(result.returncode, 0, result.stdout)
+    commands = {}
+    for entry in json.loads((build / "compile_commands.json").read_text()):
+        arguments = entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
+        commands[Path(entry["file"]).name] = (arguments, entry["directory"])
+    return commands
+
+
 class InstallTest:
     """The checks for one fork; the subclasses below name it."""
 
@@ -474,25 +491,15 @@ class InstallTest:
                          "AFFINE_ORB_CMAKE and AFFINE_ORB_CXX name no CMake and compiler")
     def test_installed_fork_compiles_the_adapter_as_cxx17(self):
         self.assert_succeeds("--recovery", self.tree, says="installed")
-        build = self.work / "build"
-        configure = [os.environ["AFFINE_ORB_CMAKE"], "-S", str(self.tree), "-B", str(build),
-                     "-DCMAKE_CXX_COMPILER=" + os.environ["AFFINE_ORB_CXX"], "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"]
-        if os.environ.get("AFFINE_ORB_CMAKE_GENERATOR"):
-            configure += ["-G", os.environ["AFFINE_ORB_CMAKE_GENERATOR"]]
-        result = subprocess.run(configure, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                universal_newlines=True)
-        self.assertEqual(result.returncode, 0, result.stdout)
-        commands = {Path(entry["file"]).name: entry
-                    for entry in json.loads((build / "compile_commands.json").read_text())}
+        commands = compile_commands(self, self.tree, self.work / "build")
         for name, standard in (("ORBextractor.cc", "-std=c++17"), ("Frame.cc", "-std=c++11"),
                                ("Tracking.cc", "-std=c++11")):
-            entry = commands[name]
-            arguments = entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
+            arguments, directory = commands[name]
             self.assertEqual([argument for argument in arguments if argument.startswith("-std=")][-1], standard,
                              "%s: %s" % (name, " ".join(arguments)))
             # The compiler with the fork's own flags for this file: the adapter's headers are found, the
             # adapter compiles as C++17 and the fork's C++11 files compile with the adapter's header.
-            result = subprocess.run(arguments + ["-fsyntax-only"], cwd=entry["directory"], stdout=subprocess.PIPE,
+            result = subprocess.run(arguments + ["-fsyntax-only"], cwd=directory, stdout=subprocess.PIPE,
                                     stderr=subprocess.STDOUT, universal_newlines=True)
             self.assertEqual(result.returncode, 0, result.stdout)
 
@@ -574,21 +581,11 @@ class StellaVslam(unittest.TestCase):
               "target_compile_features(${PROJECT_NAME} PUBLIC cxx_std_14)\nadd_subdirectory(feature)\n")
         write(self.root / "src/stella_vslam/system.cc", "int system_stand_in() { return 0; }\n")
         self.assertEqual(self.run_script(str(self.root)).returncode, 0)
-        build = self.root / "build"
-        configure = [os.environ["AFFINE_ORB_CMAKE"], "-S", str(self.root), "-B", str(build),
-                     "-DCMAKE_CXX_COMPILER=" + os.environ["AFFINE_ORB_CXX"], "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"]
-        if os.environ.get("AFFINE_ORB_CMAKE_GENERATOR"):
-            configure += ["-G", os.environ["AFFINE_ORB_CMAKE_GENERATOR"]]
-        result = subprocess.run(configure, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                universal_newlines=True)
-        self.assertEqual(result.returncode, 0, result.stdout)
-        commands = {Path(entry["file"]).name: entry
-                    for entry in json.loads((build / "compile_commands.json").read_text())}
+        commands = compile_commands(self, self.root, self.root / "build")
         common = str(PROJECT / "adapters" / "common")
         for name, standard, adapter_includes in (("orb_extractor.cc", "-std=gnu++17", True),
                                                  ("system.cc", "-std=gnu++14", False)):
-            entry = commands[name]
-            arguments = entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
+            arguments = commands[name][0]
             line = " ".join(arguments)
             self.assertEqual([argument for argument in arguments if argument.startswith("-std=")][-1], standard, line)
             self.assertEqual(common in line, adapter_includes, line)

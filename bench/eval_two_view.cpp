@@ -1,6 +1,6 @@
 // eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b,...]
 //               [--methods SUBSTRING,...] [--asift-sequences a,b,...|all] [--peer-cache FILE] [--sweep]
-//               [--placement] [--repeats N]
+//               [--placement] [--origins] [--repeats N]
 //
 // Two-view matching judged where users feel it: on every Oxford pair 1->2 ... 1->6, opencv-doc's
 // graf 1->3 (subset "oxford") and every pair of ../shared/data/pairs/ (hpatches, homogr, evd), per
@@ -34,7 +34,8 @@
 // matches correct within 3 px over all pairs run: count, median and 90th percentile. --repeats N
 // runs every method it computes N times on each pair in a row and reports the median time (the
 // methods are deterministic: the outcome is the last run's); one run by default. Rows read from
-// --peer-cache keep the time of the run that wrote them.
+// --peer-cache keep the time of the run that wrote them. --origins adds, per matcher and subset, the
+// correct matches by the stage that extracted them (which stage finds them).
 //
 // --methods keeps the methods whose name contains one of the comma-separated substrings, or, for an
 // entry that starts with '=', whose name is the rest of it.
@@ -85,6 +86,7 @@ struct Outcome {
   bool verified = false;  ///< matcher only
   std::string stages;     ///< matcher only: per stage run, matches / inliers and the model chosen
   std::vector<std::pair<int, int>> octaves;  ///< ours only: per match, the octaves of its two keypoints
+  std::vector<int> origins;  ///< matcher only: per match, the stage that extracted its later keypoint
 };
 
 struct Method {
@@ -146,8 +148,19 @@ Method ours(const std::string& name, const affine_orb::ExtractorOptions& options
 /// The two-view matcher with views on demand.
 Method two_view(const std::string& name, const affine_orb::TwoViewOptions& options) {
   auto matcher = std::make_shared<affine_orb::TwoViewMatcher<affine_orb::Rbrief>>(options);
+  // Per view index (Features::views), the stage that extracts it: 0 for the image, else the first
+  // stage whose max_tilt covers the view's tilt.
+  std::vector<int> view_stage;
+  for (const auto& [tilt, rotation] : affine_orb::view_parameters(options.extractor.views)) {
+    int stage = 0;
+    while (tilt > 1.0 && stage < static_cast<int>(options.stages.size()) &&
+           tilt > options.stages[static_cast<std::size_t>(stage)].max_tilt * (1.0 + 1e-3)) {
+      ++stage;
+    }
+    view_stage.push_back(tilt > 1.0 ? stage + 1 : 0);
+  }
   return {name,
-          [matcher](const cv::Mat& a, const cv::Mat& b, const affine_orb::bench::ViewpointPair&) {
+          [matcher, view_stage](const cv::Mat& a, const cv::Mat& b, const affine_orb::bench::ViewpointPair&) {
             Outcome o;
             const auto start = Clock::now();
             const auto r = matcher->match(a, b);
@@ -157,6 +170,11 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
               const cv::KeyPoint& k2 = r.features2.keypoints[static_cast<std::size_t>(r.matches[i].train)];
               o.matches.emplace_back(k1.pt, r.points2[i]);
               o.octaves.emplace_back(k1.octave, k2.octave);
+              const auto origin = [&](const auto& features, int index) {
+                return view_stage[static_cast<std::size_t>(features.views[static_cast<std::size_t>(index)])];
+              };
+              o.origins.push_back(
+                  std::max(origin(r.features1, r.matches[i].query), origin(r.features2, r.matches[i].train)));
             }
             o.homography_found = r.model.homography_found;
             if (r.model.homography_found) o.homography = to_matx(r.model.homography);
@@ -408,6 +426,39 @@ void verification_table(const std::vector<Method>& methods, const std::vector<Ro
   md << "\n";
 }
 
+/// --origins: per matcher method and subset, the returned matches within 3 px of the ground truth
+/// by the stage that extracted the later of their two keypoints (0: both the images' own), summed
+/// over the subset's pairs: which stage finds the correct matches.
+void origin_table(const std::vector<Method>& methods, const std::vector<Row>& rows,
+                  const std::vector<affine_orb::bench::ViewpointPair>& pairs,
+                  const std::vector<std::pair<std::string, std::string>>& subset_names, std::ostringstream& md) {
+  md << "| method | subset | correct matches by stage of origin (0, 1, 2, ...) | pairs solved by the own model |\n"
+     << "|---|---|---|---:|\n";
+  for (const Method& m : methods) {
+    if (!m.matcher) continue;
+    for (const auto& [key, title] : subset_names) {
+      std::vector<long> by_stage(static_cast<std::size_t>(m.stages) + 1, 0);
+      int solved = 0, run = 0;
+      for (const Row& r : rows) {
+        if (r.method != m.name || r.subset != key) continue;
+        ++run;
+        solved += r.own_corner_error <= affine_orb::bench::kSolvedCornerError;
+        const auto pair = std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.name() == r.pair; });
+        for (std::size_t i = 0; i < r.outcome.matches.size(); ++i) {
+          const auto& [x1, x2] = r.outcome.matches[i];
+          const cv::Point2d y = affine_orb::bench::map_point(pair->h, x1);
+          if (std::hypot(y.x - x2.x, y.y - x2.y) < 3.0) ++by_stage[static_cast<std::size_t>(r.outcome.origins[i])];
+        }
+      }
+      if (run == 0) continue;
+      md << "| " << m.name << " | " << title << " |";
+      for (std::size_t k = 0; k < by_stage.size(); ++k) md << (k ? ", " : " ") << by_stage[k];
+      md << " | " << solved << " / " << run << " |\n";
+    }
+  }
+  md << "\n";
+}
+
 /// `method` run `repeats` times on a pair: the last run's outcome with the median of the times (the
 /// upper of the two middle ones for an even count).
 Outcome run_repeated(const Method& method, const cv::Mat& a, const cv::Mat& b,
@@ -434,6 +485,7 @@ int main(int argc, char** argv) {
   std::string cache_path;
   bool sweep = false;
   bool placement = false;
+  bool origins = false;
   int repeats = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
@@ -442,6 +494,8 @@ int main(int argc, char** argv) {
       sweep = true;
     } else if (flag == "--placement") {
       placement = true;
+    } else if (flag == "--origins") {
+      origins = true;
     } else if (flag == "--out" && has_value) {
       out_dir = argv[++i];
     } else if (flag == "--sequences" && has_value) {
@@ -461,7 +515,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b] "
                    "[--methods SUBSTRING,...] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement] "
-                   "[--repeats N]\n");
+                   "[--origins] [--repeats N]\n");
       return 2;
     }
   }
@@ -703,6 +757,7 @@ int main(int argc, char** argv) {
   md << "\n\n";
   auc_tables(methods, rows, subset_names, md);
   verification_table(methods, rows, md);
+  if (origins) origin_table(methods, rows, pairs, subset_names, md);
 
   // Per method: pairs solved; total time over all pairs and over the pairs plain 2000 solves,
   // against plain 2000 and the affine default in the same run; pairs verified with a wrong model.

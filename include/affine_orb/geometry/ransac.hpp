@@ -359,10 +359,10 @@ RansacResult<typename Estimator::Model> search(const Estimator& estimator, const
 
 /// RANSAC with the estimator's score (MSAC-style when the score is the truncated χ² one):
 /// draws `draw_size` distinct correspondence indices per iteration from a std::mt19937_64 seeded
-/// with options.seed (uniformly, or progressively: RansacOptions::progressive_sampling), hands the first Estimator::kSampleSize of them to estimator.generate(),
-/// locally optimises every model that beats all earlier sample models (see
-/// RansacOptions::refinement_passes), keeps the optimised model of highest score and stops
-/// adaptively (see RansacOptions).
+/// with options.seed (uniformly, or progressively: RansacOptions::progressive_sampling), hands the
+/// first Estimator::kSampleSize of them to estimator.generate(), locally optimises every model that
+/// beats all earlier sample models (see RansacOptions::refinement_passes), keeps the optimised
+/// model of highest score and stops adaptively (see RansacOptions).
 ///
 /// `draw_size` (>= kSampleSize) exists so that two estimators can be run on the same sample sets:
 /// runs with the same seed, number of correspondences and draw_size see the same index sets in the
@@ -381,12 +381,11 @@ RansacResult<typename Estimator::Model> ransac(const Estimator& estimator, const
                         "ransac: draw_size (at least the estimator's sample size)");
 
   const std::size_t n = estimator.size();
-  RansacResult<Model> result;
-  result.inliers.assign(n, 0);
   if (n < static_cast<std::size_t>(draw_size) || n > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
-    return result;
+    RansacResult<Model> none;
+    none.inliers.assign(n, 0);
+    return none;
   }
-
   if (options.progressive_sampling) {
     detail::ProgressiveSampler sampler(n, draw_size, options.max_iterations, options.seed);
     return detail::search(estimator, options, sampler, draw_size);

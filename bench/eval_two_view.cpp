@@ -312,6 +312,12 @@ std::map<std::string, Row> read_cache(const std::string& path) {
   return rows;
 }
 
+/// The pair of the run named `name` (ViewpointPair::name(); every row's pair is one of them).
+const affine_orb::bench::ViewpointPair& pair_named(const std::vector<affine_orb::bench::ViewpointPair>& pairs,
+                                                   const std::string& name) {
+  return *std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.name() == name; });
+}
+
 /// --placement: per octave of the image-1 keypoint and of the image-2 keypoint, the residuals
 /// |H·x1 − x2| (pixels of image 2) of the matches of `method` within 3 px of the ground truth.
 void placement_table(const std::string& method, const std::vector<Row>& rows,
@@ -320,12 +326,11 @@ void placement_table(const std::string& method, const std::vector<Row>& rows,
   std::map<int, std::vector<double>> by1, by2;
   for (const Row& r : rows) {
     if (r.method != method) continue;
-    const auto pair = std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.name() == r.pair; });
+    const cv::Matx33d& h = pair_named(pairs, r.pair).h;
     for (std::size_t i = 0; i < r.outcome.matches.size(); ++i) {
       const auto& [x1, x2] = r.outcome.matches[i];
-      const cv::Point2d y = affine_orb::bench::map_point(pair->h, x1);
-      const double residual = std::hypot(y.x - x2.x, y.y - x2.y);
-      if (residual >= 3.0) continue;
+      const double residual = affine_orb::bench::match_residual(h, x1, x2);
+      if (residual >= affine_orb::bench::kCorrectMatchError) continue;
       by1[r.outcome.octaves[i].first].push_back(residual);
       by2[r.outcome.octaves[i].second].push_back(residual);
     }
@@ -443,11 +448,12 @@ void origin_table(const std::vector<Method>& methods, const std::vector<Row>& ro
         if (r.method != m.name || r.subset != key) continue;
         ++run;
         solved += r.own_corner_error <= affine_orb::bench::kSolvedCornerError;
-        const auto pair = std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.name() == r.pair; });
+        const cv::Matx33d& h = pair_named(pairs, r.pair).h;
         for (std::size_t i = 0; i < r.outcome.matches.size(); ++i) {
           const auto& [x1, x2] = r.outcome.matches[i];
-          const cv::Point2d y = affine_orb::bench::map_point(pair->h, x1);
-          if (std::hypot(y.x - x2.x, y.y - x2.y) < 3.0) ++by_stage[static_cast<std::size_t>(r.outcome.origins[i])];
+          if (affine_orb::bench::match_residual(h, x1, x2) < affine_orb::bench::kCorrectMatchError) {
+            ++by_stage[static_cast<std::size_t>(r.outcome.origins[i])];
+          }
         }
       }
       if (run == 0) continue;

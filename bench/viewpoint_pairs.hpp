@@ -115,7 +115,17 @@ inline cv::Point2d map_point(const cv::Matx33d& h, cv::Point2f p) {
   return {q[0] / q[2], q[1] / q[2]};
 }
 
-/// Matches the ground truth maps within 3 px of their partner (SPEC §7), and how many distinct
+/// A match is correct when the ground truth maps its image-1 point within this many pixels of its
+/// image-2 point (SPEC §7).
+inline constexpr double kCorrectMatchError = 3.0;
+
+/// |h·x1 − x2|, pixels of image 2: a match's distance from the ground truth h.
+inline double match_residual(const cv::Matx33d& h, cv::Point2f x1, cv::Point2f x2) {
+  const cv::Point2d y = map_point(h, x1);
+  return std::hypot(y.x - x2.x, y.y - x2.y);
+}
+
+/// Matches the ground truth maps within kCorrectMatchError of their partner, and how many distinct
 /// image-1 points (2-px cells) they have.
 struct CorrectMatches {
   std::size_t correct = 0;
@@ -127,8 +137,7 @@ inline CorrectMatches correct_matches(const std::vector<std::pair<cv::Point2f, c
   CorrectMatches c;
   std::set<std::pair<int, int>> cells;
   for (const auto& [x1, x2] : matches) {
-    const cv::Point2d y = map_point(h, x1);
-    if (std::hypot(y.x - x2.x, y.y - x2.y) >= 3.0) continue;
+    if (match_residual(h, x1, x2) >= kCorrectMatchError) continue;
     ++c.correct;
     cells.insert({static_cast<int>(std::floor(x1.x / 2)), static_cast<int>(std::floor(x1.y / 2))});
   }

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
@@ -143,47 +144,48 @@ E parse_choice(const char* name, const char* text, std::initializer_list<Choice<
   return choices.begin()->value;
 }
 
-/// An AFFINE_ORB_* variable (options.hpp) and how its value sets its field.
+/// An AFFINE_ORB_* variable (options.hpp) and how a value sets its field; `shown` is the name a
+/// bad value's message gives (the variable's, or the setting's that carried the value).
 struct Variable {
   const char* name;
-  void (*apply)(AdapterOptions& options, const char* text);
+  void (*apply)(AdapterOptions& options, const char* shown, const char* text);
 };
 
 /// Every variable of the table in options.hpp.
 inline const std::vector<Variable>& variables() {
   static const std::vector<Variable> table = {
       {kEnvKeypoints,
-       [](AdapterOptions& o, const char* v) {
+       [](AdapterOptions& o, const char* n, const char* v) {
          o.keypoints = parse_choice<AdapterKeypoints>(
-             kEnvKeypoints, v, {{"fork", AdapterKeypoints::kFork}, {"affine_orb", AdapterKeypoints::kAffineOrb}});
+             n, v, {{"fork", AdapterKeypoints::kFork}, {"affine_orb", AdapterKeypoints::kAffineOrb}});
        }},
-      {kEnvMaxTilt, [](AdapterOptions& o, const char* v) { o.max_tilt = parse_number(kEnvMaxTilt, v, 1.0, 16.0, false); }},
+      {kEnvMaxTilt, [](AdapterOptions& o, const char* n, const char* v) { o.max_tilt = parse_number(n, v, 1.0, 16.0, false); }},
       {kEnvDescriptor,
-       [](AdapterOptions& o, const char* v) {
+       [](AdapterOptions& o, const char* n, const char* v) {
          o.descriptor = parse_choice<AdapterDescriptor>(
-             kEnvDescriptor, v, {{"rbrief", AdapterDescriptor::kRbrief}, {"brisk", AdapterDescriptor::kBrisk}});
+             n, v, {{"rbrief", AdapterDescriptor::kRbrief}, {"brisk", AdapterDescriptor::kBrisk}});
        }},
-      {kEnvThreads, [](AdapterOptions& o, const char* v) { o.threads = parse_integer(kEnvThreads, v, 1, 256); }},
+      {kEnvThreads, [](AdapterOptions& o, const char* n, const char* v) { o.threads = parse_integer(n, v, 1, 256); }},
       {kEnvDuplicates,
-       [](AdapterOptions& o, const char* v) {
+       [](AdapterOptions& o, const char* n, const char* v) {
          o.duplicates = parse_choice<AdapterDuplicates>(
-             kEnvDuplicates, v, {{"merge", AdapterDuplicates::kMerge}, {"keep", AdapterDuplicates::kKeepAll}});
+             n, v, {{"merge", AdapterDuplicates::kMerge}, {"keep", AdapterDuplicates::kKeepAll}});
        }},
       {kEnvMergeRadius,
-       [](AdapterOptions& o, const char* v) { o.merge_radius = parse_number(kEnvMergeRadius, v, 0.0, 64.0, true); }},
+       [](AdapterOptions& o, const char* n, const char* v) { o.merge_radius = parse_number(n, v, 0.0, 64.0, true); }},
       {kEnvViewFeatures,
-       [](AdapterOptions& o, const char* v) { o.view_features = parse_number(kEnvViewFeatures, v, 0.0, 16.0, false); }},
+       [](AdapterOptions& o, const char* n, const char* v) { o.view_features = parse_number(n, v, 0.0, 16.0, false); }},
       {kEnvRecoveryImageFeatures,
-       [](AdapterOptions& o, const char* v) {
-         o.recovery.image_features = parse_number(kEnvRecoveryImageFeatures, v, 1.0, 16.0, false);
+       [](AdapterOptions& o, const char* n, const char* v) {
+         o.recovery.image_features = parse_number(n, v, 1.0, 16.0, false);
        }},
       {kEnvRecoveryMaxTilt,
-       [](AdapterOptions& o, const char* v) {
-         o.recovery.max_tilt = parse_number(kEnvRecoveryMaxTilt, v, 1.0, 16.0, false);
+       [](AdapterOptions& o, const char* n, const char* v) {
+         o.recovery.max_tilt = parse_number(n, v, 1.0, 16.0, false);
        }},
       {kEnvRecoveryViewFeatures,
-       [](AdapterOptions& o, const char* v) {
-         o.recovery.view_features = parse_number(kEnvRecoveryViewFeatures, v, 0.0, 16.0, false);
+       [](AdapterOptions& o, const char* n, const char* v) {
+         o.recovery.view_features = parse_number(n, v, 0.0, 16.0, false);
        }},
   };
   return table;
@@ -196,7 +198,37 @@ inline const std::vector<Variable>& variables() {
 /// (an empty value included).
 inline AdapterOptions apply_environment(AdapterOptions base) {
   for (const detail_env::Variable& variable : detail_env::variables()) {
-    if (const char* value = std::getenv(variable.name)) variable.apply(base, value);
+    if (const char* value = std::getenv(variable.name)) variable.apply(base, variable.name, value);
+  }
+  base.check();
+  return base;
+}
+
+/// The key that names an AFFINE_ORB_* variable among settings: its name without the prefix, in
+/// lower case ("max_tilt" for AFFINE_ORB_MAX_TILT).
+inline std::string setting_key(const char* variable) {
+  std::string key(variable + std::char_traits<char>::length("AFFINE_ORB_"));
+  for (char& c : key) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return key;
+}
+
+/// `base` with each (key, value) of `settings` applied over the field of the variable whose
+/// setting_key() is `key`, as its environment value would be: how a fork's own configuration file
+/// carries the options (stella_vslam's YAML `Feature: affine_orb:` map). `where` prefixes a key in
+/// messages ("Feature.affine_orb."). An unknown key or a bad value throws std::invalid_argument
+/// naming it; the environment is not read.
+inline AdapterOptions apply_settings(AdapterOptions base, const std::vector<std::pair<std::string, std::string>>& settings,
+                                     const std::string& where) {
+  const std::vector<detail_env::Variable>& table = detail_env::variables();
+  for (const auto& [key, value] : settings) {
+    const auto variable = std::find_if(table.begin(), table.end(),
+                                       [&](const detail_env::Variable& v) { return setting_key(v.name) == key; });
+    if (variable == table.end()) {
+      std::string known;
+      for (const detail_env::Variable& v : table) known += (known.empty() ? "" : ", ") + setting_key(v.name);
+      require_option(false, "unknown setting " + where + key + " (known: " + known + ")");
+    }
+    variable->apply(base, (where + key).c_str(), value.c_str());
   }
   base.check();
   return base;

@@ -4,9 +4,14 @@
 adapters/stella_vslam/install.sh runs this file; `--help` explains the rest. Python 3.6 or later,
 standard library only; the file helpers are install_adapter.py's (the ORB-SLAM installer).
 
-What an install does to the checkout (STELLA below), and what --uninstall undoes byte for byte:
-- stella's own src/stella_vslam/feature/orb_extractor.cc is saved in STELLA/.affine_orb_backup/ and
-  replaced by adapters/stella_vslam/orb_extractor.cc; stella's orb_extractor.h stays;
+What an install does to the checkout (STELLA below), and what --uninstall undoes byte for byte
+(each changed file's original is saved in STELLA/.affine_orb_backup/ first):
+- src/stella_vslam/feature/orb_extractor.cc is replaced by adapters/stella_vslam/orb_extractor.cc;
+- src/stella_vslam/feature/orb_extractor.h gets, after image_pyramid_, a marked public declaration
+  of configure_affine_orb(), which reads affine_orb's options from the YAML `Feature: affine_orb:`
+  map, and src/stella_vslam/system.cc a marked line after each construction of an orb_extractor
+  calling it with the config's `Feature` node: stella hands its extractor orb_params and
+  `Preprocessing` values only;
 - src/stella_vslam/feature/CMakeLists.txt gets, at its end, a block between two marker comments
   giving orb_extractor.cc alone, in the library target that file adds its sources to, the affine_orb
   checkout's include/ and adapters/common/ and -std=gnu++17 (set_source_files_properties with
@@ -15,7 +20,8 @@ What an install does to the checkout (STELLA below), and what --uninstall undoes
   Dockerfiles), too old for the adapter. Stella's other files keep their compile lines.
 
 Recognition (the files are read, nothing is built): orb_extractor.h declares stella's
-`class orb_extractor` with its public image_pyramid_; orb_extractor.cc is stella's own when it
+`class orb_extractor` with its public image_pyramid_; system.cc constructs extractor_left_ with
+`new feature::orb_extractor(...)`; orb_extractor.cc is stella's own when it
 defines orb_extractor::distribute_keypoints, the adapter's when it includes "affine_orb_adapter/";
 another file there is another extractor, and the script leaves such a tree alone.
 """
@@ -33,9 +39,15 @@ FEATURE = "src/stella_vslam/feature"
 SOURCE = FEATURE + "/orb_extractor.cc"
 HEADER = FEATURE + "/orb_extractor.h"
 CMAKE = FEATURE + "/CMakeLists.txt"
+SYSTEM = "src/stella_vslam/system.cc"
 STOCK_IDENTIFIER = re.compile(rb"\borb_extractor::distribute_keypoints\b")
 HEADER_CLASS = re.compile(rb"\bclass[ \t]+orb_extractor\s*\{.*\bstd::vector<cv::Mat>[ \t]+image_pyramid_;", re.DOTALL)
 TARGET_SOURCES = re.compile(rb"target_sources\s*\(\s*(\$\{PROJECT_NAME\}|[\w.-]+)[^)]*orb_extractor\.cc", re.DOTALL)
+CONSTRUCTION = re.compile(rb"^([ \t]*)(extractor_(?:left|right)_)[ \t]*=[ \t]*new[ \t]+feature::orb_extractor\([^;]*\);[ \t]*$",
+                          re.MULTILINE)
+DECLARATION = ("\n    // affine_orb adapter: reads the options of YAML `Feature: affine_orb:` (%s)"
+               "\n    void configure_affine_orb(const YAML::Node& feature);" % SCRIPT).encode()
+CALL = rb'\n\1\2->configure_affine_orb(util::yaml_optional_ref(cfg->yaml_node_, "Feature"));  // affine_orb adapter'
 
 
 def classify(data):
@@ -46,28 +58,39 @@ def classify(data):
 def check_tree(tree):
     """Refuses a tree that is not a stella_vslam checkout with the files the install changes; returns
     the target that feature/CMakeLists.txt adds orb_extractor.cc to."""
-    for relative in (SOURCE, HEADER, CMAKE):
+    for relative in (SOURCE, HEADER, CMAKE, SYSTEM):
         if not (tree / relative).is_file():
             raise Refusal("%s is not a stella_vslam checkout: %s is missing" % (tree, relative))
-    if not HEADER_CLASS.search((tree / HEADER).read_bytes()):
+    if not HEADER_CLASS.search(original(tree, HEADER)):
         raise Refusal("%s does not declare stella_vslam's orb_extractor with image_pyramid_" % (tree / HEADER))
-    target = TARGET_SOURCES.search((tree / CMAKE).read_bytes())
+    if b"extractor_left_" not in b" ".join(m.group(2) for m in CONSTRUCTION.finditer(original(tree, SYSTEM))):
+        raise Refusal("%s does not construct extractor_left_ with new feature::orb_extractor(...): an unknown "
+                      "stella_vslam layout" % (tree / SYSTEM))
+    target = TARGET_SOURCES.search(original(tree, CMAKE))
     if not target:
         raise Refusal("%s does not add orb_extractor.cc with target_sources(): an unknown stella_vslam layout"
                       % (tree / CMAKE))
     return target.group(1).decode()
 
 
-def strip_block(text):
-    """`text` without this script's marked block (and the newline before it that the install added)."""
-    begin = text.find("\n" + BEGIN_MARKER)
-    if begin < 0:
-        return text
-    end = text.index(END_MARKER, begin) + len(END_MARKER)
-    return text[:begin] + text[end + 1:] if text[end:end + 1] == "\n" else text[:begin] + text[end:]
+def original(tree, relative):
+    """stella's own bytes of `relative`: its backup once the install has changed it."""
+    backup = tree / BACKUP_DIR / relative
+    return (backup if backup.is_file() else tree / relative).read_bytes()
 
 
-def block(target, project):
+def patched_header(data):
+    """stella's orb_extractor.h with the adapter's declaration after image_pyramid_ (the test of the
+    adapter compiles against this too)."""
+    end = HEADER_CLASS.search(data).end()
+    return data[:end] + DECLARATION + data[end:]
+
+
+def patched_system(data):
+    return CONSTRUCTION.sub(lambda m: m.group(0) + m.expand(CALL), data)
+
+
+def cmake_block(target, project):
     return ("\n%s\nset_source_files_properties(${CMAKE_CURRENT_SOURCE_DIR}/orb_extractor.cc TARGET_DIRECTORY %s\n"
             "  PROPERTIES INCLUDE_DIRECTORIES \"%s;%s\" COMPILE_OPTIONS -std=gnu++17)\n%s\n"
             % (BEGIN_MARKER, target, project / "include", project / "adapters" / "common", END_MARKER))
@@ -78,42 +101,44 @@ def install(tree, project):
     if not adapter.is_file() or not (project / "include/affine_orb").is_dir():
         raise Refusal("%s is not an affine_orb checkout with the stella_vslam adapter" % project)
     target = check_tree(tree)
-    current = (tree / SOURCE).read_bytes()
-    kind = classify(current)
-    backup = tree / BACKUP_DIR / SOURCE
+    kind = classify((tree / SOURCE).read_bytes())
     if kind == "other":
         raise Refusal("%s is neither stella's own extractor nor affine_orb's adapter; nothing changed" % SOURCE)
-    if kind == "adapter" and not backup.is_file():
+    if kind == "adapter" and not (tree / BACKUP_DIR / SOURCE).is_file():
         raise Refusal("%s is affine_orb's adapter but %s has no backup of stella's own" % (SOURCE, BACKUP_DIR))
-    cmake = (tree / CMAKE).read_bytes().decode("utf-8", "surrogateescape")
-    new_cmake = strip_block(cmake).rstrip("\n") + "\n" + block(target, project)
+    cmake = original(tree, CMAKE)
+    wanted = {SOURCE: adapter.read_bytes(), HEADER: patched_header(original(tree, HEADER)),
+              SYSTEM: patched_system(original(tree, SYSTEM)),
+              CMAKE: cmake.rstrip(b"\n") + b"\n" + cmake_block(target, project).encode()}
+    what = {SOURCE: "affine_orb's adapter", HEADER: "declares configure_affine_orb()",
+            SYSTEM: "calls configure_affine_orb()", CMAKE: "affine_orb's include directories"}
     changes = []
-    if kind == "stock":
-        write_file(backup, current, tree / SOURCE)
-        changes.append("saved stella's %s in %s/" % (SOURCE, BACKUP_DIR))
-    if current != adapter.read_bytes():
-        write_file(tree / SOURCE, adapter.read_bytes(), tree / SOURCE)
-        changes.append("%s: affine_orb's adapter" % SOURCE)
-    if new_cmake != cmake:
-        if kind == "stock":
-            write_file(tree / BACKUP_DIR / CMAKE, cmake.encode("utf-8", "surrogateescape"), tree / CMAKE)
-        write_file(tree / CMAKE, new_cmake.encode("utf-8", "surrogateescape"), tree / CMAKE)
-        changes.append("%s: affine_orb's include directories" % CMAKE)
+    for relative, data in wanted.items():
+        current = (tree / relative).read_bytes()
+        if current == data:
+            continue
+        backup = tree / BACKUP_DIR / relative
+        if not backup.is_file():
+            write_file(backup, current, tree / relative)
+            changes.append("saved stella's %s in %s/" % (relative, BACKUP_DIR))
+        write_file(tree / relative, data, tree / relative)
+        changes.append("%s: %s" % (relative, what[relative]))
     print("\n".join(changes) if changes else "nothing to do: the adapter of %s is installed" % project)
 
 
 def uninstall(tree):
     check_tree(tree)
-    backups = [tree / BACKUP_DIR / relative for relative in (SOURCE, CMAKE)]
     if classify((tree / SOURCE).read_bytes()) != "adapter":
         print("nothing to do: %s is not affine_orb's adapter" % SOURCE)
         return
-    if not all(b.is_file() for b in backups):
-        raise Refusal("%s/ lacks stella's own files; nothing changed" % BACKUP_DIR)
-    for relative, saved in zip((SOURCE, CMAKE), backups):
-        write_file(tree / relative, saved.read_bytes(), saved)
-        saved.unlink()
-        print("%s: stella's own, restored" % relative)
+    if not (tree / BACKUP_DIR / SOURCE).is_file():
+        raise Refusal("%s/ lacks stella's own %s; nothing changed" % (BACKUP_DIR, SOURCE))
+    for relative in (SOURCE, HEADER, SYSTEM, CMAKE):
+        saved = tree / BACKUP_DIR / relative
+        if saved.is_file():
+            write_file(tree / relative, saved.read_bytes(), saved)
+            saved.unlink()
+            print("%s: stella's own, restored" % relative)
     for folder in sorted((tree / BACKUP_DIR).rglob("*"), reverse=True) + [tree / BACKUP_DIR]:
         if folder.is_dir() and not any(folder.iterdir()):
             folder.rmdir()
@@ -123,8 +148,9 @@ def main(argv):
     parser = argparse.ArgumentParser(
         prog=SCRIPT,
         description="Installs affine_orb's stella_vslam adapter: %s becomes adapters/stella_vslam/orb_extractor.cc "
-                    "(stella's own kept in %s/) and %s gets marked lines adding affine_orb's include "
-                    "directories. Running it again changes nothing or refreshes the file; --uninstall restores "
+                    "(stella's own kept in %s/), %s gets marked lines adding affine_orb's include "
+                    "directories and orb_extractor.h and system.cc a marked line each reading the YAML "
+                    "`Feature: affine_orb:` options. Running it again changes nothing or refreshes the file; --uninstall restores "
                     "stella byte for byte. It refuses a tree that is not a stella_vslam checkout or holds "
                     "another extractor." % (SOURCE, BACKUP_DIR, CMAKE),
         epilog="Then rebuild stella_vslam as usual.")

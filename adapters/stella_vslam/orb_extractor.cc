@@ -1,9 +1,10 @@
 // stella_vslam's feature::orb_extractor implemented by affine_orb: this file replaces stella's
-// src/stella_vslam/feature/orb_extractor.cc and keeps its unmodified orb_extractor.h
-// (adapters/README.md, "stella_vslam"). By default extract() returns stella's own keypoints, in
-// its order, its ORB rows and its image_pyramid_ bytes (StellaVslamKeypoints); the
-// AFFINE_ORB_* variables of affine_orb_adapter/options.hpp turn on affine_orb's views or spreading.
-// stella's YAML `Feature:` section is not read here: stella passes orb_params and min_size only.
+// src/stella_vslam/feature/orb_extractor.cc; stella's orb_extractor.h stays but for one declaration,
+// configure_affine_orb(), that adapters/stella_vslam/install.sh adds with a call in system.cc
+// (adapters/README.md, "stella_vslam"). By default extract() returns stella's own keypoints, in its
+// order, its ORB rows and its image_pyramid_ bytes (StellaVslamKeypoints); the YAML `Feature:
+// affine_orb:` settings, then the AFFINE_ORB_* variables over them (affine_orb_adapter/options.hpp),
+// turn on affine_orb's views or spreading.
 #include "stella_vslam/feature/orb_extractor.h"
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -115,6 +117,24 @@ affine_orb::ExtractorOptions extractor_options(const orb_params& p, unsigned min
   return options;
 }
 
+/// The settings of YAML `Feature: affine_orb:` (a map of scalars; absent: none) as key and value.
+std::vector<std::pair<std::string, std::string>> yaml_settings(const YAML::Node& feature) {
+  std::vector<std::pair<std::string, std::string>> settings;
+  const YAML::Node node = feature.IsMap() ? feature["affine_orb"] : YAML::Node();
+  if (!node || node.IsNull()) return settings;
+  affine_orb::detail::require(node.IsMap(), std::string(kWho) + ": Feature.affine_orb must be a map of settings");
+  for (const auto& entry : node) {
+    const std::string key = entry.first.as<std::string>();
+    affine_orb::detail::require(entry.second.IsScalar(),
+                                std::string(kWho) + ": Feature.affine_orb." + key + " must be a single value");
+    affine_orb::detail::require(key.rfind("recovery_", 0) != 0,
+                                std::string(kWho) + ": Feature.affine_orb." + key +
+                                    " has no effect: stella_vslam tells its extractor nothing of lost tracking");
+    settings.emplace_back(key, entry.second.Scalar());
+  }
+  return settings;
+}
+
 }  // namespace
 
 orb_extractor::orb_extractor(const orb_params* orb_params, const unsigned int min_area, const descriptor_type desc_type,
@@ -130,6 +150,19 @@ orb_extractor::orb_extractor(const orb_params* orb_params, const unsigned int mi
   rect_mask_ = own_state(state);
   extractor_options(*orb_params_, min_area, mask_rects_, state->affine, 1);  // refuses bad parameters now
   image_pyramid_.resize(orb_params_->num_levels_);
+}
+
+/// Applies the YAML `Feature: affine_orb:` settings (keys: the AFFINE_ORB_* variables' names without
+/// the prefix, in lower case, e.g. `max_tilt: 2.83`), then the set AFFINE_ORB_* variables over them;
+/// std::invalid_argument for an unknown key or a bad value. The next frame uses them.
+void orb_extractor::configure_affine_orb(const YAML::Node& feature) {
+  namespace ad = affine_orb::adapters;
+  const ad::AdapterOptions affine =
+      ad::apply_environment(ad::apply_settings({}, yaml_settings(feature), "Feature.affine_orb."));
+  extractor_options(*orb_params_, state_of(rect_mask_).min_area, mask_rects_, affine, 1);  // refuses now
+  AdapterState& state = state_of(rect_mask_);
+  state.affine = affine;
+  state.engine = std::monostate{};
 }
 
 /// Keypoints and ORB rows of `in_image` (CV_8UC1; empty: returns, outputs untouched), with

@@ -524,6 +524,15 @@ public:
 """
 STELLA_SOURCE = "// stand-in\nstd::vector<cv::KeyPoint> orb_extractor::distribute_keypoints() {}\n"
 STELLA_CMAKE = "target_sources(${PROJECT_NAME}\n    PRIVATE\n    ${CMAKE_CURRENT_SOURCE_DIR}/orb_extractor.cc)\n"
+STELLA_SYSTEM = """\
+int system_stand_in() {
+    extractor_left_ = new feature::orb_extractor(orb_params_, min_size, desc_type, mask_rectangles);
+    if (camera_->setup_type_ == camera::setup_type_t::Stereo) {
+        extractor_right_ = new feature::orb_extractor(orb_params_, min_size, desc_type, mask_rectangles);
+    }
+    return 0;
+}
+"""
 
 
 class StellaVslam(unittest.TestCase):
@@ -536,6 +545,7 @@ class StellaVslam(unittest.TestCase):
         write(feature / "orb_extractor.h", STELLA_HEADER)
         write(feature / "orb_extractor.cc", STELLA_SOURCE)
         write(feature / "CMakeLists.txt", STELLA_CMAKE)
+        write(self.root / "src/stella_vslam/system.cc", STELLA_SYSTEM)
 
     def run_script(self, *args):
         return subprocess.run(["sh", str(PROJECT / "adapters/stella_vslam/install.sh")] + list(args),
@@ -548,7 +558,22 @@ class StellaVslam(unittest.TestCase):
         feature = self.root / "src/stella_vslam/feature"
         self.assertEqual((feature / "orb_extractor.cc").read_bytes(),
                          (PROJECT / "adapters/stella_vslam/orb_extractor.cc").read_bytes())
-        self.assertEqual((feature / "orb_extractor.h").read_text(), STELLA_HEADER)
+        header = (feature / "orb_extractor.h").read_text()
+        declaration = "    void configure_affine_orb(const YAML::Node& feature);\n"
+        self.assertEqual(header.count(declaration), 1)
+        self.assertLess(header.index("image_pyramid_;"), header.index(declaration))
+        self.assertLess(header.index(declaration), header.index("};"))
+        self.assertEqual(header.replace(declaration, "").replace(
+            "    // affine_orb adapter: reads the options of YAML `Feature: affine_orb:` "
+            "(adapters/stella_vslam/install.sh)\n", "").replace(";\n\n", ";\n", 1), STELLA_HEADER)
+        system = (self.root / "src/stella_vslam/system.cc").read_text().splitlines()
+        for side in ("left", "right"):
+            construction = [i for i, line in enumerate(system) if line.strip().startswith("extractor_%s_ = new" % side)]
+            self.assertEqual(len(construction), 1)
+            self.assertEqual(system[construction[0] + 1].strip(),
+                             'extractor_%s_->configure_affine_orb(util::yaml_optional_ref(cfg->yaml_node_, "Feature"));'
+                             '  // affine_orb adapter' % side)
+        self.assertEqual(len(system), len(STELLA_SYSTEM.splitlines()) + 2)
         self.assertIn(str(PROJECT / "adapters" / "common"), (feature / "CMakeLists.txt").read_text())
         installed = snapshot(self.root)
         again = self.run_script(str(self.root))
@@ -567,6 +592,27 @@ class StellaVslam(unittest.TestCase):
         self.assertEqual(refused.returncode, 1)
         self.assertIn("neither stella's own extractor", refused.stderr)
         self.assertEqual(snapshot(self.root), before)
+        write(source, STELLA_SOURCE)
+        write(self.root / "src/stella_vslam/system.cc", "int system_stand_in() { return 0; }\n")
+        before = snapshot(self.root)
+        refused = self.run_script(str(self.root))
+        self.assertEqual(refused.returncode, 1)
+        self.assertIn("does not construct extractor_left_", refused.stderr)
+        self.assertEqual(snapshot(self.root), before)
+
+    def test_installs_over_an_install_without_the_yaml_lines(self):
+        # An install by the adapter before configure_affine_orb() changed orb_extractor.cc and the
+        # CMake lines only: installing again adds the two files' lines, --uninstall restores all.
+        before = snapshot(self.root)
+        feature = self.root / "src/stella_vslam/feature"
+        write(self.root / ".affine_orb_backup/src/stella_vslam/feature/orb_extractor.cc", STELLA_SOURCE)
+        write(self.root / ".affine_orb_backup/src/stella_vslam/feature/CMakeLists.txt", STELLA_CMAKE)
+        write(feature / "orb_extractor.cc", (PROJECT / "adapters/stella_vslam/orb_extractor.cc").read_text())
+        self.assertEqual(self.run_script(str(self.root)).returncode, 0)
+        self.assertIn("configure_affine_orb", (feature / "orb_extractor.h").read_text())
+        self.assertIn("configure_affine_orb", (self.root / "src/stella_vslam/system.cc").read_text())
+        self.assertEqual(self.run_script("--uninstall", str(self.root)).returncode, 0)
+        self.assertEqual(snapshot(self.root), before)
 
     @unittest.skipUnless(os.environ.get("AFFINE_ORB_CMAKE") and os.environ.get("AFFINE_ORB_CXX"),
                          "AFFINE_ORB_CMAKE and AFFINE_ORB_CXX name no CMake and compiler")
@@ -579,7 +625,6 @@ class StellaVslam(unittest.TestCase):
         write(self.root / "src/stella_vslam/CMakeLists.txt",
               "add_library(${PROJECT_NAME} SHARED ${CMAKE_CURRENT_SOURCE_DIR}/system.cc)\n"
               "target_compile_features(${PROJECT_NAME} PUBLIC cxx_std_14)\nadd_subdirectory(feature)\n")
-        write(self.root / "src/stella_vslam/system.cc", "int system_stand_in() { return 0; }\n")
         self.assertEqual(self.run_script(str(self.root)).returncode, 0)
         commands = compile_commands(self, self.root, self.root / "build")
         common = str(PROJECT / "adapters" / "common")

@@ -2,7 +2,8 @@
 // stella's own headers from ../shared/slam/stock_extractors) with stella's stock orb_extractor,
 // compiled from there in a renamed namespace (tests/stock/stock_stella.hpp): the same keypoints,
 // in order, the same descriptor rows and the same image_pyramid_ bytes, with and without
-// mask_rects and an input mask; and the adapter's refusals.
+// mask_rects and an input mask; the adapter's refusals; its YAML `Feature: affine_orb:` settings
+// against the AFFINE_ORB_* variables they mirror.
 #include <doctest/doctest.h>
 
 #include <cstdlib>
@@ -13,6 +14,7 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "stella_vslam/feature/orb_extractor.h"
 #include "stella_vslam/feature/orb_params.h"
@@ -109,6 +111,25 @@ std::vector<cv::Mat> data_frames() {
   return out;
 }
 
+/// Keypoints and rows of `image` from an adapter configured with the YAML `feature` section.
+std::pair<std::vector<cv::KeyPoint>, cv::Mat> extract_configured(const cv::Mat& image, const std::string& feature) {
+  const orb_params params("affine_orb test", 1.2f, 8, 20, 7);
+  orb_extractor adapter(&params, 800);
+  adapter.configure_affine_orb(YAML::Load(feature));
+  std::pair<std::vector<cv::KeyPoint>, cv::Mat> out;
+  adapter.extract(image, cv::Mat(), out.first, out.second);
+  return out;
+}
+
+bool same_output(const std::pair<std::vector<cv::KeyPoint>, cv::Mat>& a,
+                 const std::pair<std::vector<cv::KeyPoint>, cv::Mat>& b) {
+  if (a.first.size() != b.first.size() || a.second.size() != b.second.size()) return false;
+  for (std::size_t i = 0; i < a.first.size(); ++i) {
+    if (!same_keypoint(a.first[i], b.first[i])) return false;
+  }
+  return a.second.empty() || cv::norm(a.second, b.second, cv::NORM_HAMMING) == 0.0;
+}
+
 }  // namespace
 
 TEST_CASE("the adapter returns stella's own keypoints, rows and pyramid on opencv-doc's photos") {
@@ -152,4 +173,39 @@ TEST_CASE("AFFINE_ORB_MAX_TILT adds view keypoints after stella's own, which sta
   ::setenv("AFFINE_ORB_KEYPOINTS", "bogus", 1);
   CHECK_THROWS_AS(orb_extractor(&params, 800), std::invalid_argument);
   ::unsetenv("AFFINE_ORB_KEYPOINTS");
+}
+
+TEST_CASE("YAML Feature: affine_orb: settings act as the AFFINE_ORB_* variables, which override them") {
+  const cv::Mat image = affine_orb::test::graf(1);
+  const auto plain = extract_configured(image, "{name: test, scale_factor: 1.2}");
+  CHECK(same_output(extract_configured(image, "{affine_orb: {}}"), plain));
+  CHECK(same_output(extract_configured(image, "{affine_orb: {max_tilt: 1}}"), plain));
+  ::setenv("AFFINE_ORB_MAX_TILT", "2.83", 1);
+  const auto from_environment = extract_configured(image, "{}");
+  ::setenv("AFFINE_ORB_MAX_TILT", "1", 1);
+  const auto overridden = extract_configured(image, "{affine_orb: {max_tilt: 2.83}}");
+  ::unsetenv("AFFINE_ORB_MAX_TILT");
+  const auto from_yaml = extract_configured(image, "{affine_orb: {max_tilt: 2.83}}");
+  CHECK(from_environment.first.size() > plain.first.size());
+  CHECK(same_output(from_yaml, from_environment));
+  CHECK(same_output(overridden, plain));
+  ::setenv("AFFINE_ORB_KEYPOINTS", "affine_orb", 1);
+  const auto spread_from_environment = extract_configured(image, "{}");
+  ::unsetenv("AFFINE_ORB_KEYPOINTS");
+  CHECK_FALSE(same_output(spread_from_environment, plain));
+  CHECK(same_output(extract_configured(image, "{affine_orb: {keypoints: affine_orb}}"), spread_from_environment));
+}
+
+TEST_CASE("bad YAML Feature: affine_orb: settings are refused by name") {
+  const cv::Mat image = affine_orb::test::graf(1);
+  const auto refused = [&](const std::string& feature, const char* named) {
+    CHECK_THROWS_WITH_AS(extract_configured(image, feature), doctest::Contains(named), std::invalid_argument);
+  };
+  refused("{affine_orb: {max_tilt: 40}}", "Feature.affine_orb.max_tilt");
+  refused("{affine_orb: {max_tilt: steep}}", "Feature.affine_orb.max_tilt");
+  refused("{affine_orb: {keypoints: octree}}", "Feature.affine_orb.keypoints");
+  refused("{affine_orb: {max_tlit: 2}}", "unknown setting Feature.affine_orb.max_tlit");
+  refused("{affine_orb: {max_tilt: [2, 3]}}", "Feature.affine_orb.max_tilt must be a single value");
+  refused("{affine_orb: {recovery_max_tilt: 2.83}}", "Feature.affine_orb.recovery_max_tilt has no effect");
+  refused("{affine_orb: 2.83}", "Feature.affine_orb must be a map");
 }

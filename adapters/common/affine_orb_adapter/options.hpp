@@ -7,6 +7,8 @@
 /// 1. the defaults: AdapterOptions{} (compiled in), or the options last given to the adapter's
 ///    static ORBextractor::SetAffineOptions();
 /// 2. each environment variable below that is set overrides its field of those defaults.
+/// stella_vslam's adapter reads no SetAffineOptions() but its YAML `Feature: affine_orb:` map, each
+/// key a variable's name in lower case without AFFINE_ORB_ (`max_tilt: 2.83`), the variables over it.
 /// A malformed or out-of-range value throws std::invalid_argument naming the variable.
 ///
 /// | variable                  | field          | values                                     |

@@ -143,6 +143,40 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
   }
 }
 
+TEST_CASE("cv::resize's row pass: the SSE2 and AVX2 kernels give the scalar reference's sums") {
+  // Downscales by 1.2 (ORB-SLAM's), 1.5 and 1.9 (sources of a block more than 16 bytes apart: no
+  // window), upscales, equal sizes, rows shorter than a window; random rows with extremes.
+  std::mt19937 rng(55);
+  int windows = 0;
+  for (const auto& widths : {std::pair<int, int>(1241, 1034), {1034, 862}, {640, 533}, {600, 400}, {190, 100},
+                             {100, 190}, {77, 77}, {15, 12}, {9, 20}, {31, 26}}) {
+    const int from = widths.first;  // not a structured binding: CAPTURE's lambda captures it
+    const int to = widths.second;
+    CAPTURE(from);
+    CAPTURE(to);
+    affine_orb::detail::CvResizeAxis axis;
+    axis.set(from, to, true);
+    for (const int w : axis.window) windows += w >= 0;
+    std::vector<std::uint8_t> row(static_cast<std::size_t>(from));
+    for (int trial = 0; trial < 20; ++trial) {
+      for (std::uint8_t& v : row) v = static_cast<std::uint8_t>(trial % 4 == 0 ? 255 * (rng() % 2) : rng() % 256);
+      std::vector<int> expected(static_cast<std::size_t>(to), -1);
+      affine_orb::detail::resize_row_x_scalar(row.data(), axis, 0, expected.data());
+      std::vector<int> got(expected.size(), -1);
+      affine_orb::detail::resize_row_x_sse2(row.data(), axis, got.data());
+      CHECK(got == expected);
+#if AFFINE_ORB_AVX2
+      if (affine_orb::detail::cpu_has_avx2()) {
+        std::fill(got.begin(), got.end(), -1);
+        affine_orb::detail::resize_row_x_avx2(row.data(), axis, got.data());
+        CHECK(got == expected);
+      }
+#endif
+    }
+  }
+  CHECK(windows > 300);  // the AVX2 kernel's vector path runs, not only its fallback
+}
+
 TEST_CASE("build_resized: every level is what cv::resize makes of the level before, byte for byte") {
   // cv::resize itself is the reference: random images and sizes (downscales by ORB-SLAM's 1.2 and
   // others, upscales, exactly half, the same size, one-pixel edges), and a ROI source.

@@ -15,6 +15,7 @@
 /// cv::resize itself.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -29,11 +30,18 @@ namespace detail {
 
 /// One axis of the resize: per destination index, its first source index and two weights.
 struct CvResizeAxis {
+  static constexpr std::size_t kBlock = 8;  ///< destination indices per AVX2 block
   std::vector<int> first;
   std::vector<int> second;  ///< min(first + 1, n − 1)
   std::vector<std::int16_t> w0;
   std::vector<std::int16_t> w1;
   std::vector<std::int16_t> pairs;  ///< w0, w1 interleaved
+  /// Along x, per block of kBlock destination indices (the AVX2 kernel): the first source
+  /// index of a 16-byte window holding every source the block reads, or −1 where none does (a
+  /// window past the row's end, or sources more than 16 apart), and the vpshufb mask that spreads
+  /// each index's two source bytes from it into the 16-bit lanes its w0, w1 pair multiplies.
+  std::vector<int> window;
+  std::vector<std::array<std::uint8_t, 32>> spread;
   int n = -1;
   int m = -1;
 
@@ -69,6 +77,33 @@ struct CvResizeAxis {
       pairs[2 * i] = w0[i];
       pairs[2 * i + 1] = w1[i];
     }
+    if (clamp_edges) {
+      set_windows();
+    } else {
+      window.clear();
+      spread.clear();
+    }
+  }
+
+  /// window and spread for the current tables.
+  void set_windows() {
+    window.assign(static_cast<std::size_t>(m / kBlock), -1);
+    spread.resize(window.size());
+    for (std::size_t b = 0; b < window.size(); ++b) {
+      const std::size_t d0 = b * kBlock;
+      const int base = *std::min_element(first.begin() + static_cast<std::ptrdiff_t>(d0),
+                                         first.begin() + static_cast<std::ptrdiff_t>(d0 + kBlock));
+      const int top = *std::max_element(second.begin() + static_cast<std::ptrdiff_t>(d0),
+                                        second.begin() + static_cast<std::ptrdiff_t>(d0 + kBlock));
+      if (base + 16 > n || top - base >= 16) continue;
+      window[b] = base;
+      for (std::size_t k = 0; k < kBlock; ++k) {  // byte 4k of index k's lane pair: its first source
+        spread[b][4 * k] = static_cast<std::uint8_t>(first[d0 + k] - base);
+        spread[b][4 * k + 1] = 0x80;  // zero: the high byte of a 16-bit lane
+        spread[b][4 * k + 2] = static_cast<std::uint8_t>(second[d0 + k] - base);
+        spread[b][4 * k + 3] = 0x80;
+      }
+    }
   }
 };
 
@@ -80,28 +115,74 @@ struct OpenCvResizeWork {
   int cached[2] = {-1, -1};  ///< which source row each holds
 };
 
-/// Source row `r` resized along x into `out`.
-inline void resize_row_x(const cv::Mat& src, int r, const CvResizeAxis& x, std::vector<int>& out) {
-  const std::uint8_t* row = src.ptr<std::uint8_t>(r);
-  const int* first = x.first.data();
-  const int* second = x.second.data();
-  const std::int16_t* w0 = x.w0.data();
-  const std::int16_t* w1 = x.w1.data();
-  int* o = out.data();
+/// Destination indices [d0, m) of source row `row` resized along x into `out`: the reference.
+inline void resize_row_x_scalar(const std::uint8_t* row, const CvResizeAxis& x, int d0, int* out) {
   const int m = static_cast<int>(x.first.size());
+  for (int d = d0; d < m; ++d) {
+    const std::size_t i = static_cast<std::size_t>(d);
+    out[d] = row[x.first[i]] * x.w0[i] + row[x.second[i]] * x.w1[i];
+  }
+}
+
+/// resize_row_x_scalar() from 0, four indices at a time with SSE2 where the target has it: each
+/// pair of source bytes as two 16-bit lanes, times its two weights (x.pairs) by one multiply-add.
+inline void resize_row_x_sse2(const std::uint8_t* row, const CvResizeAxis& x, int* out) {
   int d = 0;
 #if defined(__SSE2__)
-  // Four pixels at a time: each pair of source bytes as two 16-bit lanes, times its two weights
-  // (x.pairs) by one multiply-add.
+  const int* first = x.first.data();
+  const int* second = x.second.data();
   const std::int16_t* pairs = x.pairs.data();
+  const int m = static_cast<int>(x.first.size());
   for (; d + 4 <= m; d += 4) {
     const auto pair = [&](int k) { return static_cast<int>(row[first[d + k]]) | (static_cast<int>(row[second[d + k]]) << 16); };
     const __m128i pixels = _mm_set_epi32(pair(3), pair(2), pair(1), pair(0));
     const __m128i weights = _mm_loadu_si128(reinterpret_cast<const __m128i*>(pairs + 2 * d));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(o + d), _mm_madd_epi16(pixels, weights));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + d), _mm_madd_epi16(pixels, weights));
   }
 #endif
-  for (; d < m; ++d) o[d] = row[first[d]] * w0[d] + row[second[d]] * w1[d];
+  resize_row_x_scalar(row, x, d, out);
+}
+
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
+/// resize_row_x_scalar() from 0, eight indices at a time with AVX2 where a block has a window
+/// (CvResizeAxis::window): its 16 source bytes in both halves, spread by one vpshufb into the
+/// 16-bit lanes of the eight pairs, times the weights by one multiply-add.
+inline void resize_row_x_avx2(const std::uint8_t* row, const CvResizeAxis& x, int* out) {
+  const std::size_t blocks = x.window.size();
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const int d0 = static_cast<int>(b * CvResizeAxis::kBlock);
+    if (x.window[b] < 0) {
+      for (int d = d0; d < d0 + static_cast<int>(CvResizeAxis::kBlock); ++d) {
+        const std::size_t i = static_cast<std::size_t>(d);
+        out[d] = row[x.first[i]] * x.w0[i] + row[x.second[i]] * x.w1[i];
+      }
+      continue;
+    }
+    const __m256i bytes =
+        _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x.window[b])));
+    const __m256i lanes = _mm256_shuffle_epi8(bytes, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x.spread[b].data())));
+    const __m256i weights = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x.pairs.data() + 2 * d0));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d0), _mm256_madd_epi16(lanes, weights));
+  }
+  const int m = static_cast<int>(x.first.size());
+  for (int d = static_cast<int>(blocks * CvResizeAxis::kBlock); d < m; ++d) {
+    const std::size_t i = static_cast<std::size_t>(d);
+    out[d] = row[x.first[i]] * x.w0[i] + row[x.second[i]] * x.w1[i];
+  }
+}
+AFFINE_ORB_TARGET_AVX2_END
+#endif
+
+/// Source row `r` resized along x into `out`, with the widest kernel the CPU runs.
+inline void resize_row_x(const cv::Mat& src, int r, const CvResizeAxis& x, std::vector<int>& out) {
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    resize_row_x_avx2(src.ptr<std::uint8_t>(r), x, out.data());
+    return;
+  }
+#endif
+  resize_row_x_sse2(src.ptr<std::uint8_t>(r), x, out.data());
 }
 
 /// The destination row from the two source rows resized along x, h0 and h1, with weights b0 and

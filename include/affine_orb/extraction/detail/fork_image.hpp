@@ -171,28 +171,39 @@ inline void interior_maxima_scalar(const cv::Mat& scores, int y, int x0, int x1,
   }
 }
 
-/// interior_maxima_scalar() 16 pixels at a time where the target has SSE2 or NEON (the last chunk
-/// overlapping the one before); the same maxima in the same order.
-inline void interior_maxima(const cv::Mat& scores, int y, int x0, int x1, std::vector<Corner>& maxima) {
+// interior_maxima_run() written once over S lanes: for Lanes128 here and, inside the AVX2 region,
+// Lanes256 (an instantiation takes the target of its definition: fast_lanes.inc explains it).
 #if AFFINE_ORB_SIMD128
-  using S = Lanes128;
-  if (x1 - x0 >= S::kLanes) {
-    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(scores.step[0]);
-    const std::uint8_t* row = scores.ptr<std::uint8_t>(y);
-    int done = x0;  // columns before it are handled
-    for (int x = x0;; x = std::min(x + S::kLanes, x1 - S::kLanes)) {
-      const std::uint8_t* p = row + x;
-      const S::V m = S::max(S::max(S::max(S::load(p - step - 1), S::load(p - step)),
-                                   S::max(S::load(p - step + 1), S::load(p - 1))),
-                            S::max(S::max(S::load(p + 1), S::load(p + step - 1)),
-                                   S::max(S::load(p + step), S::load(p + step + 1))));
-      // s > m (so s >= 1) where the saturated s − m is not zero.
-      unsigned above = ~S::mask(S::eq(S::subs(S::load(p), m), S::zero())) & 0xFFFFu;
-      above &= ~((1u << (done - x)) - 1u);
-      append_corners(above, x, y, row, maxima);
-      done = x + S::kLanes;
-      if (done >= x1) return;
-    }
+namespace maxima128 {
+#include "affine_orb/extraction/detail/maxima_lanes.inc"
+}  // namespace maxima128
+#endif
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
+namespace maxima256 {
+#include "affine_orb/extraction/detail/maxima_lanes.inc"
+}  // namespace maxima256
+
+/// interior_maxima_scalar() 32 pixels at a time, for runs of at least 32 columns.
+inline void interior_maxima_avx2(const cv::Mat& scores, int y, int x0, int x1, std::vector<Corner>& maxima) {
+  maxima256::interior_maxima_run<Lanes256>(scores, y, x0, x1, maxima);
+}
+AFFINE_ORB_TARGET_AVX2_END
+#endif
+
+/// interior_maxima_scalar() with the widest lanes the CPU runs and the run fills: 32 with AVX2, 16
+/// with SSE2 or NEON; the scalar reference for shorter runs.
+inline void interior_maxima(const cv::Mat& scores, int y, int x0, int x1, std::vector<Corner>& maxima) {
+#if AFFINE_ORB_AVX2
+  if (x1 - x0 >= 32 && cpu_has_avx2()) {
+    interior_maxima_avx2(scores, y, x0, x1, maxima);
+    return;
+  }
+#endif
+#if AFFINE_ORB_SIMD128
+  if (x1 - x0 >= Lanes128::kLanes) {
+    maxima128::interior_maxima_run<Lanes128>(scores, y, x0, x1, maxima);
+    return;
   }
 #endif
   interior_maxima_scalar(scores, y, x0, x1, maxima);

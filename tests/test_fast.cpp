@@ -323,7 +323,7 @@ TEST_CASE("every compiled suppression row path equals the scalar reference, ties
 }
 
 TEST_CASE("every compiled path of the fork cells' interior maxima equals the scalar reference") {
-  using Row = void (*)(const cv::Mat&, int, int, int, std::vector<affine_orb::Corner>&);
+  using Row = void (*)(const cv::Mat&, int, int, int, int, std::vector<affine_orb::Corner>&);
   std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::interior_maxima}};
 #if AFFINE_ORB_SIMD128
   paths.emplace_back("128-bit (SSE2 or NEON)", &affine_orb::detail::maxima128::interior_maxima_run<affine_orb::detail::Lanes128>);
@@ -335,21 +335,24 @@ TEST_CASE("every compiled path of the fork cells' interior maxima equals the sca
     // Score maps with few distinct values (many ties, which no maximum may win) and mostly zeros.
     cv::Mat scores = random_image(101, 23, seed, seed % 2 ? 3 : 9);
     if (seed > 3) scores.setTo(0, random_image(101, 23, seed + 7, 2) == 0);
-    for (int y = 1; y < scores.rows - 1; ++y) {
-      // Runs of 99, 33, 32, 47, 40, 16 and 17 pixels; the 128-bit path takes none shorter than 16.
-      for (const auto& [x0, x1] : {std::pair<int, int>(1, 100), {5, 38}, {17, 49}, {2, 49}, {60, 100}, {3, 19}, {8, 25}}) {
-        std::vector<affine_orb::Corner> expected;
-        affine_orb::detail::interior_maxima_scalar(scores, y, x0, x1, expected);
-        for (const auto& path : paths) {
-          const auto& name = path.first;  // not a structured binding: CAPTURE's lambda captures it
-          if (x1 - x0 < 32 && std::string(name) == "avx2") continue;
-          CAPTURE(name);
-          std::vector<affine_orb::Corner> got;
-          path.second(scores, y, x0, x1, got);
-          REQUIRE(got.size() == expected.size());
-          for (std::size_t i = 0; i < got.size(); ++i) {
-            CHECK(got[i].x == expected[i].x);
-            CHECK(got[i].score == expected[i].score);
+    for (const int floor : {1, 5, 100, 255}) {
+      for (int y = 1; y < scores.rows - 1; ++y) {
+        // Runs of 99, 33, 32, 47, 40, 16 and 17 pixels; the 128-bit path takes none shorter than 16.
+        for (const auto& [x0, x1] : {std::pair<int, int>(1, 100), {5, 38}, {17, 49}, {2, 49}, {60, 100}, {3, 19}, {8, 25}}) {
+          std::vector<affine_orb::Corner> expected;
+          affine_orb::detail::interior_maxima_scalar(scores, y, x0, x1, floor, expected);
+          for (const auto& path : paths) {
+            const auto& name = path.first;  // not a structured binding: CAPTURE's lambda captures it
+            if (x1 - x0 < 32 && std::string(name) == "avx2") continue;
+            CAPTURE(name);
+            CAPTURE(floor);
+            std::vector<affine_orb::Corner> got;
+            path.second(scores, y, x0, x1, floor, got);
+            REQUIRE(got.size() == expected.size());
+            for (std::size_t i = 0; i < got.size(); ++i) {
+              CHECK(got[i].x == expected[i].x);
+              CHECK(got[i].score == expected[i].score);
+            }
           }
         }
       }

@@ -1,16 +1,19 @@
 // stella_vslam's feature::orb_extractor implemented by affine_orb: this file replaces stella's
-// src/stella_vslam/feature/orb_extractor.cc; stella's orb_extractor.h stays but for one declaration,
-// configure_affine_orb(), that adapters/stella_vslam/install.sh adds with a call in system.cc
-// (adapters/README.md, "stella_vslam"). By default extract() returns stella's own keypoints, in its
-// order, its ORB rows and its image_pyramid_ bytes (StellaVslamKeypoints); the YAML `Feature:
-// affine_orb:` settings, then the AFFINE_ORB_* variables over them (affine_orb_adapter/options.hpp),
-// turn on affine_orb's views or spreading.
+// src/stella_vslam/feature/orb_extractor.cc; stella's orb_extractor.h stays but for two
+// declarations, configure_affine_orb() and set_affine_orb_recovering(), that
+// adapters/stella_vslam/install.sh adds with their calls in system.cc (adapters/README.md,
+// "stella_vslam"). By default extract() returns stella's own keypoints, in its order, its ORB rows
+// and its image_pyramid_ bytes (StellaVslamKeypoints); the YAML `Feature: affine_orb:` settings,
+// then the AFFINE_ORB_* variables over them (affine_orb_adapter/options.hpp), turn on affine_orb's
+// views or spreading, and with install.sh --recovery the recovery options serve the frames
+// extracted while tracking is lost.
 #include "stella_vslam/feature/orb_extractor.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -32,14 +35,19 @@ namespace {
 
 constexpr const char* kWho = "stella_vslam::feature::orb_extractor (affine_orb)";
 
-/// What an extractor keeps between frames: the affine options read at construction and, from the
-/// first frame on, affine_orb's extractor and the pyramid it fills in place.
+/// What an extractor keeps between frames: the affine options, whether system.cc reports lost
+/// tracking (install.sh --recovery) and whether it is lost now, and from the first frame on
+/// affine_orb's extractor, the one for the recovery options where they differ, and the pyramid
+/// they fill in place.
 struct AdapterState {
   using Engine = std::variant<std::monostate, affine_orb::Extractor<affine_orb::Rbrief>,
                               affine_orb::Extractor<affine_orb::Brisk>>;
   affine_orb::adapters::AdapterOptions affine;
   unsigned min_area = 0;  ///< stella's Preprocessing.min_size
+  bool recovery_hook = false;
+  bool recovering = false;
   Engine engine;
+  Engine recovery_engine;
   std::vector<cv::Mat> levels;
 };
 
@@ -84,10 +92,12 @@ std::vector<affine_orb::MaskRectangle> mask_rectangles(const std::vector<std::ve
   return out;
 }
 
-/// The cells of stella's selection grid over every level for a `size` image: the most keypoints
-/// its own extraction keeps, and the budget of the views and of affine_orb's spreading.
-int grid_cells(const orb_params& p, unsigned min_area_sqrt, cv::Size size) {
+/// The cells of stella's selection grid over every level for a `size` image with cells of
+/// `min_area` pixels: the most keypoints its own extraction keeps, and the budget of the views and
+/// of affine_orb's spreading.
+int grid_cells(const orb_params& p, unsigned min_area, cv::Size size) {
   constexpr int kPatchRadius = 19;  // stella's orb_patch_radius_: no keypoint nearer the border
+  const double min_area_sqrt = static_cast<unsigned>(std::sqrt(min_area));  // stella's min_area_sqrt_
   double cells = 0.0;
   for (unsigned l = 0; l < p.num_levels_; ++l) {
     const double scale = p.scale_factors_.at(l);
@@ -99,26 +109,60 @@ int grid_cells(const orb_params& p, unsigned min_area_sqrt, cv::Size size) {
   return static_cast<int>(std::clamp(cells, 1.0, 1000000.0));
 }
 
-/// affine_orb's options for stella's parameters, the affine options and a `features` budget.
+/// affine_orb's options for stella's parameters with cells of `min_area` pixels and `plan`, whose
+/// views add plan.view_features · `cells` keypoints (cells: the normal grid's count).
 affine_orb::ExtractorOptions extractor_options(const orb_params& p, unsigned min_area,
                                                const std::vector<std::vector<float>>& rects,
-                                               const affine_orb::adapters::AdapterOptions& affine, int features) {
+                                               const affine_orb::adapters::AdapterOptions& affine,
+                                               const affine_orb::adapters::ExtractionPlan& plan, int cells) {
   namespace ad = affine_orb::adapters;
-  const ad::ForkParameters fork{features, p.scale_factor_, static_cast<int>(p.num_levels_),
+  const ad::ForkParameters fork{cells, p.scale_factor_, static_cast<int>(p.num_levels_),
                                 static_cast<int>(p.ini_fast_thr_), static_cast<int>(p.min_fast_thr_)};
   fork.check(kWho);
   affine_orb::StellaVslamKeypoints stella;
   stella.min_size = static_cast<int>(std::min(min_area, 2000000000u));  // check() refuses > 10^8
   stella.mask_rectangles = mask_rectangles(rects);
-  affine_orb::ExtractorOptions options =
-      ad::plan_options(ad::base_options(stella, fork, affine),
-                       ad::make_plan(features, affine.max_tilt, affine.view_features), features);
+  affine_orb::ExtractorOptions options = ad::plan_options(ad::base_options(stella, fork, affine), plan, cells);
   options.check();
   return options;
 }
 
-/// The settings of YAML `Feature: affine_orb:` (a map of scalars; absent: none) as key and value.
-std::vector<std::pair<std::string, std::string>> yaml_settings(const YAML::Node& feature) {
+/// The cell area of the recovery extraction: round(image_features) times the cells.
+unsigned recovery_min_area(unsigned min_area, const affine_orb::adapters::AdapterOptions& affine) {
+  return std::max(1u, static_cast<unsigned>(std::lround(min_area / affine.recovery.image_features)));
+}
+
+/// The options of the normal extraction of a `size` image and, with the recovery hook, of the
+/// recovery one where its cells or views differ (std::invalid_argument for bad parameters).
+std::pair<affine_orb::ExtractorOptions, std::optional<affine_orb::ExtractorOptions>> engine_options(
+    const AdapterState& state, const orb_params& p, const std::vector<std::vector<float>>& rects, cv::Size size) {
+  namespace ad = affine_orb::adapters;
+  const ad::AdapterOptions& a = state.affine;
+  const int cells = grid_cells(p, state.min_area, size);
+  const ad::ExtractionPlan normal = ad::make_plan(cells, a.max_tilt, a.view_features);
+  std::pair<affine_orb::ExtractorOptions, std::optional<affine_orb::ExtractorOptions>> out{
+      extractor_options(p, state.min_area, rects, a, normal, cells), std::nullopt};
+  if (!state.recovery_hook) return out;
+  const unsigned area = recovery_min_area(state.min_area, a);
+  const ad::ExtractionPlan recovery =
+      ad::make_plan(grid_cells(p, area, size), a.recovery.max_tilt, a.recovery.view_features);
+  if (area != state.min_area || recovery != normal) out.second = extractor_options(p, area, rects, a, recovery, cells);
+  return out;
+}
+
+/// Builds `engine` for `options` with the descriptor `affine` names.
+void build(AdapterState::Engine& engine, const affine_orb::ExtractorOptions& options,
+           const affine_orb::adapters::AdapterOptions& affine) {
+  if (affine.descriptor == affine_orb::adapters::AdapterDescriptor::kRbrief) {
+    engine.emplace<affine_orb::Extractor<affine_orb::Rbrief>>(options);
+  } else {
+    engine.emplace<affine_orb::Extractor<affine_orb::Brisk>>(options);
+  }
+}
+
+/// The settings of YAML `Feature: affine_orb:` (a map of scalars; absent: none) as key and value;
+/// the recovery keys only with the recovery hook.
+std::vector<std::pair<std::string, std::string>> yaml_settings(const YAML::Node& feature, bool recovery_hook) {
   std::vector<std::pair<std::string, std::string>> settings;
   const YAML::Node node = feature.IsMap() ? feature["affine_orb"] : YAML::Node();
   if (!node || node.IsNull()) return settings;
@@ -127,9 +171,10 @@ std::vector<std::pair<std::string, std::string>> yaml_settings(const YAML::Node&
     const std::string key = entry.first.as<std::string>();
     affine_orb::detail::require(entry.second.IsScalar(),
                                 std::string(kWho) + ": Feature.affine_orb." + key + " must be a single value");
-    affine_orb::detail::require(key.rfind("recovery_", 0) != 0,
+    affine_orb::detail::require(recovery_hook || key.rfind("recovery_", 0) != 0,
                                 std::string(kWho) + ": Feature.affine_orb." + key +
-                                    " has no effect: stella_vslam tells its extractor nothing of lost tracking");
+                                    " has no effect: install the adapter with --recovery, which tells the "
+                                    "extractor when tracking is lost");
     settings.emplace_back(key, entry.second.Scalar());
   }
   return settings;
@@ -146,24 +191,32 @@ orb_extractor::orb_extractor(const orb_params* orb_params, const unsigned int mi
                                   " is not supported, only ORB (restore stella's extractor for HashSIFT)");
   affine_orb::detail::require(min_area >= 1, std::string(kWho) + ": min_size must be at least 1");
   min_area_sqrt_ = static_cast<unsigned>(std::sqrt(min_area));
-  auto* state = new AdapterState{affine_orb::adapters::apply_environment({}), min_area, {}, {}};
+  auto* state = new AdapterState{affine_orb::adapters::apply_environment({}), min_area, false, false, {}, {}, {}};
   rect_mask_ = own_state(state);
-  extractor_options(*orb_params_, min_area, mask_rects_, state->affine, 1);  // refuses bad parameters now
+  engine_options(*state, *orb_params_, mask_rects_, cv::Size(640, 480));  // refuses bad parameters now
   image_pyramid_.resize(orb_params_->num_levels_);
 }
 
 /// Applies the YAML `Feature: affine_orb:` settings (keys: the AFFINE_ORB_* variables' names without
 /// the prefix, in lower case, e.g. `max_tilt: 2.83`), then the set AFFINE_ORB_* variables over them;
-/// std::invalid_argument for an unknown key or a bad value. The next frame uses them.
-void orb_extractor::configure_affine_orb(const YAML::Node& feature) {
+/// std::invalid_argument for an unknown key or a bad value. `recovery_hook`: system.cc reports lost
+/// tracking (set_affine_orb_recovering()), so the recovery options apply. The next frame uses them.
+void orb_extractor::configure_affine_orb(const YAML::Node& feature, bool recovery_hook) {
   namespace ad = affine_orb::adapters;
-  const ad::AdapterOptions affine =
-      ad::apply_environment(ad::apply_settings({}, yaml_settings(feature), "Feature.affine_orb."));
-  extractor_options(*orb_params_, state_of(rect_mask_).min_area, mask_rects_, affine, 1);  // refuses now
   AdapterState& state = state_of(rect_mask_);
-  state.affine = affine;
+  AdapterState next{ad::apply_environment(ad::apply_settings({}, yaml_settings(feature, recovery_hook),
+                                                             "Feature.affine_orb.")),
+                    state.min_area, recovery_hook, false, {}, {}, {}};
+  engine_options(next, *orb_params_, mask_rects_, cv::Size(640, 480));  // refuses now
+  state.affine = next.affine;
+  state.recovery_hook = recovery_hook;
   state.engine = std::monostate{};
+  state.recovery_engine = std::monostate{};
 }
+
+/// While `recovering` (tracking lost, as system.cc reports with the recovery hook), the frames are
+/// extracted with the recovery options where they differ from the normal ones.
+void orb_extractor::set_affine_orb_recovering(bool recovering) { state_of(rect_mask_).recovering = recovering; }
 
 /// Keypoints and ORB rows of `in_image` (CV_8UC1; empty: returns, outputs untouched), with
 /// `in_image_mask` (non-zero = allowed) or else mask_rects_; image_pyramid_ level 0 is the image,
@@ -176,16 +229,12 @@ void orb_extractor::extract(const cv::_InputArray& in_image, const cv::_InputArr
   const cv::Mat mask = in_image_mask.getMat();
   AdapterState& state = state_of(rect_mask_);
   if (std::holds_alternative<std::monostate>(state.engine)) {
-    const affine_orb::ExtractorOptions options =
-        extractor_options(*orb_params_, state.min_area, mask_rects_, state.affine,
-                          grid_cells(*orb_params_, min_area_sqrt_, image.size()));
-    if (state.affine.descriptor == affine_orb::adapters::AdapterDescriptor::kRbrief) {
-      state.engine.emplace<affine_orb::Extractor<affine_orb::Rbrief>>(options);
-    } else {
-      state.engine.emplace<affine_orb::Extractor<affine_orb::Brisk>>(options);
-    }
+    const auto options = engine_options(state, *orb_params_, mask_rects_, image.size());
+    build(state.engine, options.first, state.affine);
+    if (options.second) build(state.recovery_engine, *options.second, state.affine);
     mask_is_initialized_ = true;
   }
+  const bool recovery = state.recovering && !std::holds_alternative<std::monostate>(state.recovery_engine);
   std::visit(
       [&](auto& extractor) {
         if constexpr (!std::is_same_v<std::decay_t<decltype(extractor)>, std::monostate>) {
@@ -205,7 +254,7 @@ void orb_extractor::extract(const cv::_InputArray& in_image, const cv::_InputArr
           }
         }
       },
-      state.engine);
+      recovery ? state.recovery_engine : state.engine);
   image_pyramid_.resize(state.levels.size());
   image_pyramid_[0] = image;
   for (std::size_t l = 1; l < state.levels.size(); ++l) image_pyramid_[l] = state.levels[l];

@@ -532,7 +532,13 @@ int system_stand_in() {
     }
     return 0;
 }
+
+int feed_frame_stand_in() {
+    const auto cam_pose_wc = tracker_->feed_frame(frm);
+    return 0;
+}
 """
+STELLA_SWITCH = "extractor->set_affine_orb_recovering(tracker_->tracking_state_ == tracker_state_t::Lost);"
 
 
 class StellaVslam(unittest.TestCase):
@@ -559,27 +565,56 @@ class StellaVslam(unittest.TestCase):
         self.assertEqual((feature / "orb_extractor.cc").read_bytes(),
                          (PROJECT / "adapters/stella_vslam/orb_extractor.cc").read_bytes())
         header = (feature / "orb_extractor.h").read_text()
-        declaration = "    void configure_affine_orb(const YAML::Node& feature);\n"
-        self.assertEqual(header.count(declaration), 1)
-        self.assertLess(header.index("image_pyramid_;"), header.index(declaration))
-        self.assertLess(header.index(declaration), header.index("};"))
-        self.assertEqual(header.replace(declaration, "").replace(
-            "    // affine_orb adapter: reads the options of YAML `Feature: affine_orb:` "
-            "(adapters/stella_vslam/install.sh)\n", "").replace(";\n\n", ";\n", 1), STELLA_HEADER)
-        system = (self.root / "src/stella_vslam/system.cc").read_text().splitlines()
-        for side in ("left", "right"):
-            construction = [i for i, line in enumerate(system) if line.strip().startswith("extractor_%s_ = new" % side)]
-            self.assertEqual(len(construction), 1)
-            self.assertEqual(system[construction[0] + 1].strip(),
-                             'extractor_%s_->configure_affine_orb(util::yaml_optional_ref(cfg->yaml_node_, "Feature"));'
-                             '  // affine_orb adapter' % side)
-        self.assertEqual(len(system), len(STELLA_SYSTEM.splitlines()) + 2)
+        added = [line for line in header.splitlines() if line not in STELLA_HEADER.splitlines()]
+        self.assertEqual([line.strip() for line in added if not line.strip().startswith("//")],
+                         ["void configure_affine_orb(const YAML::Node& feature, bool recovery_hook);",
+                          "void set_affine_orb_recovering(bool recovering);"])
+        self.assertLess(header.index("image_pyramid_;"), header.index("configure_affine_orb"))
+        self.assertLess(header.index("set_affine_orb_recovering"), header.index("};"))
+        self.assertEqual(self.configure_calls(), ["false", "false"])
+        self.assertNotIn(STELLA_SWITCH, (self.root / "src/stella_vslam/system.cc").read_text())
         self.assertIn(str(PROJECT / "adapters" / "common"), (feature / "CMakeLists.txt").read_text())
         installed = snapshot(self.root)
         again = self.run_script(str(self.root))
         self.assertEqual(again.returncode, 0)
         self.assertIn("nothing to do", again.stdout)
         self.assertEqual(snapshot(self.root), installed)
+        self.assertEqual(self.run_script("--uninstall", str(self.root)).returncode, 0)
+        self.assertEqual(snapshot(self.root), before)
+
+    def configure_calls(self):
+        """The second argument of each configure_affine_orb() call in system.cc, after the construction
+        of the extractor it configures."""
+        system = (self.root / "src/stella_vslam/system.cc").read_text().splitlines()
+        calls = []
+        for side in ("left", "right"):
+            construction = [i for i, line in enumerate(system) if line.strip().startswith("extractor_%s_ = new" % side)]
+            self.assertEqual(len(construction), 1)
+            call = system[construction[0] + 1].strip()
+            prefix = 'extractor_%s_->configure_affine_orb(util::yaml_optional_ref(cfg->yaml_node_, "Feature"), ' % side
+            self.assertTrue(call.startswith(prefix) and call.endswith(");  // affine_orb adapter"), call)
+            calls.append(call[len(prefix):-len(");  // affine_orb adapter")])
+        return calls
+
+    def test_recovery_switch_added_kept_and_removed(self):
+        before = snapshot(self.root)
+        system = self.root / "src/stella_vslam/system.cc"
+        self.assertEqual(self.run_script("--recovery", str(self.root)).returncode, 0)
+        self.assertEqual(self.configure_calls(), ["true", "true"])
+        lines = system.read_text().splitlines()
+        tracked = [i for i, line in enumerate(lines) if "tracker_->feed_frame(frm);" in line]
+        self.assertEqual(len(tracked), 1)
+        self.assertEqual(lines[tracked[0] + 2].strip(), "if (extractor) " + STELLA_SWITCH)
+        self.assertEqual(system.read_text().count(STELLA_SWITCH), 1)
+        recovering = snapshot(self.root)
+        again = self.run_script(str(self.root))  # a plain install keeps the switch
+        self.assertIn("nothing to do", again.stdout)
+        self.assertEqual(snapshot(self.root), recovering)
+        self.assertEqual(self.run_script("--no-recovery", str(self.root)).returncode, 0)
+        self.assertEqual(self.configure_calls(), ["false", "false"])
+        self.assertNotIn(STELLA_SWITCH, system.read_text())
+        self.assertEqual(self.run_script("--recovery", str(self.root)).returncode, 0)
+        self.assertEqual(snapshot(self.root), recovering)
         self.assertEqual(self.run_script("--uninstall", str(self.root)).returncode, 0)
         self.assertEqual(snapshot(self.root), before)
 
@@ -593,12 +628,15 @@ class StellaVslam(unittest.TestCase):
         self.assertIn("neither stella's own extractor", refused.stderr)
         self.assertEqual(snapshot(self.root), before)
         write(source, STELLA_SOURCE)
-        write(self.root / "src/stella_vslam/system.cc", "int system_stand_in() { return 0; }\n")
-        before = snapshot(self.root)
-        refused = self.run_script(str(self.root))
-        self.assertEqual(refused.returncode, 1)
-        self.assertIn("does not construct extractor_left_", refused.stderr)
-        self.assertEqual(snapshot(self.root), before)
+        system = self.root / "src/stella_vslam/system.cc"
+        for text, complaint in ((STELLA_SYSTEM.split("\n\n")[1], "does not construct extractor_left_"),
+                                (STELLA_SYSTEM.split("\n\n")[0], "no single `const auto cam_pose_wc")):
+            write(system, text)
+            before = snapshot(self.root)
+            refused = self.run_script(str(self.root))
+            self.assertEqual(refused.returncode, 1)
+            self.assertIn(complaint, refused.stderr)
+            self.assertEqual(snapshot(self.root), before)
 
     def test_installs_over_an_install_without_the_yaml_lines(self):
         # An install by the adapter before configure_affine_orb() changed orb_extractor.cc and the

@@ -111,14 +111,24 @@ std::vector<cv::Mat> data_frames() {
   return out;
 }
 
-/// Keypoints and rows of `image` from an adapter configured with the YAML `feature` section.
-std::pair<std::vector<cv::KeyPoint>, cv::Mat> extract_configured(const cv::Mat& image, const std::string& feature) {
+/// Keypoints and rows of `image` from an adapter configured with the YAML `feature` section, with
+/// the recovery hook and tracking lost when `recovering`.
+std::pair<std::vector<cv::KeyPoint>, cv::Mat> extract_configured(const cv::Mat& image, const std::string& feature,
+                                                                 bool recovering = false) {
   const orb_params params("affine_orb test", 1.2f, 8, 20, 7);
   orb_extractor adapter(&params, 800);
-  adapter.configure_affine_orb(YAML::Load(feature));
+  adapter.configure_affine_orb(YAML::Load(feature), recovering);
+  adapter.set_affine_orb_recovering(recovering);
   std::pair<std::vector<cv::KeyPoint>, cv::Mat> out;
   adapter.extract(image, cv::Mat(), out.first, out.second);
   return out;
+}
+
+/// stella's own extractor's keypoints and rows at `min_size`.
+std::pair<std::vector<cv::KeyPoint>, cv::Mat> extract_stock(const cv::Mat& image, unsigned min_size) {
+  StockStellaExtractor stock(1.2f, 8, 20, 7, min_size, {});
+  const StockFrame frame = stock.extract(image, cv::Mat());
+  return {frame.keypoints, frame.descriptors};
 }
 
 bool same_output(const std::pair<std::vector<cv::KeyPoint>, cv::Mat>& a,
@@ -207,5 +217,32 @@ TEST_CASE("bad YAML Feature: affine_orb: settings are refused by name") {
   refused("{affine_orb: {max_tlit: 2}}", "unknown setting Feature.affine_orb.max_tlit");
   refused("{affine_orb: {max_tilt: [2, 3]}}", "Feature.affine_orb.max_tilt must be a single value");
   refused("{affine_orb: {recovery_max_tilt: 2.83}}", "Feature.affine_orb.recovery_max_tilt has no effect");
+  CHECK_NOTHROW(extract_configured(image, "{affine_orb: {recovery_max_tilt: 2.83}}", true));
   refused("{affine_orb: 2.83}", "Feature.affine_orb must be a map");
+}
+
+TEST_CASE("with the recovery hook, lost frames are stella's own extraction at a third of min_size") {
+  // RecoveryOptions::image_features (default 3) times the keypoints: cells of round(800 / 3) pixels,
+  // as stella's own extractor makes them at that min_size; the normal frames stay stella's own at 800.
+  for (const cv::Mat& image : {affine_orb::test::graf(1), affine_orb::test::textured_photo()}) {
+    const auto own = extract_stock(image, 800);
+    const auto lost = extract_configured(image, "{}", true);
+    CHECK(same_output(lost, extract_stock(image, 267)));
+    CHECK(lost.first.size() * 2 > own.first.size() * 3);
+    CHECK(same_output(extract_configured(image, "{affine_orb: {recovery_image_features: 1}}", true), own));
+    CHECK(same_output(extract_configured(image, "{affine_orb: {recovery_image_features: 2}}", true),
+                      extract_stock(image, 400)));
+    CHECK(same_output(extract_configured(image, "{}", false), own));
+  }
+  // The switch: the same extractor follows it frame by frame.
+  const orb_params params("affine_orb test", 1.2f, 8, 20, 7);
+  orb_extractor adapter(&params, 800);
+  adapter.configure_affine_orb(YAML::Load("{}"), true);
+  const cv::Mat image = affine_orb::test::graf(1);
+  std::pair<std::vector<cv::KeyPoint>, cv::Mat> out;
+  for (const bool recovering : {false, true, false}) {
+    adapter.set_affine_orb_recovering(recovering);
+    adapter.extract(image, cv::Mat(), out.first, out.second);
+    CHECK(same_output(out, extract_stock(image, recovering ? 267 : 800)));
+  }
 }

@@ -131,8 +131,9 @@ def install(tree, project, recovery=None):
     wanted = {SOURCE: adapter.read_bytes(), HEADER: patched_header(original(tree, HEADER)),
               SYSTEM: patched_system(original(tree, SYSTEM), recovery),
               CMAKE: cmake.rstrip(b"\n") + b"\n" + cmake_block(target, project).encode()}
-    what = {SOURCE: "affine_orb's adapter", HEADER: "declares configure_affine_orb()",
-            SYSTEM: "calls configure_affine_orb()" + (", reports lost tracking (recovery mode)" if recovery else ""), CMAKE: "affine_orb's include directories"}
+    what = {SOURCE: "affine_orb's adapter", HEADER: "declares configure_affine_orb(), set_affine_orb_recovering()",
+            SYSTEM: "calls configure_affine_orb()" + (", reports lost tracking (recovery mode)" if recovery else ""),
+            CMAKE: "affine_orb's include directories"}
     changes = []
     for relative, data in wanted.items():
         current = (tree / relative).read_bytes()

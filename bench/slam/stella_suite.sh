@@ -1,7 +1,7 @@
 #!/bin/bash
 # stella_suite.sh -- the regression suite of the drop-in in stella_vslam: stella's own extractor (S)
-# against the adapter's default, stella's own keypoints and bits (A0), and its 18 affine views (V,
-# AFFINE_ORB_MAX_TILT=2.83), on many seeds of every rendered sequence, RGB-D and monocular, plus
+# against the adapter's default, stella's own keypoints and bits (A0), its 18 affine views (V,
+# AFFINE_ORB_MAX_TILT=2.83) and, with --recovery, its recovery mode (R), on many seeds of every rendered sequence, RGB-D and monocular, plus
 # run_kitti_slam on KITTI 00; prints one table per sequence type and every sequence where an adapter
 # configuration is worse than stock beyond the run-to-run range (slam_tables.py suite). The sibling
 # of suite.sh (ORB-SLAM2/3); the runs have the layout of ../shared/slam/run.sh, so that analyze.py
@@ -13,6 +13,9 @@
 #   --adapter TREE     the tree of build_stella.sh --affine PROJECT: the same with the adapter
 #                      installed (adapters/stella_vslam/install.sh: TREE/stella_vslam/.affine_orb_backup/
 #                      holds stella's own orb_extractor.cc); any other tree is refused
+#   --recovery TREE    adds configuration R: a tree with the adapter installed by install.sh --recovery
+#                      (its system.cc reports lost tracking) and rebuilt (build_stella.sh --tree NAME)
+#   --run '...'        the configurations to run (default: all given, S A0 V and R with --recovery)
 #   --vocab FILE       FBoW vocabulary (default: STOCK/../vocab/orb_k10_L5.fbow, where build_stella.sh
 #                      writes it)
 #   --synth DIR        renders: DIR/SEQUENCE_sSEED/ (default /tmp/synth); this script renders nothing:
@@ -25,7 +28,7 @@
 #   --first I          index of the first run (default 1; e.g. 3 adds runs 3.. to earlier ones), KITTI too
 #   --kitti-repeats N  run_kitti_slam runs per configuration on KITTI 00 (default 6; 0 = none)
 #   --tables-only      print the tables of the runs already in --runs
-#   --confs '...'      the configurations the tables show, stock first (default 'S A0 V')
+#   --confs '...'      the configurations the tables show, stock first (default 'S A0 V R')
 # Per render and mode, RUNS/stella_configs/SEQUENCE_MODE.yaml is written from the render's camera.yaml
 # (ORB-SLAM keys: intrinsics, distortion, fps, size, Camera.bf, ThDepth, DepthMapFactor, Camera.RGB,
 # the ORBextractor scale, levels and FAST thresholds), with the Tracking and Mapping sections of
@@ -58,15 +61,17 @@ set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 HARNESS=${SLAM_HARNESS:-$HERE/../../../shared/slam}
 KITTI=${KITTI_DATA:-$HERE/../../../shared/data/kitti00}
-STOCK=; ADAPTER=; VOCAB=; SYNTH=/tmp/synth; RUNS=/tmp/stella_suite
+STOCK=; ADAPTER=; RECOVERY=; RUN=; VOCAB=; SYNTH=/tmp/synth; RUNS=/tmp/stella_suite
 SEEDS='1 2 3 4 5'; SEQUENCES='revisit_sweep oblique fast shake'; MODES='rgbd mono'
-REPEATS=2; FIRST=1; KITTI_REPEATS=6; TABLES_ONLY=0; CONFS='S A0 V'
+REPEATS=2; FIRST=1; KITTI_REPEATS=6; TABLES_ONLY=0; CONFS='S A0 V R'
 TIMEOUT=${TIMEOUT:-1200}; WAIT_RENDER=${WAIT_RENDER:-3600}
 usage() { sed -n '/^# usage/,/^# Every step/p' "$0" | sed '$d; s/^# \{0,1\}//' >&2; exit 2; }
 while [ $# -gt 0 ]; do
   case $1 in
     --stock) STOCK=$2; shift 2;;
     --adapter) ADAPTER=$2; shift 2;;
+    --recovery) RECOVERY=$2; shift 2;;
+    --run) RUN=$2; shift 2;;
     --vocab) VOCAB=$2; shift 2;;
     --synth) SYNTH=$2; shift 2;;
     --runs) RUNS=$2; shift 2;;
@@ -95,23 +100,27 @@ tables() {  # the configurations of CONFS that have runs, stock first
 }
 if [ "$TABLES_ONLY" = 1 ]; then tables; exit 0; fi
 if [ -z "$STOCK" ] || [ -z "$ADAPTER" ]; then usage; fi
-STOCK=$(readlink -f "$STOCK"); ADAPTER=$(readlink -f "$ADAPTER")
+STOCK=$(readlink -f "$STOCK"); ADAPTER=$(readlink -f "$ADAPTER"); [ -z "$RECOVERY" ] || RECOVERY=$(readlink -f "$RECOVERY")
 VOCAB=${VOCAB:-$STOCK/../vocab/orb_k10_L5.fbow}
 [ -f "$VOCAB" ] || { echo "vocabulary not found: $VOCAB (--vocab)" >&2; exit 2; }
 VOCAB=$(readlink -f "$VOCAB")
 EXTRACTOR=src/stella_vslam/feature/orb_extractor.cc
-for t in "$STOCK" "$ADAPTER"; do
+for t in "$STOCK" "$ADAPTER" ${RECOVERY:+"$RECOVERY"}; do
   [ -f "$t/stella_vslam/$EXTRACTOR" ] || { echo "$t: no stella_vslam/$EXTRACTOR (not a build_stella.sh tree)" >&2; exit 2; }
   for r in run_tum_rgbd_slam run_image_slam run_kitti_slam; do
     [ -x "$t/build/examples/$r" ] || { echo "$t: no build/examples/$r (build_stella.sh)" >&2; exit 2; }
   done
 done
-[ -f "$ADAPTER/stella_vslam/.affine_orb_backup/$EXTRACTOR" ] ||
-  { echo "$ADAPTER: no adapter (no .affine_orb_backup/$EXTRACTOR; build_stella.sh --affine PROJECT)" >&2; exit 2; }
+for t in "$ADAPTER" ${RECOVERY:+"$RECOVERY"}; do
+  [ -f "$t/stella_vslam/.affine_orb_backup/$EXTRACTOR" ] ||
+    { echo "$t: no adapter (no .affine_orb_backup/$EXTRACTOR; build_stella.sh --affine PROJECT)" >&2; exit 2; }
+  [ "$t/install/lib/libstella_vslam.so" -nt "$t/stella_vslam/$EXTRACTOR" ] ||
+    { echo "$t: the library is older than the installed adapter: rebuild (build_stella.sh --tree NAME)" >&2; exit 2; }
+done
+[ -z "$RECOVERY" ] || grep -q "affine_orb recovery mode" "$RECOVERY/stella_vslam/src/stella_vslam/system.cc" ||
+  { echo "$RECOVERY: no recovery lines in system.cc (adapters/stella_vslam/install.sh --recovery)" >&2; exit 2; }
 [ ! -e "$STOCK/stella_vslam/.affine_orb_backup" ] ||
   { echo "$STOCK: holds the adapter (.affine_orb_backup/): not a stock tree" >&2; exit 2; }
-[ "$ADAPTER/install/lib/libstella_vslam.so" -nt "$ADAPTER/stella_vslam/$EXTRACTOR" ] ||
-  { echo "$ADAPTER: the library is older than the installed adapter: rebuild (build_stella.sh --tree affine)" >&2; exit 2; }
 for m in $MODES; do [ "$m" = rgbd ] || [ "$m" = mono ] || { echo "bad mode: $m" >&2; exit 2; }; done
 mkdir -p "$RUNS"; RUNS=$(readlink -f "$RUNS"); SYNTH=$(readlink -f "$SYNTH")
 
@@ -120,6 +129,11 @@ NAMES=(S A0 V)
 TREE[S]=$STOCK; KIND[S]=stock; ENVS[S]=
 TREE[A0]=$ADAPTER; KIND[A0]=affine; ENVS[A0]=
 TREE[V]=$ADAPTER; KIND[V]=affine; ENVS[V]=AFFINE_ORB_MAX_TILT=2.83
+[ -z "$RECOVERY" ] || { NAMES+=(R); TREE[R]=$RECOVERY; KIND[R]=affine; ENVS[R]=; }
+if [ -n "$RUN" ]; then
+  for name in $RUN; do [ -n "${TREE[$name]:-}" ] || { echo "--run: no configuration $name" >&2; exit 2; }; done
+  read -r -a NAMES <<< "$RUN"
+fi
 record() {  # RUNS_ROOT NAME: its config.txt as run.sh writes it; a name used for another is refused
   local desc="$2=${KIND[$2]}${ENVS[$2]:+ ${ENVS[$2]}}"$'\n'"tree: ${TREE[$2]}"
   mkdir -p "$1/$2"

@@ -161,7 +161,7 @@ TEST_CASE("cv::resize's row pass: the SSE2 and AVX2 kernels give the scalar refe
     for (int trial = 0; trial < 20; ++trial) {
       for (std::uint8_t& v : row) v = static_cast<std::uint8_t>(trial % 4 == 0 ? 255 * (rng() % 2) : rng() % 256);
       std::vector<int> expected(static_cast<std::size_t>(to), -1);
-      affine_orb::detail::resize_row_x_scalar(row.data(), axis, 0, expected.data());
+      affine_orb::detail::resize_row_x_scalar(row.data(), axis, 0, to, expected.data());
       std::vector<int> got(expected.size(), -1);
       affine_orb::detail::resize_row_x_sse2(row.data(), axis, got.data());
       CHECK(got == expected);

@@ -115,10 +115,9 @@ struct OpenCvResizeWork {
   int cached[2] = {-1, -1};  ///< which source row each holds
 };
 
-/// Destination indices [d0, m) of source row `row` resized along x into `out`: the reference.
-inline void resize_row_x_scalar(const std::uint8_t* row, const CvResizeAxis& x, int d0, int* out) {
-  const int m = static_cast<int>(x.first.size());
-  for (int d = d0; d < m; ++d) {
+/// Destination indices [d0, d1) of source row `row` resized along x into `out`: the reference.
+inline void resize_row_x_scalar(const std::uint8_t* row, const CvResizeAxis& x, int d0, int d1, int* out) {
+  for (int d = d0; d < d1; ++d) {
     const std::size_t i = static_cast<std::size_t>(d);
     out[d] = row[x.first[i]] * x.w0[i] + row[x.second[i]] * x.w1[i];
   }
@@ -127,12 +126,12 @@ inline void resize_row_x_scalar(const std::uint8_t* row, const CvResizeAxis& x, 
 /// resize_row_x_scalar() from 0, four indices at a time with SSE2 where the target has it: each
 /// pair of source bytes as two 16-bit lanes, times its two weights (x.pairs) by one multiply-add.
 inline void resize_row_x_sse2(const std::uint8_t* row, const CvResizeAxis& x, int* out) {
+  const int m = static_cast<int>(x.first.size());
   int d = 0;
 #if defined(__SSE2__)
   const int* first = x.first.data();
   const int* second = x.second.data();
   const std::int16_t* pairs = x.pairs.data();
-  const int m = static_cast<int>(x.first.size());
   for (; d + 4 <= m; d += 4) {
     const auto pair = [&](int k) { return static_cast<int>(row[first[d + k]]) | (static_cast<int>(row[second[d + k]]) << 16); };
     const __m128i pixels = _mm_set_epi32(pair(3), pair(2), pair(1), pair(0));
@@ -140,23 +139,22 @@ inline void resize_row_x_sse2(const std::uint8_t* row, const CvResizeAxis& x, in
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + d), _mm_madd_epi16(pixels, weights));
   }
 #endif
-  resize_row_x_scalar(row, x, d, out);
+  resize_row_x_scalar(row, x, d, m, out);
 }
 
 #if AFFINE_ORB_AVX2
 AFFINE_ORB_TARGET_AVX2_BEGIN
 /// resize_row_x_scalar() from 0, eight indices at a time with AVX2 where a block has a window
 /// (CvResizeAxis::window): its 16 source bytes in both halves, spread by one vpshufb into the
-/// 16-bit lanes of the eight pairs, times the weights by one multiply-add.
+/// 16-bit lanes of the eight pairs, times the weights by one multiply-add; the other indices by the
+/// reference (compiled outside this region, so its only copy runs on any CPU).
 inline void resize_row_x_avx2(const std::uint8_t* row, const CvResizeAxis& x, int* out) {
+  constexpr int kBlock = static_cast<int>(CvResizeAxis::kBlock);
   const std::size_t blocks = x.window.size();
   for (std::size_t b = 0; b < blocks; ++b) {
-    const int d0 = static_cast<int>(b * CvResizeAxis::kBlock);
+    const int d0 = static_cast<int>(b) * kBlock;
     if (x.window[b] < 0) {
-      for (int d = d0; d < d0 + static_cast<int>(CvResizeAxis::kBlock); ++d) {
-        const std::size_t i = static_cast<std::size_t>(d);
-        out[d] = row[x.first[i]] * x.w0[i] + row[x.second[i]] * x.w1[i];
-      }
+      resize_row_x_scalar(row, x, d0, d0 + kBlock, out);
       continue;
     }
     const __m256i bytes =
@@ -165,11 +163,7 @@ inline void resize_row_x_avx2(const std::uint8_t* row, const CvResizeAxis& x, in
     const __m256i weights = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x.pairs.data() + 2 * d0));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d0), _mm256_madd_epi16(lanes, weights));
   }
-  const int m = static_cast<int>(x.first.size());
-  for (int d = static_cast<int>(blocks * CvResizeAxis::kBlock); d < m; ++d) {
-    const std::size_t i = static_cast<std::size_t>(d);
-    out[d] = row[x.first[i]] * x.w0[i] + row[x.second[i]] * x.w1[i];
-  }
+  resize_row_x_scalar(row, x, static_cast<int>(blocks) * kBlock, static_cast<int>(x.first.size()), out);
 }
 AFFINE_ORB_TARGET_AVX2_END
 #endif

@@ -190,7 +190,6 @@ orb_extractor::orb_extractor(const orb_params* orb_params, const unsigned int mi
                               std::string(kWho) + ": descriptor_type " + descriptor_type_to_string(desc_type) +
                                   " is not supported, only ORB (restore stella's extractor for HashSIFT)");
   affine_orb::detail::require(min_area >= 1, std::string(kWho) + ": min_size must be at least 1");
-  min_area_sqrt_ = static_cast<unsigned>(std::sqrt(min_area));
   auto* state = new AdapterState{affine_orb::adapters::apply_environment({}), min_area, false, false, {}, {}, {}};
   rect_mask_ = own_state(state);
   engine_options(*state, *orb_params_, mask_rects_, cv::Size(640, 480));  // refuses bad parameters now

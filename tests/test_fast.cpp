@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/detection/fast.hpp"
-#include "affine_orb/extraction/detail/fork_image.hpp"
+#include "affine_orb/extraction/detail/cell_maxima.hpp"
 #include "test_data.hpp"
 
 namespace {

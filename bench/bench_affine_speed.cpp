@@ -33,7 +33,6 @@
 #include <functional>
 #include <map>
 #include <new>
-#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -47,6 +46,7 @@
 
 #include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
+#include "viewpoint_pairs.hpp"
 
 // Counts operator-new calls of the whole process (ours and OpenCV's C++ allocations).
 std::atomic<long> g_new_calls{0};
@@ -107,32 +107,14 @@ cv::Ptr<cv::Feature2D> affine_feature_peer(int views) {
   return cv::AffineFeature::create(cv::ORB::create(kAffineFeatures / views + 1), 3, 0, std::sqrt(2.0f), 72.0f);
 }
 
-cv::Matx33d read_homography(const std::string& path) {
-  std::ifstream in(path);
-  cv::Matx33d h;
-  for (int i = 0; i < 9; ++i) {
-    if (!(in >> h.val[i])) {
-      std::fprintf(stderr, "cannot read %s\n", path.c_str());
-      std::exit(1);
-    }
-  }
-  return h;
-}
-
 // Distinct correct matches of two feature sets (see the file comment).
 int distinct_correct(const affine_orb::Features<256>& a, const affine_orb::Features<256>& b, const cv::Matx33d& h) {
-  const auto matches =
-      affine_orb::match(affine_orb::descriptors_to_mat(a.descriptors), affine_orb::descriptors_to_mat(b.descriptors));
-  std::set<std::pair<int, int>> cells;
-  for (const auto& m : matches) {
-    const cv::Point2f p = a.keypoints[static_cast<std::size_t>(m.query)].pt;
-    const cv::Point2f q = b.keypoints[static_cast<std::size_t>(m.train)].pt;
-    const cv::Vec3d x = h * cv::Vec3d(p.x, p.y, 1.0);
-    if (std::hypot(x[0] / x[2] - q.x, x[1] / x[2] - q.y) < 3.0) {
-      cells.emplace(static_cast<int>(std::floor(p.x / 2.0f)), static_cast<int>(std::floor(p.y / 2.0f)));
-    }
+  std::vector<std::pair<cv::Point2f, cv::Point2f>> pairs;
+  for (const auto& m :
+       affine_orb::match(affine_orb::descriptors_to_mat(a.descriptors), affine_orb::descriptors_to_mat(b.descriptors))) {
+    pairs.emplace_back(a.keypoints[static_cast<std::size_t>(m.query)].pt, b.keypoints[static_cast<std::size_t>(m.train)].pt);
   }
-  return static_cast<int>(cells.size());
+  return static_cast<int>(affine_orb::bench::correct_matches(pairs, h).distinct);
 }
 
 /// The five extractions of the bench on one image, each with its --profile mode name.
@@ -402,6 +384,6 @@ int main(int argc, char** argv) {
   const auto f3 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img3.png"));
   std::printf("Accuracy, graf 1 -> 3 at full size, %d affine features per image, duplicates kept, ratio 0.8: ", kAffineFeatures);
   std::printf("%d distinct correct matches (< 3 px, 2-px cells)\n",
-              distinct_correct(f1, f3, read_homography(data + "/oxford/graf/H1to3p")));
+              distinct_correct(f1, f3, affine_orb::bench::read_oxford_homography(data + "/oxford/graf/H1to3p")));
   return 0;
 }

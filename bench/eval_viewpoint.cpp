@@ -148,8 +148,7 @@ Row evaluate(const Extracted& a, const Extracted& b, const cv::Matx33d& h, cv::S
   for (std::size_t k = 0; k < matches.size(); ++k) {
     const cv::Point2f x1 = a.keypoints[static_cast<std::size_t>(matches[k].query)].pt;
     const cv::Point2f x2 = b.keypoints[static_cast<std::size_t>(matches[k].train)].pt;
-    const cv::Point2d y = affine_orb::bench::map_point(h, x1);
-    correct[k] = std::hypot(y.x - x2.x, y.y - x2.y) < 3.0;
+    correct[k] = affine_orb::bench::match_residual(h, x1, x2) < affine_orb::bench::kCorrectMatchError;
     if (correct[k]) cells.insert({static_cast<int>(std::floor(x1.x / 2)), static_cast<int>(std::floor(x1.y / 2))});
     p1.push_back(x1);
     p2.push_back(x2);

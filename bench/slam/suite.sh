@@ -9,7 +9,7 @@
 # usage: suite.sh --stock TREE --adapter TREE [options]
 #   --stock TREE       the fork built with rgbd_tum, mono_tum and mono_kitti: ORB-SLAM2 by
 #                      ../shared/slam/build_orbslam2.sh (TARGETS="rgbd_tum mono_tum mono_kitti"), or
-#                      ORB-SLAM3 built with the same examples (told as install.sh tells them)
+#                      ORB-SLAM3 by bench/slam/build_orbslam3.sh (told as install.sh tells them)
 #   --adapter TREE     a copy with the adapter installed by adapters/orbslam2/install.sh --recovery
 #                      (adapters/orbslam3/ for ORB-SLAM3) and rebuilt; A0 runs it with
 #                      AFFINE_ORB_RECOVERY_IMAGE_FEATURES=1 (the recovery extraction then equals the

@@ -54,6 +54,7 @@
 set -euo pipefail
 JOBS=${JOBS:-2}
 TARGETS=${TARGETS:-"rgbd_tum mono_tum mono_kitti"}
+HERE=$(cd "$(dirname "$0")" && pwd)
 usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//' >&2; exit 2; }
 case "${1:-}" in
   ""|-h|--help) usage ;;
@@ -72,16 +73,9 @@ fi
 cd "$D"
 
 # --- Debian packages
-PKGS="build-essential cmake libeigen3-dev libopencv-dev libboost-serialization-dev libssl-dev"
-MISSING=()
-for p in $PKGS; do
-  dpkg-query -W -f='${Status}\n' "$p" 2>/dev/null | grep -q '^install ok installed' || MISSING+=("$p")
-done
-if [ ${#MISSING[@]} -gt 0 ]; then
-  step "apt-get install ${MISSING[*]}"
-  [ "$(id -u)" = 0 ] || { echo "run as root, or install first: ${MISSING[*]}" >&2; exit 1; }
-  apt-get install -y --no-install-recommends "${MISSING[@]}"
-fi
+# shellcheck source=bench/slam/debian_packages.sh
+. "$HERE/debian_packages.sh"
+install_missing build-essential cmake libeigen3-dev libopencv-dev libboost-serialization-dev libssl-dev
 
 # --- the fixes
 # empty_bodies FILE REGEX BODY N: the body of each function whose signature line matches REGEX (its

@@ -112,16 +112,9 @@ cmake_build() {
 }
 
 # --- Debian packages
-PKGS="build-essential cmake git libeigen3-dev libopencv-dev libyaml-cpp-dev libsqlite3-dev libsuitesparse-dev libspdlog-dev ccache python3"
-MISSING=()
-for p in $PKGS; do
-  dpkg-query -W -f='${Status}\n' "$p" 2>/dev/null | grep -q '^install ok installed' || MISSING+=("$p")
-done
-if [ ${#MISSING[@]} -gt 0 ]; then
-  step "apt-get install ${MISSING[*]}"
-  [ "$(id -u)" = 0 ] || { echo "run as root, or install first: ${MISSING[*]}" >&2; exit 1; }
-  apt-get install -y --no-install-recommends "${MISSING[@]}"
-fi
+# shellcheck source=bench/slam/debian_packages.sh
+. "$HERE/debian_packages.sh"
+install_missing build-essential cmake git libeigen3-dev libopencv-dev libyaml-cpp-dev libsqlite3-dev libsuitesparse-dev libspdlog-dev ccache python3
 
 # --- g2o and FBoW -> PREFIX/deps
 RPATH="$DEPS/lib;$INSTALL/lib"

@@ -6,9 +6,12 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 
 #include "affine_orb/detection/fast.hpp"
 #include "affine_orb/extraction/detail/cell_maxima.hpp"
+#include "affine_orb/extraction/detail/fork_image.hpp"
+#include "affine_orb/extraction/detail/stella_image.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -322,41 +325,139 @@ TEST_CASE("every compiled suppression row path equals the scalar reference, ties
   }
 }
 
-TEST_CASE("every compiled path of the fork cells' interior maxima equals the scalar reference") {
-  using Row = void (*)(const cv::Mat&, int, int, int, int, std::vector<affine_orb::Corner>&);
-  std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::interior_maxima}};
+TEST_CASE("every compiled path of the cells' maxima rows equals the scalar reference") {
+  using Row = void (*)(const cv::Mat&, int, bool, bool, int, int, const std::uint8_t*, const std::uint8_t*, int, int,
+                       std::uint64_t*, std::uint64_t*);
+  std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::mark_row}};
 #if AFFINE_ORB_SIMD128
-  paths.emplace_back("128-bit (SSE2 or NEON)", &affine_orb::detail::maxima128::interior_maxima_run<affine_orb::detail::Lanes128>);
+  paths.emplace_back("128-bit (SSE2 or NEON)", &affine_orb::detail::maxima128::mark_row_run<affine_orb::detail::Lanes128>);
 #endif
 #if AFFINE_ORB_AVX2
-  if (affine_orb::detail::cpu_has_avx2()) paths.emplace_back("avx2", &affine_orb::detail::interior_maxima_avx2);
+  if (affine_orb::detail::cpu_has_avx2()) paths.emplace_back("avx2", &affine_orb::detail::mark_row_avx2);
 #endif
+  // Cells of 99, 35 and 29, 1 and 34, one column, 33, 16 and 16 pixels: runs that end inside a chunk
+  // and cells narrower than the lanes.
+  const std::vector<std::vector<int>> tilings = {
+      {1, 100}, {1, 36, 71, 100}, {5, 6, 40, 41, 80}, {2, 3, 4, 50}, {10, 43}, {1, 17}, {3, 19, 35, 51, 67, 83, 99}};
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
-    // Score maps with few distinct values (many ties, which no maximum may win) and mostly zeros.
-    cv::Mat scores = random_image(101, 23, seed, seed % 2 ? 3 : 9);
-    if (seed > 3) scores.setTo(0, random_image(101, 23, seed + 7, 2) == 0);
-    for (const int floor : {1, 5, 100, 255}) {
-      for (int y = 1; y < scores.rows - 1; ++y) {
-        // Runs of 99, 33, 32, 47, 40, 16 and 17 pixels; the 128-bit path takes none shorter than 16.
-        for (const auto& [x0, x1] : {std::pair<int, int>(1, 100), {5, 38}, {17, 49}, {2, 49}, {60, 100}, {3, 19}, {8, 25}}) {
-          std::vector<affine_orb::Corner> expected;
-          affine_orb::detail::interior_maxima_scalar(scores, y, x0, x1, floor, expected);
-          for (const auto& path : paths) {
-            const auto& name = path.first;  // not a structured binding: CAPTURE's lambda captures it
-            if (x1 - x0 < 32 && std::string(name) == "avx2") continue;
-            CAPTURE(name);
-            CAPTURE(floor);
-            std::vector<affine_orb::Corner> got;
-            path.second(scores, y, x0, x1, floor, got);
-            REQUIRE(got.size() == expected.size());
-            for (std::size_t i = 0; i < got.size(); ++i) {
-              CHECK(got[i].x == expected[i].x);
-              CHECK(got[i].score == expected[i].score);
+    // Score maps with few distinct values (many ties, which no maximum may win) and mostly zeros; the
+    // padding past the map is random too, so a lane that reads it and is not cleared shows.
+    cv::Mat padded = random_image(101 + affine_orb::detail::kCellMaximaPadding, 23, seed, seed % 2 ? 3 : 9);
+    if (seed > 3) padded.setTo(0, random_image(padded.cols, 23, seed + 7, 2) == 0);
+    const cv::Mat scores = padded.colRange(0, 101);
+    for (const std::vector<int>& edges : tilings) {
+      affine_orb::detail::CellMaximaWork work;
+      work.edges = edges;
+      affine_orb::detail::set_cell_columns(work);
+      const std::size_t words = static_cast<std::size_t>(work.words_per_row);
+      for (const auto& [strong_floor, weak_floor] : {std::pair<int, int>(1, 1), {5, 3}, {100, 1}, {255, 7}}) {
+        for (int y = 1; y < scores.rows - 1; ++y) {
+          for (const int edge_rows : {0, 1, 2, 3}) {
+            const bool top = (edge_rows & 1) != 0;
+            const bool bottom = (edge_rows & 2) != 0;
+            std::vector<std::uint64_t> strong(words, 0), weak(words, 0);
+            affine_orb::detail::mark_row_scalar(scores, y, top, bottom, edges.front(), edges.back(),
+                                                work.drop_left.data(), work.drop_right.data(), strong_floor,
+                                                weak_floor, strong.data(), weak.data());
+            for (const auto& path : paths) {
+              const auto& name = path.first;  // not a structured binding: CAPTURE's lambda captures it
+              CAPTURE(name);
+              CAPTURE(y);
+              std::vector<std::uint64_t> got_strong(words, 0), got_weak(words, 0);
+              path.second(scores, y, top, bottom, edges.front(), edges.back(), work.drop_left.data(),
+                          work.drop_right.data(), strong_floor, weak_floor, got_strong.data(), got_weak.data());
+              CHECK(got_strong == strong);
+              CHECK(got_weak == weak);
             }
           }
         }
       }
     }
+  }
+}
+
+namespace {
+
+/// What the forks' extractors do in one cell: cv::FAST with non-maximum suppression on the cell's
+/// image at `initial`, at `minimum` where that finds nothing; positions relative to `origin`.
+void fast_in_cell(const cv::Mat& level, const cv::Rect& image, cv::Point origin, int initial, int minimum,
+                  std::vector<cv::Point2f>& points, std::vector<float>& responses) {
+  std::vector<cv::KeyPoint> found;
+  cv::FAST(level(image), found, initial, true);
+  if (found.empty()) cv::FAST(level(image), found, minimum, true);
+  for (const cv::KeyPoint& k : found) {
+    points.emplace_back(k.pt.x + static_cast<float>(image.x - origin.x), k.pt.y + static_cast<float>(image.y - origin.y));
+    responses.push_back(k.response);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the forks' cells keep the corners cv::FAST finds on each cell's image, in its order") {
+  const cv::Mat photo = affine_orb::test::textured_photo();
+  const cv::Mat graf = affine_orb::test::graf(1);
+  // Whole images and crops whose last column or row of cells the forks skip or cut.
+  const std::vector<cv::Mat> levels = {graf, photo, graf(cv::Rect(0, 0, 293, 211)), photo(cv::Rect(7, 3, 140, 77)),
+                                       graf(cv::Rect(100, 100, 40, 40))};
+  for (std::size_t n = 0; n < levels.size(); ++n) {
+    const cv::Mat& level = levels[n];
+    CAPTURE(n);
+    for (const int cell_size : {30, 35}) {
+      const affine_orb::detail::ForkCells cells(level.size(), cell_size);
+      std::vector<cv::Point2f> expected_points;
+      std::vector<float> expected_responses;
+      const cv::Point origin(affine_orb::detail::kForkRegionBorder, affine_orb::detail::kForkRegionBorder);
+      for (int i = 0; i < cells.rows; ++i) {
+        for (int j = 0; j < cells.columns; ++j) {
+          const cv::Rect scored = cells.scored(i, j);
+          if (scored.width <= 0 || scored.height <= 0) continue;
+          const int r = affine_orb::kFastRadius;
+          const cv::Rect image(scored.x - r, scored.y - r, scored.width + 2 * r, scored.height + 2 * r);
+          fast_in_cell(level, image, origin, 20, 7, expected_points, expected_responses);
+        }
+      }
+      cv::Mat storage;
+      affine_orb::detail::CellMaximaWork work;
+      std::vector<cv::Point2f> points;
+      std::vector<float> responses;
+      affine_orb::detail::detect_in_fork_cells(level, cells, 20, 7, storage, work, points, responses);
+      CAPTURE(cell_size);
+      CHECK(points.size() >= (n + 1 < levels.size() ? 20u : 0u));  // the last level holds no whole cell
+      CHECK(points == expected_points);
+      CHECK(responses == expected_responses);
+    }
+  }
+}
+
+TEST_CASE("stella_vslam's cells keep the corners cv::FAST finds on each cell's image, in its order") {
+  const cv::Mat photo = affine_orb::test::textured_photo();
+  const cv::Mat graf = affine_orb::test::graf(1);
+  // Crops whose last column and row of cells stella skips (297 x 168: regions of 4·64 + 3 and 2·64 + 2
+  // pixels) or cuts.
+  for (const cv::Mat& level : {graf, photo, graf(cv::Rect(0, 0, 297, 168)), photo(cv::Rect(5, 9, 90, 90))}) {
+    const affine_orb::detail::StellaCells cells(level.size());
+    const cv::Point origin(affine_orb::detail::kStellaRegionBorder, affine_orb::detail::kStellaRegionBorder);
+    std::vector<cv::Point2f> expected_points;
+    std::vector<float> expected_responses;
+    for (int i = 0; i < cells.rows; ++i) {
+      for (int j = 0; j < cells.columns; ++j) {
+        const cv::Rect image = cells.image(i, j);
+        if (image.width <= 2 * affine_orb::kFastRadius || image.height <= 2 * affine_orb::kFastRadius) continue;
+        fast_in_cell(level, image, origin, 20, 7, expected_points, expected_responses);
+      }
+    }
+    cv::Mat storage;
+    affine_orb::detail::CellMaximaWork work;
+    std::vector<cv::Point2f> points;
+    std::vector<float> responses;
+    affine_orb::DetectorOptions detector;
+    detector.initial_threshold = 20;
+    detector.min_threshold = 7;
+    affine_orb::detail::detect_in_stella_cells(level, cells, 1.0f, detector, cv::Mat(), storage, work, points,
+                                               responses);
+    CHECK(points.size() >= 20u);
+    CHECK(points == expected_points);
+    CHECK(responses == expected_responses);
   }
 }
 

@@ -132,10 +132,10 @@ struct ForkCells {
 };
 
 /// The FAST candidates of one level as the fork finds them (file comment), in the fork's order:
-/// cells row by row, raster order within a cell. `storage` holds the score map and `maxima` a
-/// cell's local maxima, both reused across calls.
+/// cells row by row, raster order within a cell. `storage` holds the score map and `maxima` the
+/// local maxima of a row of cells, both reused across calls.
 inline void detect_in_fork_cells(const cv::Mat& level, const ForkCells& cells, int initial_threshold,
-                                 int min_threshold, cv::Mat& storage, std::vector<Corner>& maxima,
+                                 int min_threshold, cv::Mat& storage, CellMaximaWork& maxima,
                                  std::vector<cv::Point2f>& points, std::vector<float>& responses) {
   points.clear();
   responses.clear();
@@ -143,14 +143,26 @@ inline void detect_in_fork_cells(const cv::Mat& level, const ForkCells& cells, i
   const cv::Rect region(kForkRegionBorder + kFastRadius, kForkRegionBorder + kFastRadius,
                         cells.width - 2 * kFastRadius, cells.height - 2 * kFastRadius);
   if (region.width <= 0 || region.height <= 0) return;
-  cv::Mat scores = fit_buffer(storage, level.size(), CV_8UC1);
+  cv::Mat scores = padded_score_map(storage, level.size());
   score_rect(level, region, min_threshold, scores);
+  // The cells' scored rectangles tile the region: each column of cells starts where the one before
+  // ends, and the last reaches the region's edge (ForkCells::scored()).
+  maxima.edges.clear();
+  for (int j = 0; j < cells.columns; ++j) {
+    const cv::Rect cell = cells.scored(0, j);
+    if (cell.width <= 0) continue;
+    if (maxima.edges.empty()) maxima.edges.push_back(cell.x);
+    maxima.edges.push_back(cell.x + cell.width);
+  }
+  if (maxima.edges.size() < 2) return;
+  set_cell_columns(maxima);
+  const cv::Point origin(kForkRegionBorder, kForkRegionBorder);
   for (int i = 0; i < cells.rows; ++i) {
-    for (int j = 0; j < cells.columns; ++j) {
-      const cv::Rect cell = cells.scored(i, j);
-      if (cell.width <= 0 || cell.height <= 0) continue;
-      suppress_in_cell(scores, cell, cv::Point(kForkRegionBorder, kForkRegionBorder), initial_threshold, min_threshold,
-                       maxima, points, responses);
+    const cv::Rect band = cells.scored(i, 0);
+    if (band.height <= 0) continue;
+    mark_cell_rows(scores, band.y, band.y + band.height, initial_threshold, min_threshold, maxima);
+    for (int j = 0; j + 1 < static_cast<int>(maxima.edges.size()); ++j) {
+      append_cell_corners(scores, maxima, j, origin, points, responses);
     }
   }
 }
@@ -159,7 +171,7 @@ inline void detect_in_fork_cells(const cv::Mat& level, const ForkCells& cells, i
 struct ForkImageWork {
   ForkScales scales;
   cv::Mat score_storage;
-  std::vector<Corner> maxima;       ///< one cell's local maxima
+  CellMaximaWork maxima;            ///< the local maxima of a row of cells
   std::vector<cv::Point2f> points;  ///< the level's candidates, relative to its region
   std::vector<float> responses;
   OctreeWorkspace octree;

@@ -155,29 +155,40 @@ inline void drop_stella_masked(const cv::Mat& mask, float factor, std::size_t fi
 }
 
 /// The FAST candidates of one level (scale `factor`) as stella finds them (file comment), relative
-/// to the region, in its order; `storage` holds the score map and `maxima` a cell's local maxima.
+/// to the region, in its order; `storage` holds the score map and `maxima` the local maxima of a
+/// row of cells.
 inline void detect_in_stella_cells(const cv::Mat& level, const StellaCells& cells, float factor,
                                    const DetectorOptions& detector, const cv::Mat& mask, cv::Mat& storage,
-                                   std::vector<Corner>& maxima, std::vector<cv::Point2f>& points,
+                                   CellMaximaWork& maxima, std::vector<cv::Point2f>& points,
                                    std::vector<float>& responses) {
   points.clear();
   responses.clear();
   if (cells.empty()) return;
   const int inset = kStellaRegionBorder + kFastRadius;
-  cv::Mat scores = fit_buffer(storage, level.size(), CV_8UC1);
+  cv::Mat scores = padded_score_map(storage, level.size());
   score_rect(level, cv::Rect(inset, inset, cells.width - 2 * kFastRadius, cells.height - 2 * kFastRadius),
              detector.min_threshold, scores);
+  // The cells' scored rectangles tile the region (StellaCells::image()).
+  maxima.edges.clear();
+  for (int j = 0; j < cells.columns; ++j) {
+    const cv::Rect c = cells.image(0, j);
+    if (c.empty() || c.width <= 2 * kFastRadius) continue;
+    if (maxima.edges.empty()) maxima.edges.push_back(c.x + kFastRadius);
+    maxima.edges.push_back(c.x + c.width - kFastRadius);
+  }
+  if (maxima.edges.size() < 2) return;
+  set_cell_columns(maxima);
   const cv::Point origin(kStellaRegionBorder, kStellaRegionBorder);
   for (int i = 0; i < cells.rows; ++i) {
+    const cv::Rect band = cells.image(i, 0);
+    if (band.empty() || band.height <= 2 * kFastRadius) continue;
+    mark_cell_rows(scores, band.y + kFastRadius, band.y + band.height - kFastRadius, detector.initial_threshold,
+                   detector.min_threshold, maxima);
     for (int j = 0; j < cells.columns; ++j) {
       const cv::Rect c = cells.image(i, j);
-      if (c.empty() || (!mask.empty() && stella_cell_masked(mask, c, factor))) continue;
-      const cv::Rect scored(c.x + kFastRadius, c.y + kFastRadius, c.width - 2 * kFastRadius,
-                            c.height - 2 * kFastRadius);
-      if (scored.width <= 0 || scored.height <= 0) continue;
+      if (c.empty() || c.width <= 2 * kFastRadius || (!mask.empty() && stella_cell_masked(mask, c, factor))) continue;
       const std::size_t first = points.size();
-      suppress_in_cell(scores, scored, origin, detector.initial_threshold, detector.min_threshold, maxima, points,
-                       responses);
+      append_cell_corners(scores, maxima, j, origin, points, responses);
       if (!mask.empty()) drop_stella_masked(mask, factor, first, points, responses);
     }
   }

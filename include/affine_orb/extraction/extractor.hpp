@@ -344,7 +344,9 @@ class Extractor {
   }
 
   bool additive() const { return options_.additive_budget() != nullptr; }
-  bool merging() const { return options_.merge_duplicates.has_value(); }
+  /// Whether the views' repeats are merged: ExtractorOptions::merge_duplicates, and views besides
+  /// the image to merge (with the image alone the repeat grids would be filled and never read).
+  bool merging() const { return options_.merge_duplicates.has_value() && view_work_.size() > 1; }
   bool fork() const { return options_.fork_keypoints(); }
 
   /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the

@@ -47,8 +47,10 @@ inline void rotated_offsets_sse2(const float* x, const float* y, std::size_t n, 
 #if AFFINE_ORB_AVX2
 AFFINE_ORB_TARGET_AVX2_BEGIN
 /// rotated_offsets_scalar() eight points at a time (n a multiple of 8), identical integers: the
-/// same float operations (no fused multiply-add: the region enables AVX2, not FMA) and a 32-bit
-/// multiply for ry·step.
+/// same float operations and a 32-bit multiply for ry·step. The region enables AVX2, not FMA; a
+/// translation unit compiled with FMA (-march=native, as ORB-SLAM builds) lets GCC fuse a product
+/// with the sum here and in the scalar code, not necessarily the same one, so that about one angle
+/// in 20,000 moves a test point by a pixel (docs/slam.md, "ORB-SLAM3: the default").
 inline void rotated_offsets_avx2(const float* x, const float* y, std::size_t n, float a, float b, std::int32_t step,
                                  std::int32_t* out) {
   const __m256 va = _mm256_set1_ps(a);

@@ -177,6 +177,38 @@ TEST_CASE("cv::resize's row pass: the SSE2 and AVX2 kernels give the scalar refe
   CHECK(windows > 300);  // the AVX2 kernel's vector path runs, not only its fallback
 }
 
+TEST_CASE("cv::resize's column pass: the SSE2 and AVX2 kernels give the scalar reference's bytes") {
+  // Rows as the row pass makes them (0 to 255 · 2048, extremes included) and weight pairs as the
+  // column axis gives them (summing to 2048, one of them 0 at a clamped edge), widths around the
+  // kernels' 8 and 16 pixels and a KITTI level's.
+  std::mt19937 rng(56);
+  std::uniform_int_distribution<int> sum(0, 255 * 2048);
+  std::uniform_int_distribution<int> weight(0, 2048);
+  for (const int width : {1, 7, 8, 15, 16, 17, 31, 33, 862, 1034}) {
+    CAPTURE(width);
+    std::vector<int> h0(static_cast<std::size_t>(width)), h1(h0.size());
+    for (int trial = 0; trial < 20; ++trial) {
+      for (std::size_t i = 0; i < h0.size(); ++i) {
+        h0[i] = trial % 5 == 0 ? 255 * 2048 * static_cast<int>(rng() % 2) : sum(rng);
+        h1[i] = trial % 5 == 1 ? 255 * 2048 : sum(rng);
+      }
+      const int b0 = trial % 7 == 0 ? 2048 : weight(rng);
+      const int b1 = 2048 - b0;
+      std::vector<std::uint8_t> expected(h0.size(), 7), got(h0.size(), 9);
+      affine_orb::detail::blend_resized_rows_scalar(h0.data(), h1.data(), b0, b1, 0, width, expected.data());
+      affine_orb::detail::blend_resized_rows_sse2(h0.data(), h1.data(), b0, b1, width, got.data());
+      CHECK(got == expected);
+#if AFFINE_ORB_AVX2
+      if (affine_orb::detail::cpu_has_avx2()) {
+        std::fill(got.begin(), got.end(), 9);
+        affine_orb::detail::blend_resized_rows_avx2(h0.data(), h1.data(), b0, b1, width, got.data());
+        CHECK(got == expected);
+      }
+#endif
+    }
+  }
+}
+
 TEST_CASE("build_resized: every level is what cv::resize makes of the level before, byte for byte") {
   // cv::resize itself is the reference: random images and sizes (downscales by ORB-SLAM's 1.2 and
   // others, upscales, exactly half, the same size, one-pixel edges), and a ROI source.

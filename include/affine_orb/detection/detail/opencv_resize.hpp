@@ -179,11 +179,19 @@ inline void resize_row_x(const cv::Mat& src, int r, const CvResizeAxis& x, std::
   resize_row_x_sse2(src.ptr<std::uint8_t>(r), x, out.data());
 }
 
-/// The destination row from the two source rows resized along x, h0 and h1, with weights b0 and
-/// b1: (((h0 >> 4)·b0 >> 16) + ((h1 >> 4)·b1 >> 16) + 2) >> 2 per pixel, 8 at a time with SSE2
-/// (16-bit high multiplies, as the formula's precision is) where the target has it; the scalar
-/// loop is the reference and does the rest.
-inline void blend_rows(const int* h0, const int* h1, int b0, int b1, int width, std::uint8_t* out) {
+/// Pixels [x0, width) of the destination row from the two source rows resized along x, h0 and h1,
+/// with weights b0 and b1: (((h0 >> 4)·b0 >> 16) + ((h1 >> 4)·b1 >> 16) + 2) >> 2 each. The
+/// reference of blend_resized_rows().
+inline void blend_resized_rows_scalar(const int* h0, const int* h1, int b0, int b1, int x0, int width,
+                                      std::uint8_t* out) {
+  for (int x = x0; x < width; ++x) {
+    out[x] = static_cast<std::uint8_t>((((h0[x] >> 4) * b0 >> 16) + ((h1[x] >> 4) * b1 >> 16) + 2) >> 2);
+  }
+}
+
+/// blend_resized_rows_scalar() from 0, 8 pixels at a time with SSE2 (16-bit high multiplies, as
+/// the formula's precision is) where the target has it.
+inline void blend_resized_rows_sse2(const int* h0, const int* h1, int b0, int b1, int width, std::uint8_t* out) {
   int x = 0;
 #if defined(__SSE2__)
   const __m128i v0 = _mm_set1_epi16(static_cast<short>(b0));
@@ -198,7 +206,48 @@ inline void blend_rows(const int* h0, const int* h1, int b0, int b1, int width, 
     _mm_storel_epi64(reinterpret_cast<__m128i*>(out + x), _mm_packus_epi16(_mm_srai_epi16(sum, 2), sum));
   }
 #endif
-  for (; x < width; ++x) out[x] = static_cast<std::uint8_t>((((h0[x] >> 4) * b0 >> 16) + ((h1[x] >> 4) * b1 >> 16) + 2) >> 2);
+  blend_resized_rows_scalar(h0, h1, b0, b1, x, width, out);
+}
+
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
+/// Sixteen values h[0..15] >> 4 as 16-bit lanes, in the quarter order of an in-lane pack: 0–3,
+/// 8–11, 4–7, 12–15.
+inline __m256i shifted_halves_avx2(const int* h) {
+  return _mm256_packs_epi32(_mm256_srai_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(h)), 4),
+                            _mm256_srai_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(h + 8)), 4));
+}
+
+/// blend_resized_rows_scalar() from 0, 16 pixels at a time with AVX2: the SSE2 kernel's arithmetic
+/// on twice the lanes, the 64-bit quarters put back in pixel order after the in-lane packs; the
+/// rest by the reference (compiled outside this region).
+inline void blend_resized_rows_avx2(const int* h0, const int* h1, int b0, int b1, int width, std::uint8_t* out) {
+  const __m256i v0 = _mm256_set1_epi16(static_cast<short>(b0));
+  const __m256i v1 = _mm256_set1_epi16(static_cast<short>(b1));
+  const __m256i two = _mm256_set1_epi16(2);
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    const __m256i sum = _mm256_add_epi16(_mm256_add_epi16(_mm256_mulhi_epi16(shifted_halves_avx2(h0 + x), v0),
+                                                          _mm256_mulhi_epi16(shifted_halves_avx2(h1 + x), v1)),
+                                         two);
+    const __m256i ordered = _mm256_permute4x64_epi64(_mm256_srai_epi16(sum, 2), 0xD8);  // pixels 0-7 | 8-15
+    const __m256i bytes = _mm256_permute4x64_epi64(_mm256_packus_epi16(ordered, ordered), 0x08);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), _mm256_castsi256_si128(bytes));
+  }
+  blend_resized_rows_scalar(h0, h1, b0, b1, x, width, out);
+}
+AFFINE_ORB_TARGET_AVX2_END
+#endif
+
+/// blend_resized_rows_scalar() from 0 with the widest kernel the CPU runs.
+inline void blend_resized_rows(const int* h0, const int* h1, int b0, int b1, int width, std::uint8_t* out) {
+#if AFFINE_ORB_AVX2
+  if (cpu_has_avx2()) {
+    blend_resized_rows_avx2(h0, h1, b0, b1, width, out);
+    return;
+  }
+#endif
+  blend_resized_rows_sse2(h0, h1, b0, b1, width, out);
 }
 
 /// The buffer holding source row `r` resized along x, computed unless one holds it already;
@@ -232,7 +281,7 @@ inline void resize_linear_8u(const cv::Mat& src, cv::Mat& dst, OpenCvResizeWork&
     const std::vector<int>& h0 = resized_row(src, r0, -1, w);
     const int keep = &h0 == &w.rows[0] ? 0 : 1;
     const std::vector<int>& h1 = resized_row(src, r1, keep, w);
-    blend_rows(h0.data(), h1.data(), w.y.w0[di], w.y.w1[di], dst.cols, dst.ptr<std::uint8_t>(d));
+    blend_resized_rows(h0.data(), h1.data(), w.y.w0[di], w.y.w1[di], dst.cols, dst.ptr<std::uint8_t>(d));
   }
 }
 

@@ -1,4 +1,5 @@
-// bench_fork_extraction [--rounds N] [--markdown]: affine_orb's extraction of a fork's own keypoints
+// bench_fork_extraction [--rounds N] [--profile orbslam2|orbslam3|stella N [--features F]]:
+// affine_orb's extraction of a fork's own keypoints
 // (ExtractorOptions::image_keypoints, what the ORB-SLAM adapters return by default) against that
 // fork's ORBextractor compiled from ../shared/slam/stock_extractors, one thread, interleaved frame by
 // frame, on the KITTI 00 frames (every 10th of 160, 1241x376) at ORB-SLAM's KITTI budget (2000) and
@@ -12,6 +13,10 @@
 // growing heap), and how many it shares (same position, octave and row, any order) with the fork
 // on the system heap, where ORB-SLAM2 orders them by address; "stock vs itself" is the same share
 // between two system-heap runs of the fork on the same frame.
+// --profile FORK N: after a warm-up frame, only affine_orb's extraction of the KITTI frames for that
+// fork (nfeatures F, default 2000; stella: min_size F, default 800), N rounds inside
+// profiled_frames(), for `valgrind --tool=callgrind --toggle-collect='*profiled_frames*'`; prints
+// the frames extracted and their keypoints.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -180,15 +185,62 @@ void run_stella(const Workload& w, int rounds) {
 }
 #endif
 
+/// The frames measured under callgrind (--toggle-collect=*profiled_frames*): `rounds` extractions
+/// of every frame; returns the keypoints extracted.
+__attribute__((noinline)) std::size_t profiled_frames(affine_orb::Extractor<affine_orb::Rbrief>& ours,
+                                                      const std::vector<cv::Mat>& frames, int rounds) {
+  std::size_t keypoints = 0;
+  for (int r = 0; r < rounds; ++r) {
+    for (const cv::Mat& frame : frames) keypoints += ours.extract(frame).keypoints.size();
+  }
+  return keypoints;
+}
+
+/// --profile: affine_orb's extraction of `fork`'s keypoints ("orbslam2", "orbslam3", "stella")
+/// on `frames`, `rounds` times inside profiled_frames() after a warm-up frame.
+int profile(const std::string& fork, int features, int rounds, const std::vector<cv::Mat>& frames) {
+  affine_orb::ExtractorOptions options;
+  options.views.max_tilt = 1.0;
+  options.features = features > 0 ? features : 2000;
+  if (fork == "orbslam2") {
+    options.image_keypoints = affine_orb::OrbSlam2Keypoints{};
+  } else if (fork == "orbslam3") {
+    options.image_keypoints = affine_orb::OrbSlam3Keypoints{};
+  } else if (fork == "stella") {
+    affine_orb::StellaVslamKeypoints stella;
+    stella.min_size = features > 0 ? features : 800;
+    options.image_keypoints = stella;
+  } else {
+    std::fprintf(stderr, "--profile takes orbslam2, orbslam3 or stella, got %s\n", fork.c_str());
+    return 2;
+  }
+  affine_orb::Extractor<affine_orb::Rbrief> ours(options);
+  ours.extract(frames.front());
+  const std::size_t keypoints = profiled_frames(ours, frames, rounds);
+  std::printf("%s: %zu frames, %zu keypoints\n", fork.c_str(), frames.size() * static_cast<std::size_t>(rounds),
+              keypoints);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int rounds = 15;
+  std::string profiled;
+  int profile_rounds = 0;
+  int features = 0;
   for (int i = 1; i + 1 < argc; ++i) {
-    if (std::string(argv[i]) == "--rounds") rounds = std::max(1, std::atoi(argv[i + 1]));
+    const std::string arg = argv[i];
+    if (arg == "--rounds") rounds = std::max(1, std::atoi(argv[i + 1]));
+    if (arg == "--features") features = std::atoi(argv[i + 1]);
+    if (arg == "--profile" && i + 2 < argc) {
+      profiled = argv[i + 1];
+      profile_rounds = std::max(1, std::atoi(argv[i + 2]));
+    }
   }
   cv::setNumThreads(1);
   const std::vector<cv::Mat> kitti = kitti00();
+  if (!profiled.empty()) return profile(profiled, features, profile_rounds, kitti);
   const std::vector<Workload> workloads = {
       {"KITTI 00", kitti, 2000}, {"KITTI 00", kitti, 4000}, {"KITTI 00", kitti, 10000}, {"Oxford", oxford(), 1000}};
   std::printf("| fork | frames, nfeatures (stella: min_size) | fork ms | affine_orb ms | ratio | identical %% | shared %% | stock vs itself %% |\n");

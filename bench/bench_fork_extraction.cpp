@@ -129,16 +129,31 @@ void print_row(const char* fork, const Workload& w, std::pair<double, double> ms
               ms.second, ms.second / ms.first, percent(same), percent(common), percent(self));
 }
 
-void run(Fork fork, const Workload& w, int rounds) {
+/// The image alone with `fork`'s keypoints at nfeatures `features`: what the ORB-SLAM adapters extract.
+affine_orb::ExtractorOptions fork_options(Fork fork, int features) {
   affine_orb::ExtractorOptions options;
-  options.features = w.features;
+  options.features = features;
   options.views.max_tilt = 1.0;
   if (fork == Fork::kOrbSlam2) {
     options.image_keypoints = affine_orb::OrbSlam2Keypoints{};
   } else {
     options.image_keypoints = affine_orb::OrbSlam3Keypoints{};
   }
-  affine_orb::Extractor<affine_orb::Rbrief> ours(options);
+  return options;
+}
+
+/// The image alone with stella_vslam's keypoints at `min_size`: what its adapter extracts.
+affine_orb::ExtractorOptions stella_options(int min_size) {
+  affine_orb::ExtractorOptions options;
+  options.views.max_tilt = 1.0;
+  affine_orb::StellaVslamKeypoints stella;
+  stella.min_size = min_size;
+  options.image_keypoints = stella;
+  return options;
+}
+
+void run(Fork fork, const Workload& w, int rounds) {
+  affine_orb::Extractor<affine_orb::Rbrief> ours(fork_options(fork, w.features));
   affine_orb::stock::StockExtractor stock(fork, w.features, 1.2f, 8, 20, 7);
   std::size_t total = 0, same = 0, common = 0, self = 0;
   for (const cv::Mat& frame : w.frames) {
@@ -161,12 +176,7 @@ void run(Fork fork, const Workload& w, int rounds) {
 #if AFFINE_ORB_STOCK_STELLA
 /// stella_vslam's row: Workload::features is its min_size.
 void run_stella(const Workload& w, int rounds) {
-  affine_orb::ExtractorOptions options;
-  options.views.max_tilt = 1.0;
-  affine_orb::StellaVslamKeypoints stella;
-  stella.min_size = w.features;
-  options.image_keypoints = stella;
-  affine_orb::Extractor<affine_orb::Rbrief> ours(options);
+  affine_orb::Extractor<affine_orb::Rbrief> ours(stella_options(w.features));
   affine_orb::stock::StockStellaExtractor stock(1.2f, 8, 20, 7, static_cast<unsigned>(w.features));
   std::size_t total = 0, same = 0, common = 0, self = 0;
   for (const cv::Mat& frame : w.frames) {
@@ -200,16 +210,12 @@ __attribute__((noinline)) std::size_t profiled_frames(affine_orb::Extractor<affi
 /// on `frames`, `rounds` times inside profiled_frames() after a warm-up frame.
 int profile(const std::string& fork, int features, int rounds, const std::vector<cv::Mat>& frames) {
   affine_orb::ExtractorOptions options;
-  options.views.max_tilt = 1.0;
-  options.features = features > 0 ? features : 2000;
   if (fork == "orbslam2") {
-    options.image_keypoints = affine_orb::OrbSlam2Keypoints{};
+    options = fork_options(Fork::kOrbSlam2, features > 0 ? features : 2000);
   } else if (fork == "orbslam3") {
-    options.image_keypoints = affine_orb::OrbSlam3Keypoints{};
+    options = fork_options(Fork::kOrbSlam3, features > 0 ? features : 2000);
   } else if (fork == "stella") {
-    affine_orb::StellaVslamKeypoints stella;
-    stella.min_size = features > 0 ? features : 800;
-    options.image_keypoints = stella;
+    options = stella_options(features > 0 ? features : 800);
   } else {
     std::fprintf(stderr, "--profile takes orbslam2, orbslam3 or stella, got %s\n", fork.c_str());
     return 2;

@@ -88,7 +88,7 @@ class Rbrief {
                      ? default_kernel_q8()
                      : detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
 #if AFFINE_ORB_SIMD128
-    disc_chunks_ = disc_chunks(options_.orientation_radius);
+    disc_chunks_ = detail::disc_chunks<8>(orb_disc_half_widths(options_.orientation_radius));
 #endif
   }
 
@@ -158,7 +158,9 @@ class Rbrief {
   /// has SSE2 or NEON (the same sums, so the same angle).
   float orientation_degrees(const LevelData& data, cv::Point2f pt) const {
 #if AFFINE_ORB_SIMD128
-    return centroid_degrees_128(data.image, cvRound(pt.x), cvRound(pt.y));
+    const detail::CentroidMoments m = detail::centroid_moments_128(
+        data.image.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x), data.image.step[0], disc_chunks_);
+    return orb_angle_degrees(m.m01, m.m10);
 #else
     return disc_.degrees(data.image, cvRound(pt.x), cvRound(pt.y));
 #endif
@@ -247,76 +249,10 @@ class Rbrief {
     return points;
   }
 
-#if AFFINE_ORB_SIMD128
-  /// The disc of CentroidDisc in 8-column chunks from column −r: for chunk j (columns
-  /// chunk_x[j] .. chunk_x[j] + 7, the last one ending at r and overlapping the one before) and row
-  /// v, the weight u of column u inside the disc and not in an earlier chunk (else 0), and the
-  /// weight v of the same columns.
-  struct DiscChunks {
-    std::vector<int> x;
-    std::vector<std::array<std::int16_t, 8>> u;  ///< [v·chunks + j]
-    std::vector<std::array<std::int16_t, 8>> v;  ///< [v·chunks + j]
-  };
-
-  static DiscChunks disc_chunks(int r) {
-    DiscChunks d;
-    for (int x = -r;; x = std::min(x + 8, r - 7)) {
-      d.x.push_back(x);
-      if (x + 8 > r) break;
-    }
-    const std::size_t chunks = d.x.size();
-    d.u.assign((static_cast<std::size_t>(r) + 1) * chunks, {});
-    d.v.assign(d.u.size(), {});
-    const std::vector<int> widths = orb_disc_half_widths(r);
-    for (int v = 0; v <= r; ++v) {
-      const int half = widths[static_cast<std::size_t>(v)];
-      for (std::size_t j = 0; j < chunks; ++j) {
-        for (int i = 0; i < 8; ++i) {
-          const int u = d.x[j] + i;
-          const bool earlier = j > 0 && u < d.x[j - 1] + 8;
-          if (std::abs(u) > half || earlier) continue;
-          d.u[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(u);
-          d.v[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(v);
-        }
-      }
-    }
-    return d;
-  }
-
-  /// CentroidDisc::degrees() with the moments m10 = Σ u·I, m01 = Σ v·I summed by 16-bit multiplies
-  /// into 32-bit lanes (SSE2's multiply-add, NEON's widening multiply-accumulate): per row pair ±v,
-  /// u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|, |v| <= 64, each product below 2^15),
-  /// exactly the integers of the scalar loop.
-  float centroid_degrees_128(const cv::Mat& image, int cx, int cy) const {
-    const int r = options_.orientation_radius;
-    const std::size_t chunks = disc_chunks_.x.size();
-    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(image.step[0]);
-    const std::uint8_t* center = image.ptr<std::uint8_t>(cy) + cx;
-    using L = detail::MomentLanes;
-    L::Sums m10 = L::zero();
-    L::Sums m01 = L::zero();
-    for (std::size_t j = 0; j < chunks; ++j) {
-      m10 = L::multiply_add(m10, L::load8(center + disc_chunks_.x[j]), L::load(disc_chunks_.u[j]));
-    }
-    for (int v = 1; v <= r; ++v) {
-      const std::uint8_t* below = center + v * step;
-      const std::uint8_t* above = center - v * step;
-      for (std::size_t j = 0; j < chunks; ++j) {
-        const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
-        const L::Words b = L::load8(below + disc_chunks_.x[j]);
-        const L::Words a = L::load8(above + disc_chunks_.x[j]);
-        m10 = L::multiply_add(m10, L::add(a, b), L::load(disc_chunks_.u[k]));
-        m01 = L::multiply_add(m01, L::subtract(b, a), L::load(disc_chunks_.v[k]));
-      }
-    }
-    return orb_angle_degrees(L::total(m01), L::total(m10));
-  }
-#endif
-
   Options options_;
   CentroidDisc disc_;
 #if AFFINE_ORB_SIMD128
-  DiscChunks disc_chunks_;
+  detail::DiscChunks<8> disc_chunks_;
 #endif
   int border_ = 0;
   /// cv::GaussianBlur's integer kernel for the options (empty: not reproduced, see prepare()).

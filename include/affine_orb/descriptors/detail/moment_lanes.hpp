@@ -1,13 +1,17 @@
 #pragma once
 /// \file
-/// The lane operations of the intensity-centroid moments (Rbrief's orientation): eight pixels
-/// widened to 16-bit lanes, multiplied by 16-bit weights and summed pairwise into four 32-bit lanes,
-/// with SSE2's multiply-add or NEON's widening multiply-accumulate. One loop over these operations
-/// serves both instruction sets; both give the scalar reference's integers (tests/test_rbrief.cpp,
-/// under qemu-user for NEON).
+/// The intensity-centroid moments of Rbrief's orientation over the disc of CentroidDisc, in chunks
+/// of columns: eight pixels widened to 16-bit lanes, multiplied by 16-bit weights and summed
+/// pairwise into four 32-bit lanes, with SSE2's multiply-add or NEON's widening
+/// multiply-accumulate. One loop over these operations serves both instruction sets; both give the
+/// scalar reference's integers (tests/test_rbrief.cpp, under qemu-user for NEON).
 
+#include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <vector>
 
 #include "affine_orb/core/detail/simd.hpp"
 
@@ -51,6 +55,76 @@ struct MomentLanes {
   }
 };
 #endif
+
+/// The disc of CentroidDisc in chunks of N columns from column −r (r + 1 = half_widths.size()):
+/// for chunk j (columns x[j] .. x[j] + N − 1, the last one ending at r and overlapping the one
+/// before; a single chunk when the disc is narrower than N) and row v, the weight u of column u
+/// inside the disc and not in an earlier chunk (else 0), and the weight v of the same columns.
+template <int N>
+struct DiscChunks {
+  int radius = 0;
+  std::vector<int> x;
+  std::vector<std::array<std::int16_t, N>> u;  ///< [v·chunks + j]
+  std::vector<std::array<std::int16_t, N>> v;  ///< [v·chunks + j]
+};
+
+/// DiscChunks of the disc whose row v spans columns −half_widths[v] .. half_widths[v].
+template <int N>
+DiscChunks<N> disc_chunks(const std::vector<int>& half_widths) {
+  DiscChunks<N> d;
+  const int r = static_cast<int>(half_widths.size()) - 1;
+  d.radius = r;
+  for (int x = -r;; x = std::min(x + N, r - (N - 1))) {
+    d.x.push_back(x);
+    if (x + N > r) break;
+  }
+  const std::size_t chunks = d.x.size();
+  d.u.assign((static_cast<std::size_t>(r) + 1) * chunks, {});
+  d.v.assign(d.u.size(), {});
+  for (int v = 0; v <= r; ++v) {
+    const int half = half_widths[static_cast<std::size_t>(v)];
+    for (std::size_t j = 0; j < chunks; ++j) {
+      for (int i = 0; i < N; ++i) {
+        const int u = d.x[j] + i;
+        const bool earlier = j > 0 && u < d.x[j - 1] + N;
+        if (std::abs(u) > half || earlier) continue;
+        d.u[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(u);
+        d.v[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(v);
+      }
+    }
+  }
+  return d;
+}
+
+/// The moments m01 = Σ v·I and m10 = Σ u·I of a disc.
+struct CentroidMoments {
+  std::int64_t m01 = 0;
+  std::int64_t m10 = 0;
+};
+
+/// The moments of the disc `d` around the pixel at `center` (rows `step` bytes apart), eight
+/// columns at a time: per row pair ±v, u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|,
+/// |v| <= 64, each product below 2^15), exactly the integers of the scalar loop. Reads the disc's
+/// chunks, up to 7 columns past its right edge for a disc narrower than 8.
+inline CentroidMoments centroid_moments_128(const std::uint8_t* center, std::size_t step, const DiscChunks<8>& d) {
+  const std::size_t chunks = d.x.size();
+  using L = MomentLanes;
+  L::Sums m10 = L::zero();
+  L::Sums m01 = L::zero();
+  for (std::size_t j = 0; j < chunks; ++j) m10 = L::multiply_add(m10, L::load8(center + d.x[j]), L::load(d.u[j]));
+  for (int v = 1; v <= d.radius; ++v) {
+    const std::uint8_t* below = center + static_cast<std::ptrdiff_t>(v) * static_cast<std::ptrdiff_t>(step);
+    const std::uint8_t* above = center - static_cast<std::ptrdiff_t>(v) * static_cast<std::ptrdiff_t>(step);
+    for (std::size_t j = 0; j < chunks; ++j) {
+      const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
+      const L::Words b = L::load8(below + d.x[j]);
+      const L::Words a = L::load8(above + d.x[j]);
+      m10 = L::multiply_add(m10, L::add(a, b), L::load(d.u[k]));
+      m01 = L::multiply_add(m01, L::subtract(b, a), L::load(d.v[k]));
+    }
+  }
+  return {L::total(m01), L::total(m10)};
+}
 
 }  // namespace affine_orb::detail
 #endif

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
+#include "affine_orb/descriptors/detail/moment_lanes.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
 #include "affine_orb/descriptors/detail/rotated_offsets.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
@@ -496,6 +497,54 @@ TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianB
     CHECK(mismatches == 0);
   }
 }
+
+#if AFFINE_ORB_SIMD128
+TEST_CASE("the centroid moment kernels give the moments of a naive sum over the disc") {
+  namespace d = affine_orb::detail;
+  MESSAGE(std::string(d::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  std::mt19937 rng(21);
+  cv::Mat noise(200, 220, CV_8UC1);
+  cv::randu(noise, 0, 256);
+  const cv::Mat white(200, 220, CV_8UC1, cv::Scalar(255));
+  for (int radius : {3, 7, 8, 9, 15, 16, 22, 64}) {
+    const std::vector<int> half = affine_orb::orb_disc_half_widths(radius);
+    const d::DiscChunks<8> chunks8 = d::disc_chunks<8>(half);
+#if AFFINE_ORB_AVX2
+    const d::DiscChunks<16> chunks16 = d::disc_chunks<16>(half);
+#endif
+    for (const cv::Mat& image : {noise, white}) {
+      std::uniform_int_distribution<int> px(radius + 16, image.cols - 1 - radius - 16);
+      std::uniform_int_distribution<int> py(radius, image.rows - 1 - radius);
+      int mismatches = 0;
+      for (int k = 0; k < 200; ++k) {
+        const int x = px(rng);
+        const int y = py(rng);
+        std::int64_t m01 = 0, m10 = 0;
+        for (int v = -radius; v <= radius; ++v) {
+          const int w = half[static_cast<std::size_t>(std::abs(v))];
+          for (int u = -w; u <= w; ++u) {
+            const int i = image.at<std::uint8_t>(y + v, x + u);
+            m01 += static_cast<std::int64_t>(v) * i;
+            m10 += static_cast<std::int64_t>(u) * i;
+          }
+        }
+        const std::uint8_t* center = image.ptr<std::uint8_t>(y) + x;
+        const std::size_t step = image.step[0];
+        const d::CentroidMoments a = d::centroid_moments_128(center, step, chunks8);
+        mismatches += a.m01 != m01 || a.m10 != m10;
+#if AFFINE_ORB_AVX2
+        if (d::cpu_has_avx2()) {
+          const d::CentroidMoments b = d::centroid_moments_avx2(center, step, chunks16);
+          mismatches += b.m01 != m01 || b.m10 != m10;
+        }
+#endif
+      }
+      CAPTURE(radius);
+      CHECK(mismatches == 0);
+    }
+  }
+}
+#endif
 
 TEST_CASE("rBRIEF orientation equals the intensity-centroid angle of the scalar disc") {
   const cv::Mat image = affine_orb::test::graf(1)(cv::Rect(30, 40, 600, 500));

@@ -88,7 +88,11 @@ class Rbrief {
                      ? default_kernel_q8()
                      : detail::gaussian_kernel_q8(options_.blur_kernel, options_.blur_sigma);
 #if AFFINE_ORB_SIMD128
-    disc_chunks_ = detail::disc_chunks<8>(orb_disc_half_widths(options_.orientation_radius));
+    const std::vector<int> half_widths = orb_disc_half_widths(options_.orientation_radius);
+    disc_chunks_ = detail::disc_chunks<8>(half_widths);
+#if AFFINE_ORB_AVX2
+    if (detail::cpu_has_avx2()) disc_chunks16_ = detail::disc_chunks<16>(half_widths);
+#endif
 #endif
   }
 
@@ -155,11 +159,17 @@ class Rbrief {
 
   /// The same orientation in degrees, the keypoint angle ORB and ORB-SLAM store:
   /// CentroidDisc::degrees(), whose integer moments are summed 8 columns at a time where the target
-  /// has SSE2 or NEON (the same sums, so the same angle).
+  /// has SSE2 or NEON, 16 on CPUs with AVX2 (the same sums, so the same angle).
   float orientation_degrees(const LevelData& data, cv::Point2f pt) const {
 #if AFFINE_ORB_SIMD128
-    const detail::CentroidMoments m = detail::centroid_moments_128(
-        data.image.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x), data.image.step[0], disc_chunks_);
+    const std::uint8_t* center = data.image.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x);
+#if AFFINE_ORB_AVX2
+    if (!disc_chunks16_.x.empty()) {
+      const detail::CentroidMoments m = detail::centroid_moments_avx2(center, data.image.step[0], disc_chunks16_);
+      return orb_angle_degrees(m.m01, m.m10);
+    }
+#endif
+    const detail::CentroidMoments m = detail::centroid_moments_128(center, data.image.step[0], disc_chunks_);
     return orb_angle_degrees(m.m01, m.m10);
 #else
     return disc_.degrees(data.image, cvRound(pt.x), cvRound(pt.y));
@@ -253,6 +263,9 @@ class Rbrief {
   CentroidDisc disc_;
 #if AFFINE_ORB_SIMD128
   detail::DiscChunks<8> disc_chunks_;
+#if AFFINE_ORB_AVX2
+  detail::DiscChunks<16> disc_chunks16_;  ///< empty without AVX2: the 8-column chunks serve
+#endif
 #endif
   int border_ = 0;
   /// cv::GaussianBlur's integer kernel for the options (empty: not reproduced, see prepare()).

@@ -3,8 +3,9 @@
 /// The intensity-centroid moments of Rbrief's orientation over the disc of CentroidDisc, in chunks
 /// of columns: eight pixels widened to 16-bit lanes, multiplied by 16-bit weights and summed
 /// pairwise into four 32-bit lanes, with SSE2's multiply-add or NEON's widening
-/// multiply-accumulate. One loop over these operations serves both instruction sets; both give the
-/// scalar reference's integers (tests/test_rbrief.cpp, under qemu-user for NEON).
+/// multiply-accumulate; sixteen at a time with AVX2, chosen at run time. One loop over the 128-bit
+/// operations serves SSE2 and NEON; every path gives the scalar reference's integers
+/// (tests/test_rbrief.cpp, under qemu-user for NEON).
 
 #include <algorithm>
 #include <array>
@@ -125,6 +126,48 @@ inline CentroidMoments centroid_moments_128(const std::uint8_t* center, std::siz
   }
   return {L::total(m01), L::total(m10)};
 }
+
+#if AFFINE_ORB_AVX2
+AFFINE_ORB_TARGET_AVX2_BEGIN
+/// centroid_moments_128() sixteen columns at a time: the pixels widened to 16 16-bit lanes and
+/// summed by AVX2's multiply-add into eight 32-bit lanes, the same integers. Reads up to 15
+/// columns past the disc's right edge for a disc narrower than 16.
+inline CentroidMoments centroid_moments_avx2(const std::uint8_t* center, std::size_t step, const DiscChunks<16>& d) {
+  const std::size_t chunks = d.x.size();
+  const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(step);
+  __m256i m10 = _mm256_setzero_si256();
+  __m256i m01 = _mm256_setzero_si256();
+  for (std::size_t j = 0; j < chunks; ++j) {
+    const __m256i i0 = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(center + d.x[j])));
+    const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.u[j].data()));
+    m10 = _mm256_add_epi32(m10, _mm256_madd_epi16(i0, u));
+  }
+  for (int v = 1; v <= d.radius; ++v) {
+    const std::uint8_t* below = center + v * row;
+    const std::uint8_t* above = center - v * row;
+    for (std::size_t j = 0; j < chunks; ++j) {
+      const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
+      const __m256i b = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(below + d.x[j])));
+      const __m256i a = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(above + d.x[j])));
+      const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.u[k].data()));
+      const __m256i w = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.v[k].data()));
+      m10 = _mm256_add_epi32(m10, _mm256_madd_epi16(_mm256_add_epi16(a, b), u));
+      m01 = _mm256_add_epi32(m01, _mm256_madd_epi16(_mm256_sub_epi16(b, a), w));
+    }
+  }
+  alignas(32) std::int32_t lanes10[8];
+  alignas(32) std::int32_t lanes01[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes10), m10);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes01), m01);
+  CentroidMoments moments;
+  for (int i = 0; i < 8; ++i) {
+    moments.m10 += lanes10[i];
+    moments.m01 += lanes01[i];
+  }
+  return moments;
+}
+AFFINE_ORB_TARGET_AVX2_END
+#endif
 
 }  // namespace affine_orb::detail
 #endif

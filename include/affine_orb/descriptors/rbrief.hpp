@@ -29,6 +29,7 @@
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "affine_orb/descriptors/detail/moment_lanes.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
+#include "affine_orb/descriptors/detail/rbrief_tests.hpp"
 #include "affine_orb/descriptors/detail/rotated_offsets.hpp"
 #include "affine_orb/detection/orientation.hpp"
 
@@ -56,7 +57,7 @@ struct RbriefOptions {
 /// The rBRIEF-256 descriptor policy.
 class Rbrief {
  public:
-  static constexpr int kBits = 256;
+  static constexpr int kBits = detail::kRbriefTests;
   /// Diameter in level pixels of ORB's patch; cv::KeyPoint::size is this times the keypoint scale.
   static constexpr float kPatchSize = 31.0f;
   using Options = RbriefOptions;
@@ -196,37 +197,7 @@ class Rbrief {
     detail::rotated_offsets(points.x.data(), points.y.data(), offset.size(), a, b, static_cast<std::int32_t>(step),
                             offset.data());
     BinaryDescriptor<kBits> descriptor{};
-#if AFFINE_ORB_SIMD128
-    // The two samples of every test gathered into byte arrays, then compared 16 tests at a time.
-    alignas(16) std::array<std::uint8_t, kBits> first;
-    alignas(16) std::array<std::uint8_t, kBits> second;
-    // Unrolled: the loads and stores are all its work, so a loop's count and branch per test
-    // would be a third of its instructions.
-    AFFINE_ORB_UNROLL
-    for (std::size_t i = 0; i < static_cast<std::size_t>(kBits); ++i) {
-      first[i] = center[offset[2 * i]];
-      second[i] = center[offset[2 * i + 1]];
-    }
-    for (int i = 0; i < kBits; i += 16) {
-#if defined(__SSE2__)
-      // I_a < I_b iff the saturated difference I_b − I_a is non-zero.
-      const __m128i va = _mm_load_si128(reinterpret_cast<const __m128i*>(first.data() + i));
-      const __m128i vb = _mm_load_si128(reinterpret_cast<const __m128i*>(second.data() + i));
-      const int not_less = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(vb, va), _mm_setzero_si128()));
-      const std::uint64_t bits = static_cast<std::uint64_t>(~not_less & 0xFFFF);
-#else
-      const uint8x16_t less = vcltq_u8(vld1q_u8(first.data() + i), vld1q_u8(second.data() + i));
-      const std::uint64_t bits = detail::top_bits_neon(less);
-#endif
-      descriptor[static_cast<std::size_t>(i / 64)] |= bits << (i % 64);
-    }
-#else
-    for (int i = 0; i < kBits; ++i) {
-      const int ia = center[offset[static_cast<std::size_t>(2 * i)]];
-      const int ib = center[offset[static_cast<std::size_t>(2 * i + 1)]];
-      descriptor[static_cast<std::size_t>(i / 64)] |= static_cast<std::uint64_t>(ia < ib) << (i % 64);
-    }
-#endif
+    detail::rbrief_tests(center, offset.data(), descriptor.data());
     return descriptor;
   }
 

@@ -14,6 +14,7 @@
 #include "affine_orb/descriptors/detail/gaussian_q8.hpp"
 #include "affine_orb/descriptors/detail/moment_lanes.hpp"
 #include "affine_orb/descriptors/detail/orb_pattern.hpp"
+#include "affine_orb/descriptors/detail/rbrief_tests.hpp"
 #include "affine_orb/descriptors/detail/rotated_offsets.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/detection/orientation.hpp"
@@ -495,6 +496,46 @@ TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianB
       CHECK(rbrief.describe(sparse, p, 0.7f) == rbrief.describe(full, p, 0.7f));
     }
     CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("the intensity-test kernels give the scalar reference's bits") {
+  namespace d = affine_orb::detail;
+  MESSAGE(std::string(d::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  std::mt19937 rng(31);
+  cv::Mat noise(120, 130, CV_8UC1);
+  cv::randu(noise, 0, 256);
+  // Ties (I_a == I_b) must give 0: a flat image and one of two grey levels.
+  const cv::Mat flat(120, 130, CV_8UC1, cv::Scalar(77));
+  cv::Mat two_levels(120, 130, CV_8UC1);
+  cv::randu(two_levels, 0, 2);
+  two_levels *= 255;
+  std::uniform_int_distribution<int> coordinate(-18, 18);
+  using Words = std::array<std::uint64_t, 4>;
+  const auto run = [](auto kernel, const std::uint8_t* center, const std::int32_t* offset) {
+    Words words{};
+    kernel(center, offset, words.data());
+    return words;
+  };
+  for (const cv::Mat& image : {noise, flat, two_levels}) {
+    const std::uint8_t* center = image.ptr<std::uint8_t>(60) + 65;
+    int mismatches = 0, ones = 0;
+    for (int k = 0; k < 100; ++k) {
+      std::array<std::int32_t, 2 * d::kRbriefTests> offset;
+      for (std::int32_t& o : offset) o = coordinate(rng) * static_cast<std::int32_t>(image.step[0]) + coordinate(rng);
+      const Words expected = run(d::rbrief_tests_scalar, center, offset.data());
+      for (std::uint64_t w : expected) ones += __builtin_popcountll(w);
+      mismatches += run(d::rbrief_tests, center, offset.data()) != expected;
+#if AFFINE_ORB_SIMD128
+      mismatches += run(d::rbrief_tests_128, center, offset.data()) != expected;
+#endif
+#if AFFINE_ORB_AVX2
+      if (d::cpu_has_avx2()) mismatches += run(d::rbrief_tests_avx2, center, offset.data()) != expected;
+#endif
+    }
+    CHECK(mismatches == 0);
+    if (image.data == flat.data) CHECK(ones == 0);                 // ties give 0
+    if (image.data == noise.data) CHECK(ones > 100 * 256 / 3);  // about half the bits set
   }
 }
 

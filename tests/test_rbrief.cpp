@@ -547,11 +547,11 @@ TEST_CASE("the centroid moment kernels give the moments of a naive sum over the 
   cv::Mat noise(200, 220, CV_8UC1);
   cv::randu(noise, 0, 256);
   const cv::Mat white(200, 220, CV_8UC1, cv::Scalar(255));
-  for (int radius : {3, 7, 8, 9, 15, 16, 22, 64}) {
+  for (int radius : {3, 7, 8, 9, 15, 16, 22, 31, 32, 64}) {
     const std::vector<int> half = affine_orb::orb_disc_half_widths(radius);
     const d::DiscChunks<8> chunks8 = d::disc_chunks<8>(half);
 #if AFFINE_ORB_AVX2
-    const d::DiscChunks<16> chunks16 = d::disc_chunks<16>(half);
+    const d::DiscChunks<32, std::int8_t> chunks32 = d::disc_chunks<32, std::int8_t>(half);
 #endif
     for (const cv::Mat& image : {noise, white}) {
       std::uniform_int_distribution<int> px(radius + 16, image.cols - 1 - radius - 16);
@@ -574,8 +574,8 @@ TEST_CASE("the centroid moment kernels give the moments of a naive sum over the 
         const d::CentroidMoments a = d::centroid_moments_128(center, step, chunks8);
         mismatches += a.m01 != m01 || a.m10 != m10;
 #if AFFINE_ORB_AVX2
-        if (d::cpu_has_avx2()) {
-          const d::CentroidMoments b = d::centroid_moments_avx2(center, step, chunks16);
+        if (d::cpu_has_avx2() && radius <= d::kCentroidAvx2MaxRadius) {
+          const d::CentroidMoments b = d::centroid_moments_avx2(center, step, chunks32);
           mismatches += b.m01 != m01 || b.m10 != m10;
         }
 #endif

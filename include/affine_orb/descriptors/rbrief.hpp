@@ -92,7 +92,8 @@ class Rbrief {
     const std::vector<int> half_widths = orb_disc_half_widths(options_.orientation_radius);
     disc_chunks_ = detail::disc_chunks<8>(half_widths);
 #if AFFINE_ORB_AVX2
-    if (detail::cpu_has_avx2()) disc_chunks16_ = detail::disc_chunks<16>(half_widths);
+    if (detail::cpu_has_avx2() && options_.orientation_radius <= detail::kCentroidAvx2MaxRadius)
+      disc_chunks32_ = detail::disc_chunks<32, std::int8_t>(half_widths);
 #endif
 #endif
   }
@@ -160,13 +161,13 @@ class Rbrief {
 
   /// The same orientation in degrees, the keypoint angle ORB and ORB-SLAM store:
   /// CentroidDisc::degrees(), whose integer moments are summed 8 columns at a time where the target
-  /// has SSE2 or NEON, 16 on CPUs with AVX2 (the same sums, so the same angle).
+  /// has SSE2 or NEON, 32 on CPUs with AVX2 (the same sums, so the same angle).
   float orientation_degrees(const LevelData& data, cv::Point2f pt) const {
 #if AFFINE_ORB_SIMD128
     const std::uint8_t* center = data.image.ptr<std::uint8_t>(cvRound(pt.y)) + cvRound(pt.x);
 #if AFFINE_ORB_AVX2
-    if (!disc_chunks16_.x.empty()) {
-      const detail::CentroidMoments m = detail::centroid_moments_avx2(center, data.image.step[0], disc_chunks16_);
+    if (!disc_chunks32_.x.empty()) {
+      const detail::CentroidMoments m = detail::centroid_moments_avx2(center, data.image.step[0], disc_chunks32_);
       return orb_angle_degrees(m.m01, m.m10);
     }
 #endif
@@ -235,7 +236,8 @@ class Rbrief {
 #if AFFINE_ORB_SIMD128
   detail::DiscChunks<8> disc_chunks_;
 #if AFFINE_ORB_AVX2
-  detail::DiscChunks<16> disc_chunks16_;  ///< empty without AVX2: the 8-column chunks serve
+  /// Empty without AVX2 or for a radius above kCentroidAvx2MaxRadius: the 8-column chunks serve.
+  detail::DiscChunks<32, std::int8_t> disc_chunks32_;
 #endif
 #endif
   int border_ = 0;

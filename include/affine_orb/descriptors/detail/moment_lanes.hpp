@@ -3,7 +3,7 @@
 /// The intensity-centroid moments of Rbrief's orientation over the disc of CentroidDisc, in chunks
 /// of columns: eight pixels widened to 16-bit lanes, multiplied by 16-bit weights and summed
 /// pairwise into four 32-bit lanes, with SSE2's multiply-add or NEON's widening
-/// multiply-accumulate; sixteen at a time with AVX2, chosen at run time. One loop over the 128-bit
+/// multiply-accumulate; 32 at a time with AVX2's 8-bit multiply-add, chosen at run time. One loop over the 128-bit
 /// operations serves SSE2 and NEON; every path gives the scalar reference's integers
 /// (tests/test_rbrief.cpp, under qemu-user for NEON).
 
@@ -57,27 +57,32 @@ struct MomentLanes {
 };
 #endif
 
-/// The disc of CentroidDisc in chunks of N columns from column −r (r + 1 = half_widths.size()):
-/// for chunk j (columns x[j] .. x[j] + N − 1, the last one ending at r and overlapping the one
-/// before; a single chunk when the disc is narrower than N) and row v, the weight u of column u
-/// inside the disc and not in an earlier chunk (else 0), and the weight v of the same columns.
-template <int N>
+/// The disc of CentroidDisc in chunks of N columns (r + 1 = half_widths.size()): a disc narrower
+/// than N in one chunk, columns −N/2 .. N/2 − 1; a wider one in chunks from column −r, x[j] ..
+/// x[j] + N − 1, the last one ending at r and overlapping the one before. For chunk j and row v,
+/// the weight u of column u inside the disc and not in an earlier chunk (else 0), and the weight v
+/// of the same columns, as `Weight`.
+template <int N, class Weight = std::int16_t>
 struct DiscChunks {
   int radius = 0;
   std::vector<int> x;
-  std::vector<std::array<std::int16_t, N>> u;  ///< [v·chunks + j]
-  std::vector<std::array<std::int16_t, N>> v;  ///< [v·chunks + j]
+  std::vector<std::array<Weight, N>> u;  ///< [v·chunks + j]
+  std::vector<std::array<Weight, N>> v;  ///< [v·chunks + j]
 };
 
 /// DiscChunks of the disc whose row v spans columns −half_widths[v] .. half_widths[v].
-template <int N>
-DiscChunks<N> disc_chunks(const std::vector<int>& half_widths) {
-  DiscChunks<N> d;
+template <int N, class Weight = std::int16_t>
+DiscChunks<N, Weight> disc_chunks(const std::vector<int>& half_widths) {
+  DiscChunks<N, Weight> d;
   const int r = static_cast<int>(half_widths.size()) - 1;
   d.radius = r;
-  for (int x = -r;; x = std::min(x + N, r - (N - 1))) {
-    d.x.push_back(x);
-    if (x + N > r) break;
+  if (2 * r + 1 <= N) {
+    d.x.push_back(-N / 2);
+  } else {
+    for (int x = -r;; x = std::min(x + N, r - (N - 1))) {
+      d.x.push_back(x);
+      if (x + N > r) break;
+    }
   }
   const std::size_t chunks = d.x.size();
   d.u.assign((static_cast<std::size_t>(r) + 1) * chunks, {});
@@ -89,8 +94,8 @@ DiscChunks<N> disc_chunks(const std::vector<int>& half_widths) {
         const int u = d.x[j] + i;
         const bool earlier = j > 0 && u < d.x[j - 1] + N;
         if (std::abs(u) > half || earlier) continue;
-        d.u[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(u);
-        d.v[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<std::int16_t>(v);
+        d.u[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<Weight>(u);
+        d.v[static_cast<std::size_t>(v) * chunks + j][static_cast<std::size_t>(i)] = static_cast<Weight>(v);
       }
     }
   }
@@ -106,7 +111,7 @@ struct CentroidMoments {
 /// The moments of the disc `d` around the pixel at `center` (rows `step` bytes apart), eight
 /// columns at a time: per row pair ±v, u·(I(u, v) + I(u, −v)) and v·(I(u, v) − I(u, −v)) (|u|,
 /// |v| <= 64, each product below 2^15), exactly the integers of the scalar loop. Reads the disc's
-/// chunks, up to 7 columns past its right edge for a disc narrower than 8.
+/// chunks: for a disc narrower than 8, columns −4 .. 3.
 inline CentroidMoments centroid_moments_128(const std::uint8_t* center, std::size_t step, const DiscChunks<8>& d) {
   const std::size_t chunks = d.x.size();
   using L = MomentLanes;
@@ -127,32 +132,63 @@ inline CentroidMoments centroid_moments_128(const std::uint8_t* center, std::siz
   return {L::total(m01), L::total(m10)};
 }
 
+/// Largest disc radius of centroid_moments_avx2(): its 16-bit sums of two rows' products,
+/// 2·2·255·r, stay below 2^15.
+inline constexpr int kCentroidAvx2MaxRadius = 32;
+
 #if AFFINE_ORB_AVX2
 AFFINE_ORB_TARGET_AVX2_BEGIN
-/// centroid_moments_128() sixteen columns at a time: the pixels widened to 16 16-bit lanes and
-/// summed by AVX2's multiply-add into eight 32-bit lanes, the same integers. Reads up to 15
-/// columns past the disc's right edge for a disc narrower than 16.
-inline CentroidMoments centroid_moments_avx2(const std::uint8_t* center, std::size_t step, const DiscChunks<16>& d) {
+/// centroid_moments_128() 32 columns at a time, for radii up to kCentroidAvx2MaxRadius: the
+/// pixels multiplied by 8-bit weights and summed pairwise into 16-bit lanes (vpmaddubsw, exact
+/// here), the row pair ±v added (u) or subtracted (v) and summed into 32-bit lanes, the same
+/// integers. ORB's radius 15 is one chunk a row. Reads the disc's chunks: for a disc narrower
+/// than 32, columns −16 .. 15.
+/// m10 += u·(I_b + I_a), m01 += v·(I_b − I_a) for the 32 columns at `below` and `above` with the
+/// weights `u` and `w` (the body of centroid_moments_avx2()).
+inline void add_row_pair_avx2(const std::uint8_t* below, const std::uint8_t* above, const std::int8_t* u,
+                              const std::int8_t* w, __m256i& m10, __m256i& m01) {
+  const __m256i ones = _mm256_set1_epi16(1);
+  const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(below));
+  const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(above));
+  const __m256i wu = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(u));
+  const __m256i wv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w));
+  const __m256i s10 = _mm256_add_epi16(_mm256_maddubs_epi16(b, wu), _mm256_maddubs_epi16(a, wu));
+  const __m256i s01 = _mm256_sub_epi16(_mm256_maddubs_epi16(b, wv), _mm256_maddubs_epi16(a, wv));
+  m10 = _mm256_add_epi32(m10, _mm256_madd_epi16(s10, ones));
+  m01 = _mm256_add_epi32(m01, _mm256_madd_epi16(s01, ones));
+}
+
+/// centroid_moments_128() 32 columns at a time, for radii up to kCentroidAvx2MaxRadius: the
+/// pixels multiplied by 8-bit weights and summed pairwise into 16-bit lanes (vpmaddubsw, exact
+/// here), the row pair ±v added (u) or subtracted (v) and summed into 32-bit lanes, the same
+/// integers. ORB's radius 15 is one chunk a row. Reads the disc's chunks: for a disc narrower
+/// than 32, columns −16 .. 15.
+inline CentroidMoments centroid_moments_avx2(const std::uint8_t* center, std::size_t step,
+                                             const DiscChunks<32, std::int8_t>& d) {
   const std::size_t chunks = d.x.size();
   const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(step);
   __m256i m10 = _mm256_setzero_si256();
   __m256i m01 = _mm256_setzero_si256();
+  // Row 0 (v = 0) adds to m10 only.
   for (std::size_t j = 0; j < chunks; ++j) {
-    const __m256i i0 = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(center + d.x[j])));
+    const __m256i i0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(center + d.x[j]));
     const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.u[j].data()));
-    m10 = _mm256_add_epi32(m10, _mm256_madd_epi16(i0, u));
+    m10 = _mm256_add_epi32(m10, _mm256_madd_epi16(_mm256_maddubs_epi16(i0, u), _mm256_set1_epi16(1)));
   }
-  for (int v = 1; v <= d.radius; ++v) {
-    const std::uint8_t* below = center + v * row;
-    const std::uint8_t* above = center - v * row;
-    for (std::size_t j = 0; j < chunks; ++j) {
-      const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
-      const __m256i b = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(below + d.x[j])));
-      const __m256i a = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(above + d.x[j])));
-      const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.u[k].data()));
-      const __m256i w = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.v[k].data()));
-      m10 = _mm256_add_epi32(m10, _mm256_madd_epi16(_mm256_add_epi16(a, b), u));
-      m01 = _mm256_add_epi32(m01, _mm256_madd_epi16(_mm256_sub_epi16(b, a), w));
+  if (chunks == 1) {  // one chunk a row (radius < 16): the pointers step by a row
+    const std::uint8_t* below = center + d.x[0] + row;
+    const std::uint8_t* above = center + d.x[0] - row;
+    for (int v = 1; v <= d.radius; ++v, below += row, above -= row) {
+      add_row_pair_avx2(below, above, d.u[static_cast<std::size_t>(v)].data(), d.v[static_cast<std::size_t>(v)].data(),
+                        m10, m01);
+    }
+  } else {
+    for (int v = 1; v <= d.radius; ++v) {
+      for (std::size_t j = 0; j < chunks; ++j) {
+        const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
+        add_row_pair_avx2(center + v * row + d.x[j], center - v * row + d.x[j], d.u[k].data(), d.v[k].data(), m10,
+                          m01);
+      }
     }
   }
   alignas(32) std::int32_t lanes10[8];

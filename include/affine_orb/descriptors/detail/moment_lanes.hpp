@@ -3,9 +3,9 @@
 /// The intensity-centroid moments of Rbrief's orientation over the disc of CentroidDisc, in chunks
 /// of columns: eight pixels widened to 16-bit lanes, multiplied by 16-bit weights and summed
 /// pairwise into four 32-bit lanes, with SSE2's multiply-add or NEON's widening
-/// multiply-accumulate; 32 at a time with AVX2's 8-bit multiply-add, chosen at run time. One loop over the 128-bit
-/// operations serves SSE2 and NEON; every path gives the scalar reference's integers
-/// (tests/test_rbrief.cpp, under qemu-user for NEON).
+/// multiply-accumulate; 32 at a time with AVX2's 8-bit multiply-add, chosen at run time. One loop
+/// over the 128-bit operations serves SSE2 and NEON; every path gives the scalar reference's
+/// integers (tests/test_rbrief.cpp, under qemu-user for NEON).
 
 #include <algorithm>
 #include <array>
@@ -138,11 +138,6 @@ inline constexpr int kCentroidAvx2MaxRadius = 32;
 
 #if AFFINE_ORB_AVX2
 AFFINE_ORB_TARGET_AVX2_BEGIN
-/// centroid_moments_128() 32 columns at a time, for radii up to kCentroidAvx2MaxRadius: the
-/// pixels multiplied by 8-bit weights and summed pairwise into 16-bit lanes (vpmaddubsw, exact
-/// here), the row pair ±v added (u) or subtracted (v) and summed into 32-bit lanes, the same
-/// integers. ORB's radius 15 is one chunk a row. Reads the disc's chunks: for a disc narrower
-/// than 32, columns −16 .. 15.
 /// m10 += u·(I_b + I_a), m01 += v·(I_b − I_a) for the 32 columns at `below` and `above` with the
 /// weights `u` and `w` (the body of centroid_moments_avx2()).
 inline void add_row_pair_avx2(const std::uint8_t* below, const std::uint8_t* above, const std::int8_t* u,
@@ -175,7 +170,9 @@ inline CentroidMoments centroid_moments_avx2(const std::uint8_t* center, std::si
     const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.u[j].data()));
     m10 = _mm256_add_epi32(m10, _mm256_madd_epi16(_mm256_maddubs_epi16(i0, u), _mm256_set1_epi16(1)));
   }
-  if (chunks == 1) {  // one chunk a row (radius < 16): the pointers step by a row
+  // One chunk a row (radius < 16, ORB's included): no chunk loop and no index arithmetic, the
+  // pointers step by a row; the general loop below gives the same sums with more instructions.
+  if (chunks == 1) {
     const std::uint8_t* below = center + d.x[0] + row;
     const std::uint8_t* above = center + d.x[0] - row;
     for (int v = 1; v <= d.radius; ++v, below += row, above -= row) {

@@ -25,6 +25,7 @@
 #include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/views/affine_views.hpp"
 #include "test_data.hpp"
+#include "test_simd.hpp"
 #include "test_views.hpp"
 
 namespace {
@@ -557,7 +558,7 @@ TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' byt
 }
 
 TEST_CASE("every canvas sampler and resampler path gives the scalar references' bytes on any column range") {
-  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   // The paths of this build and CPU (AVX2 eight at a time, SSE2 or NEON four at a time, clamped or not) against the
   // scalar references, on column ranges of every remainder modulo 8 and on images taller and
   // wider than the canvas.

@@ -13,6 +13,7 @@
 #include "affine_orb/extraction/detail/fork_image.hpp"
 #include "affine_orb/extraction/detail/stella_image.hpp"
 #include "test_data.hpp"
+#include "test_simd.hpp"
 
 namespace {
 
@@ -286,7 +287,7 @@ TEST_CASE("suppression on row spans keeps the rectangle's maxima that lie on the
 }
 
 TEST_CASE("every compiled suppression row path equals the scalar reference, ties included") {
-  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   using Row = void (*)(const cv::Mat&, int, int, int, int, std::vector<affine_orb::Corner>&);
   std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::non_max_row}};
 #if AFFINE_ORB_SIMD128
@@ -462,7 +463,7 @@ TEST_CASE("stella_vslam's cells keep the corners cv::FAST finds on each cell's i
 }
 
 TEST_CASE("every compiled SIMD row path of FAST equals the scalar reference") {
-  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   const cv::Mat noise = random_image(150, 12, 33, 256);
   const cv::Mat coarse = random_image(150, 12, 34, 3);
   for (const cv::Mat* image : {&noise, &coarse}) {

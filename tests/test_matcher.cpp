@@ -19,6 +19,7 @@
 
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/matching/matcher.hpp"
+#include "test_simd.hpp"
 
 namespace {
 
@@ -210,7 +211,7 @@ void check_hamming_distance() {
 
 template <int Bits>
 void check_knn2() {
-  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   for (const auto& set : test_sets<Bits>()) {
     const Descriptors<Bits>& query = set.first;
     const Descriptors<Bits>& train = set.second;

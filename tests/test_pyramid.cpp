@@ -17,6 +17,7 @@
 #include "affine_orb/detection/fast.hpp"
 #include "affine_orb/detection/pyramid.hpp"
 #include "test_data.hpp"
+#include "test_simd.hpp"
 
 TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a grey level of cv::resize") {
   const cv::Mat image = affine_orb::test::textured_photo()(cv::Rect(13, 7, 611, 433));  // a ROI
@@ -73,7 +74,7 @@ TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a g
 }
 
 TEST_CASE("every resize row and column blend path gives the scalar references' values") {
-  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   // Random source rows (extremes included) and column tables of several ratios; column ranges of
   // every remainder modulo 8.
   std::mt19937 rng(34);

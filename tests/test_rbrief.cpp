@@ -20,6 +20,7 @@
 #include "affine_orb/detection/orientation.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "test_data.hpp"
+#include "test_simd.hpp"
 
 namespace {
 
@@ -185,7 +186,7 @@ TEST_CASE("rBRIEF describe() matches the definition at arbitrary angles") {
 }
 
 TEST_CASE("rBRIEF rotated test offsets: the SSE2 and AVX2 paths give the scalar reference's integers") {
-  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   namespace d = affine_orb::detail;
   std::vector<float> x, y;
   for (const auto& pair : d::kOrbTestPairs) {
@@ -348,7 +349,7 @@ TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on e
 }
 
 TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar reference and the formula") {
-  MESSAGE(std::string(affine_orb::detail::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   namespace d = affine_orb::detail;
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> byte(0, 255);
@@ -501,7 +502,7 @@ TEST_CASE("rBRIEF smoothing, whole level or sparse squares, equals cv::GaussianB
 
 TEST_CASE("the intensity-test kernels give the scalar reference's bits") {
   namespace d = affine_orb::detail;
-  MESSAGE(std::string(d::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   std::mt19937 rng(31);
   cv::Mat noise(120, 130, CV_8UC1);
   cv::randu(noise, 0, 256);
@@ -542,7 +543,7 @@ TEST_CASE("the intensity-test kernels give the scalar reference's bits") {
 #if AFFINE_ORB_SIMD128
 TEST_CASE("the centroid moment kernels give the moments of a naive sum over the disc") {
   namespace d = affine_orb::detail;
-  MESSAGE(std::string(d::cpu_has_avx2() ? "AVX2 paths checked" : "AVX2 paths not checked: no AVX2 on this CPU"));
+  MESSAGE(affine_orb::test::avx2_paths_message());
   std::mt19937 rng(21);
   cv::Mat noise(200, 220, CV_8UC1);
   cv::randu(noise, 0, 256);

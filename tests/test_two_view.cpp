@@ -250,6 +250,43 @@ TEST_CASE("a chance consensus, bark 1 -> 6's F on 16 of 79 matches, is not verif
   const auto earlier = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image6);
   CHECK(earlier.verified);
   CHECK(earlier.model.model == affine_orb::GeometricModel::kFundamental);
+  // The last stage's search finds the plane among the same matches: a homography within a few
+  // pixels, still unverified (its correct matches are fewer than min_inliers).
+  options = affine_orb::TwoViewOptions{};
+  options.last_stage_search = affine_orb::LastStageSearchOptions{};
+  const auto searched = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image6);
+  REQUIRE(searched.model.model == affine_orb::GeometricModel::kHomography);
+  CHECK_FALSE(searched.verified);
+  CHECK(searched.inlier_count < options.min_inliers);
+  CHECK(affine_orb::test::corner_error(searched.model.homography, truth, image1.size()) < 10.0);
+}
+
+TEST_CASE("the last stage's search finds the homography that 500 uniform samples miss") {
+  // The scene of the test above with Lowe's ratio 0.9: about a fifth of the matches are correct,
+  // so four correct ones are drawn with probability ~10⁻³ per sample, and select_model()'s 500
+  // uniform samples end on a wrong model that lacks support. LastStageSearchOptions' 10 000
+  // samples on the same matches find the plane's homography, which then passes the tests.
+  const cv::Mat image = affine_orb::test::graf(1);
+  const cv::Matx33d truth = turned_camera(8.0, image.size());
+  const cv::Mat view = inverted_cells(image, truth);
+  cv::Mat strip, widened;
+  cv::resize(affine_orb::test::textured_photo(), strip, cv::Size(600, image.rows), 0, 0, cv::INTER_AREA);
+  cv::hconcat(image, strip, widened);
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 800;
+  options.extractor.spreading = affine_orb::Spreading::kQuadtree;
+  options.stages.clear();
+  options.matching.matcher.ratio = 0.9f;
+  const auto plain = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view);
+  CHECK_FALSE(plain.verified);
+  CHECK(plain.inlier_count < options.min_inliers);
+  CHECK(affine_orb::test::corner_error(plain.model.homography, truth, image.size()) > 20.0);
+  options.last_stage_search = affine_orb::LastStageSearchOptions{};
+  const auto searched = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view);
+  REQUIRE(searched.model.model == affine_orb::GeometricModel::kHomography);
+  CHECK(searched.verified);
+  CHECK(affine_orb::test::corner_error(searched.model.homography, truth, image.size()) < 2.0);
+  CHECK(inlier_precision(searched, truth) > 0.9);
 }
 
 TEST_CASE("two-view matching honours masks and refuses bad input") {
@@ -297,6 +334,11 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
       [](auto& o) { o.guided_matching->matching.max_distance = -1; },
       [](auto& o) { o.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{1}; },
       [](auto& o) { o.extractor.view_budget = affine_orb::AreaSplitBudget{}; },
+      [](auto& o) { o.last_stage_search = affine_orb::LastStageSearchOptions{affine_orb::RansacOptions{}, 0.0}; },
+      [](auto& o) {
+        o.last_stage_search = affine_orb::LastStageSearchOptions{};
+        o.last_stage_search->ransac.max_iterations = 0;
+      },
   };
   for (const auto& change : invalid) {
     affine_orb::TwoViewOptions bad;

@@ -3,7 +3,8 @@
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers, the support
 // tests (max_false_alarms, min_inlier_ratio), PROSAC (progressive_sampling), all_stages, the precision test (max_half_disagreement), guided matching
 // (rounds, gate radius, ratio), the aligned correspondences (align_correspondences), the final fit
-// (final_fit: Cauchy scale, max_error, iterations, some invalid), stages to the extreme
+// (final_fit: Cauchy scale, max_error, iterations, some invalid), the last stage's search
+// (last_stage_search: σ, some invalid), stages to the extreme
 // tilts 4 and 4√2, given or from stages_up_to(). Invalid options must end in
 // std::invalid_argument, valid ones in a result that keeps every documented invariant: stage
 // reports, the stopping rule, inlier flags, match indices, keypoints inside their image and mask,
@@ -103,6 +104,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     options.final_fit->cauchy_scale = 1.5 * ((fit >> 1) & 3);
     options.final_fit->max_error = 3.0 * ((fit >> 3) & 3);
     options.final_fit->iterations = (fit >> 5) & 3;
+  }
+  // The last stage's search off or on, with as many samples as model selection and σ 0 (invalid)
+  // to 2.25 px.
+  if (fit & 128) {
+    options.last_stage_search = affine_orb::LastStageSearchOptions{};
+    options.last_stage_search->ransac = options.model.ransac;
+    options.last_stage_search->sigma = 0.75 * ((fit >> 1) & 3);
   }
 
   const int width1 = 1 + bytes.next() % 48;

@@ -75,7 +75,8 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 /// not verified (TwoViewOptions). Per stage k = 0, 1, ...: both images get the keypoints of the
 /// stage (stage 0: Extractor::extract_image(); then ViewSession::extend() with the stage's tilts
 /// and budget), every keypoint so far of image 1 is matched against every keypoint so far of image 2
-/// (match_features()), and select_model() estimates H and F and chooses one; a chosen homography
+/// (match_features()), and select_model() estimates H and F and chooses one (on the last stage,
+/// when that model lacks support, TwoViewOptions::last_stage_search may replace it); a chosen homography
 /// is put to the precision test (max_half_disagreement) and, with min_inliers inliers that pass
 /// the support test (max_false_alarms, min_inlier_ratio), refined by
 /// TwoViewOptions::guided_matching, then by TwoViewOptions::align_correspondences, then, when it
@@ -168,7 +169,8 @@ class TwoViewMatcher {
     int aligned_count = 0;
   };
 
-  /// select_model() on the matches; the chosen model's inlier flags and count; for a chosen
+  /// select_model() on the matches; the chosen model's inlier flags and count; on a `reported`
+  /// stage whose model lacks support, TwoViewOptions::last_stage_search; for a chosen
   /// homography under the precision test, the disagreement of its two half estimates; a chosen
   /// homography with enough support refined by guided matching and then by aligned
   /// correspondences, and then, when it passed the precision test and still has that support, by
@@ -189,8 +191,11 @@ class TwoViewMatcher {
     stage.model = select_model(stage.points.points1, stage.points.points2, options_.model);
     stage.inliers = stage.model.chosen_inliers();
     stage.inlier_count = stage.model.chosen_inlier_count();
+    stage.inlier_probability = inlier_probability(stage.model.model, image1.size(), image2.size());
+    if (reported && options_.last_stage_search && !supported(stage) && search_homography(stage)) {
+      stage.inlier_probability = inlier_probability(stage.model.model, image1.size(), image2.size());
+    }
     const bool homography = stage.model.model == GeometricModel::kHomography;
-    stage.inlier_probability = inlier_probability(homography, image1.size(), image2.size());
     if (homography && options_.max_half_disagreement) {
       stage.half_disagreement = half_disagreement(stage.points.points1, stage.points.points2, stage.inliers,
                                                   stage.model.homography, image1.size());
@@ -203,6 +208,23 @@ class TwoViewMatcher {
       fit_final(features1, features2, unguided, stage, precise(stage));
     }
     return stage;
+  }
+
+  /// TwoViewOptions::last_stage_search on `stage`'s matches: when it finds a homography that
+  /// scores higher under its σ than the stage's estimated one, that homography, its inliers and
+  /// score become the stage's chosen model; returns whether they did.
+  bool search_homography(StageModel& stage) const {
+    const LastStageSearchOptions& search = *options_.last_stage_search;
+    const TruncatedChi2Score scoring{search.sigma, options_.model.homography_chi2, options_.model.score_constant};
+    const HomographyEstimator estimator(stage.points.points1, stage.points.points2, scoring);
+    const RansacResult<HomographyModel> found = ransac(estimator, search.ransac);
+    if (!found.success) return false;
+    const std::optional<HomographyModel> current = HomographyModel::from_pixels(stage.model.homography);
+    if (current && evaluate_model(estimator, *current).score >= found.score) return false;
+    stage.model.success = true;
+    stage.model.model = GeometricModel::kHomography;
+    take_homography(stage, found);
+    return true;
   }
 
   /// TwoViewOptions::final_fit on the chosen homography of `stage`: with `fit`, refine_homography()
@@ -345,10 +367,10 @@ class TwoViewMatcher {
 
   /// The chance that a wrong match falls within model selection's inlier bound σ·√χ² of a model's
   /// prediction in the smaller image: near a point for a homography, a line for F.
-  double inlier_probability(bool homography, cv::Size size1, cv::Size size2) const {
+  double inlier_probability(GeometricModel model, cv::Size size1, cv::Size size2) const {
     const cv::Size smaller = size1.area() <= size2.area() ? size1 : size2;
     const ModelSelectionOptions& m = options_.model;
-    return homography ? point_inlier_probability(m.sigma * std::sqrt(m.homography_chi2), smaller)
+    return model == GeometricModel::kHomography ? point_inlier_probability(m.sigma * std::sqrt(m.homography_chi2), smaller)
                       : line_inlier_probability(m.sigma * std::sqrt(m.fundamental_chi2), smaller);
   }
 

@@ -412,7 +412,7 @@ PYBIND11_MODULE(affine_orb, m) {
          const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers,
          std::optional<double> max_false_alarms, std::optional<double> min_inlier_ratio, int guided_rounds,
          std::optional<double> max_half_disagreement, bool align_correspondences, bool final_fit,
-         bool progressive_sampling, bool all_stages, const std::string& descriptor, const std::string& spreading,
+         bool last_stage_search, bool progressive_sampling, bool all_stages, const std::string& descriptor, const std::string& spreading,
          int threads, const py::handle& mask1, const py::handle& mask2) {
         affine_orb::TwoViewOptions options;
         options.extractor.features = features;
@@ -437,6 +437,7 @@ PYBIND11_MODULE(affine_orb, m) {
         options.max_half_disagreement = max_half_disagreement;
         if (align_correspondences) options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
         if (!final_fit) options.final_fit.reset();
+        if (last_stage_search) options.last_stage_search = affine_orb::LastStageSearchOptions{};
         options.model.ransac.progressive_sampling = progressive_sampling;
         options.all_stages = all_stages;
         options.check();
@@ -456,6 +457,7 @@ PYBIND11_MODULE(affine_orb, m) {
       py::arg("guided_rounds") = two_view.guided_matching->rounds,
       py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("align_correspondences") = false,
       py::arg("final_fit") = two_view.final_fit.has_value(),
+      py::arg("last_stage_search") = two_view.last_stage_search.has_value(),
       py::arg("progressive_sampling") = two_view.model.ransac.progressive_sampling,
       py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
       py::arg("threads") = two_view.extractor.threads, py::arg("mask1") = py::none(), py::arg("mask2") = py::none(),
@@ -474,7 +476,9 @@ PYBIND11_MODULE(affine_orb, m) {
       "(sub-pixel correspondences) and the homography re-estimated on them; with final_fit (the default), a "
       "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
       "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
-      "accepts, never looser than the unguided ones. progressive_sampling: RANSAC draws from the matches of "
+      "accepts, never looser than the unguided ones. last_stage_search (off by default): when the last stage's "
+      "model lacks support, a RANSAC of 10 000 samples for a homography alone on its matches, whose homography "
+      "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: RANSAC draws from the matches of "
       "smallest descriptor distance first (PROSAC), for pairs whose correct matches are a few percent. "
       "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "

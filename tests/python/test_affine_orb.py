@@ -134,6 +134,28 @@ def test_match_images_guided_matching_and_precision_test_are_reported():
 
 
 @pytest.mark.data
+def test_match_images_last_stage_search_finds_bark_1_to_6s_plane():
+    """last_stage_search reaches the C++ options: bark 1->6 ends unverified either way, with a
+    homography hundreds of pixels off by default and within 10 px of the ground truth (corners) when
+    the last stage searches for a homography alone."""
+    image1 = cv2.imread(os.path.join(DATA, "oxford", "bark", "img1.png"), cv2.IMREAD_GRAYSCALE)
+    image6 = cv2.imread(os.path.join(DATA, "oxford", "bark", "img6.png"), cv2.IMREAD_GRAYSCALE)
+    truth = np.loadtxt(os.path.join(DATA, "oxford", "bark", "H1to6p"))
+    h, w = image1.shape
+    corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], float).T
+
+    def corner_error(estimate):
+        a, b = estimate @ corners, truth @ corners
+        return float(np.mean(np.linalg.norm(a[:2] / a[2] - b[:2] / b[2], axis=0)))
+
+    default = affine_orb.match_images(image1, image6)
+    searched = affine_orb.match_images(image1, image6, last_stage_search=True)
+    assert not default["verified"] and not searched["verified"]
+    assert corner_error(default["homography"]) > 50.0
+    assert searched["model"] == "homography" and corner_error(searched["homography"]) < 10.0
+
+
+@pytest.mark.data
 def test_match_images_support_test_final_fit_and_progressive_sampling_reach_the_matcher():
     """max_false_alarms, min_inlier_ratio, final_fit and progressive_sampling reach the C++ options: on
     graf 1->2 the stage reports the chosen homography's log10 number of false alarms (far below 0;

@@ -27,7 +27,7 @@
 // own homographies come from the same estimator. --peer-cache FILE reads the OpenCV peers' rows
 // from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
 // --sweep adds matcher variants (stages, min_inliers, the support tests, the final fit's Cauchy
-// scale and max_error), the measurement behind
+// scale and max_error, the last stage's search), the measurement behind
 // TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
 // demand, with and without sub-pixel positions, per octave of the keypoint in image 1 and in image
 // 2, the residuals |H·x1 − x2| (ground truth H, pixels of image 2, level-0 coordinates) of the
@@ -647,6 +647,18 @@ int main(int argc, char** argv) {
     variant("RANSAC up to 10000 iterations, confidence 0.999", [](auto& o) {
       o.model.ransac.max_iterations = 10000;
       o.model.ransac.confidence = 0.999;
+    });
+    for (double sigma : {1.0, 1.5, 2.0}) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "last-stage search, sigma %.1f px", sigma);
+      variant(name, [sigma](auto& o) {
+        o.last_stage_search = affine_orb::LastStageSearchOptions{};
+        o.last_stage_search->sigma = sigma;
+      });
+    }
+    variant("stages to 5.66, last-stage search", [&extreme](auto& o) {
+      o = extreme;
+      o.last_stage_search = affine_orb::LastStageSearchOptions{};
     });
     variant("plain 1000 first", [](auto& o) {
       o.extractor.features = 1000;

@@ -93,6 +93,38 @@ cv::Mat inverted_cells(const cv::Mat& image, const cv::Matx33d& truth) {
   return out;
 }
 
+/// A pair of known geometry whose correct matches are few, as between day and night: image 1 is
+/// graf 1 with a strip of another photo beside it that image 2 does not show; image 2 is
+/// inverted_cells() of graf 1 under a camera turned by 8°; `plane` is graf 1's size.
+struct DayNightScene {
+  cv::Mat image1, image2;
+  cv::Matx33d truth;
+  cv::Size plane;
+};
+
+DayNightScene day_night_scene() {
+  DayNightScene scene;
+  const cv::Mat image = affine_orb::test::graf(1);
+  scene.plane = image.size();
+  scene.truth = turned_camera(8.0, image.size());
+  scene.image2 = inverted_cells(image, scene.truth);
+  cv::Mat strip;
+  cv::resize(affine_orb::test::textured_photo(), strip, cv::Size(600, image.rows), 0, 0, cv::INTER_AREA);
+  cv::hconcat(image, strip, scene.image1);
+  return scene;
+}
+
+/// Options that match day_night_scene() at stage 0 alone, 800 keypoints in every cell (the
+/// quadtree), with Lowe's ratio `ratio`.
+affine_orb::TwoViewOptions day_night_options(float ratio) {
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 800;
+  options.extractor.spreading = affine_orb::Spreading::kQuadtree;
+  options.stages.clear();
+  options.matching.matcher.ratio = ratio;
+  return options;
+}
+
 /// Options that run every stage, with `features` image keypoints.
 affine_orb::TwoViewOptions every_stage(int features) {
   affine_orb::TwoViewOptions options;
@@ -204,30 +236,21 @@ TEST_CASE("a correct model supported by a few percent of the matches is verified
   // that image 2 does not show. Matched without a ratio test, as descriptors that changed (day and
   // night) match, the correct homography's inliers are under 10 % of the matches. The a-contrario
   // test verifies it, the earlier 10 % bound did not.
-  const cv::Mat image = affine_orb::test::graf(1);
-  const cv::Matx33d truth = turned_camera(8.0, image.size());
-  const cv::Mat view = inverted_cells(image, truth);
-  cv::Mat strip, widened;
-  cv::resize(affine_orb::test::textured_photo(), strip, cv::Size(600, image.rows), 0, 0, cv::INTER_AREA);
-  cv::hconcat(image, strip, widened);
-  affine_orb::TwoViewOptions options;
-  options.extractor.features = 800;
-  options.extractor.spreading = affine_orb::Spreading::kQuadtree;  // keypoints in every cell
-  options.stages.clear();
-  options.matching.matcher.ratio = 1.0f;
+  const DayNightScene scene = day_night_scene();
+  affine_orb::TwoViewOptions options = day_night_options(1.0f);
   // PROSAC: the correct matches have the smallest descriptor distances, and are drawn first.
   options.model.ransac.progressive_sampling = true;
-  const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view);
+  const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(scene.image1, scene.image2);
   REQUIRE(r.model.model == affine_orb::GeometricModel::kHomography);
   CHECK(r.verified);
-  CHECK(affine_orb::test::corner_error(r.model.homography, truth, image.size()) < 3.0);
+  CHECK(affine_orb::test::corner_error(r.model.homography, scene.truth, scene.plane) < 3.0);
   REQUIRE(r.stages[0].log10_false_alarms.has_value());
   CHECK(*r.stages[0].log10_false_alarms < 0.0);
   const double ratio = r.stages[0].inliers / static_cast<double>(r.stages[0].matches);
   CHECK(ratio < 0.1);
   options.min_inlier_ratio = 0.1;
   options.max_false_alarms.reset();
-  CHECK_FALSE(affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view).verified);
+  CHECK_FALSE(affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(scene.image1, scene.image2).verified);
 }
 
 TEST_CASE("a chance consensus, bark 1 -> 6's F on 16 of 79 matches, is not verified" * doctest::test_suite("data")) {
@@ -262,31 +285,22 @@ TEST_CASE("a chance consensus, bark 1 -> 6's F on 16 of 79 matches, is not verif
 }
 
 TEST_CASE("the last stage's search finds the homography that 500 uniform samples miss") {
-  // The scene of the test above with Lowe's ratio 0.9: about a fifth of the matches are correct,
+  // The day-and-night scene with Lowe's ratio 0.9: about a fifth of the matches are correct,
   // so four correct ones are drawn with probability ~10⁻³ per sample, and select_model()'s 500
   // uniform samples end on a wrong model that lacks support. LastStageSearchOptions' 10 000
   // samples on the same matches find the plane's homography, which then passes the tests.
-  const cv::Mat image = affine_orb::test::graf(1);
-  const cv::Matx33d truth = turned_camera(8.0, image.size());
-  const cv::Mat view = inverted_cells(image, truth);
-  cv::Mat strip, widened;
-  cv::resize(affine_orb::test::textured_photo(), strip, cv::Size(600, image.rows), 0, 0, cv::INTER_AREA);
-  cv::hconcat(image, strip, widened);
-  affine_orb::TwoViewOptions options;
-  options.extractor.features = 800;
-  options.extractor.spreading = affine_orb::Spreading::kQuadtree;
-  options.stages.clear();
-  options.matching.matcher.ratio = 0.9f;
-  const auto plain = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view);
+  const DayNightScene scene = day_night_scene();
+  affine_orb::TwoViewOptions options = day_night_options(0.9f);
+  const auto plain = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(scene.image1, scene.image2);
   CHECK_FALSE(plain.verified);
   CHECK(plain.inlier_count < options.min_inliers);
-  CHECK(affine_orb::test::corner_error(plain.model.homography, truth, image.size()) > 20.0);
+  CHECK(affine_orb::test::corner_error(plain.model.homography, scene.truth, scene.plane) > 20.0);
   options.last_stage_search = affine_orb::LastStageSearchOptions{};
-  const auto searched = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(widened, view);
+  const auto searched = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(scene.image1, scene.image2);
   REQUIRE(searched.model.model == affine_orb::GeometricModel::kHomography);
   CHECK(searched.verified);
-  CHECK(affine_orb::test::corner_error(searched.model.homography, truth, image.size()) < 2.0);
-  CHECK(inlier_precision(searched, truth) > 0.9);
+  CHECK(affine_orb::test::corner_error(searched.model.homography, scene.truth, scene.plane) < 2.0);
+  CHECK(inlier_precision(searched, scene.truth) > 0.9);
 }
 
 TEST_CASE("two-view matching honours masks and refuses bad input") {
@@ -334,7 +348,9 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
       [](auto& o) { o.guided_matching->matching.max_distance = -1; },
       [](auto& o) { o.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{1}; },
       [](auto& o) { o.extractor.view_budget = affine_orb::AreaSplitBudget{}; },
-      [](auto& o) { o.last_stage_search = affine_orb::LastStageSearchOptions{affine_orb::RansacOptions{}, 0.0}; },
+      [](auto& o) {
+        o.last_stage_search = affine_orb::LastStageSearchOptions{affine_orb::RansacOptions{}, 0.0};
+      },
       [](auto& o) {
         o.last_stage_search = affine_orb::LastStageSearchOptions{};
         o.last_stage_search->ransac.max_iterations = 0;

@@ -412,8 +412,8 @@ PYBIND11_MODULE(affine_orb, m) {
          const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers,
          std::optional<double> max_false_alarms, std::optional<double> min_inlier_ratio, int guided_rounds,
          std::optional<double> max_half_disagreement, bool align_correspondences, bool final_fit,
-         bool last_stage_search, bool progressive_sampling, bool all_stages, const std::string& descriptor, const std::string& spreading,
-         int threads, const py::handle& mask1, const py::handle& mask2) {
+         bool last_stage_search, bool progressive_sampling, bool all_stages, const std::string& descriptor,
+         const std::string& spreading, int threads, const py::handle& mask1, const py::handle& mask2) {
         affine_orb::TwoViewOptions options;
         options.extractor.features = features;
         options.extractor.views.max_tilt = max_tilt;
@@ -478,8 +478,9 @@ PYBIND11_MODULE(affine_orb, m) {
       "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
       "accepts, never looser than the unguided ones. last_stage_search (off by default): when the last stage's "
       "model lacks support, a RANSAC of 10 000 samples for a homography alone on its matches, whose homography "
-      "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: RANSAC draws from the matches of "
-      "smallest descriptor distance first (PROSAC), for pairs whose correct matches are a few percent. "
+      "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
+      "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
+      "matches are a few percent. "
       "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
       "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image 2's "

@@ -370,8 +370,9 @@ class TwoViewMatcher {
   double inlier_probability(GeometricModel model, cv::Size size1, cv::Size size2) const {
     const cv::Size smaller = size1.area() <= size2.area() ? size1 : size2;
     const ModelSelectionOptions& m = options_.model;
-    return model == GeometricModel::kHomography ? point_inlier_probability(m.sigma * std::sqrt(m.homography_chi2), smaller)
-                      : line_inlier_probability(m.sigma * std::sqrt(m.fundamental_chi2), smaller);
+    return model == GeometricModel::kHomography
+               ? point_inlier_probability(m.sigma * std::sqrt(m.homography_chi2), smaller)
+               : line_inlier_probability(m.sigma * std::sqrt(m.fundamental_chi2), smaller);
   }
 
   /// log10 of the chosen model's number of false alarms among the stage's matches (nullopt when no

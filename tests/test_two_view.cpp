@@ -295,10 +295,12 @@ TEST_CASE("the last stage's search finds the homography that 500 uniform samples
   CHECK_FALSE(plain.verified);
   CHECK(plain.inlier_count < options.min_inliers);
   CHECK(affine_orb::test::corner_error(plain.model.homography, scene.truth, scene.plane) > 20.0);
+  CHECK_FALSE(plain.stages.back().last_stage_search);
   options.last_stage_search = affine_orb::LastStageSearchOptions{};
   const auto searched = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(scene.image1, scene.image2);
   REQUIRE(searched.model.model == affine_orb::GeometricModel::kHomography);
   CHECK(searched.verified);
+  CHECK(searched.stages.back().last_stage_search);
   CHECK(affine_orb::test::corner_error(searched.model.homography, scene.truth, scene.plane) < 2.0);
   CHECK(inlier_precision(searched, scene.truth) > 0.9);
 }

@@ -250,6 +250,7 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
     stage["log10_false_alarms"] = s.log10_false_alarms ? py::object(py::float_(*s.log10_false_alarms)) : py::none();
     stage["guided_rounds"] = s.guided_rounds;
     stage["aligned"] = s.aligned;
+    stage["last_stage_search"] = s.last_stage_search;
     stage["extract_ms"] = s.extract_ms;
     stage["match_ms"] = s.match_ms;
     stage["verify_ms"] = s.verify_ms;
@@ -488,6 +489,6 @@ PYBIND11_MODULE(affine_orb, m) {
       "(\"homography\", \"fundamental\" or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, "
       "or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement "
       "(pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned (matches aligned), "
-      "milliseconds). Invalid options raise "
+      "last_stage_search (the model is the last stage's search's), milliseconds). Invalid options raise "
       "ValueError, wrong types TypeError.");
 }

@@ -167,6 +167,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // refined homography, which the result's H fields describe.
     const int rounds = options.guided_matching ? options.guided_matching->rounds : 0;
     for (const affine_orb::TwoViewStageReport& s : r.stages) require(s.guided_rounds <= rounds);
+    // The last stage's search replaces a model only when on, on a reported stage, by a homography.
+    for (std::size_t k = 0; k < r.stages.size(); ++k) {
+      const affine_orb::TwoViewStageReport& s = r.stages[k];
+      if (!s.last_stage_search) continue;
+      require(options.last_stage_search.has_value() && s.model == affine_orb::GeometricModel::kHomography);
+      require(options.all_stages || k + 1 == static_cast<std::size_t>(n_stages) + 1);
+    }
     if (r.stages.back().guided_rounds > 0) {
       require(r.model.model == affine_orb::GeometricModel::kHomography);
       require(r.model.homography_inlier_count == r.inlier_count);

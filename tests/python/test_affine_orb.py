@@ -153,6 +153,7 @@ def test_match_images_last_stage_search_finds_bark_1_to_6s_plane():
     assert not default["verified"] and not searched["verified"]
     assert corner_error(default["homography"]) > 50.0
     assert searched["model"] == "homography" and corner_error(searched["homography"]) < 10.0
+    assert searched["stages"][-1]["last_stage_search"] and not default["stages"][-1]["last_stage_search"]
 
 
 @pytest.mark.data

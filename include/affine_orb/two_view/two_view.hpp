@@ -167,6 +167,7 @@ class TwoViewMatcher {
     double inlier_probability = 1.0;
     int guided_rounds = 0;
     int aligned_count = 0;
+    bool searched = false;  ///< the chosen model is TwoViewOptions::last_stage_search's homography
   };
 
   /// select_model() on the matches; the chosen model's inlier flags and count; on a `reported`
@@ -193,6 +194,7 @@ class TwoViewMatcher {
     stage.inlier_count = stage.model.chosen_inlier_count();
     stage.inlier_probability = inlier_probability(stage.model.model, image1.size(), image2.size());
     if (reported && options_.last_stage_search && !supported(stage) && search_homography(stage)) {
+      stage.searched = true;
       stage.inlier_probability = inlier_probability(stage.model.model, image1.size(), image2.size());
     }
     const bool homography = stage.model.model == GeometricModel::kHomography;
@@ -295,6 +297,7 @@ class TwoViewMatcher {
     report.log10_false_alarms = result.log10_false_alarms;
     report.guided_rounds = stage.guided_rounds;
     report.aligned = stage.aligned_count;
+    report.last_stage_search = stage.searched;
   }
 
   /// TwoViewOptions::align_correspondences on the chosen homography of `stage`: its points2

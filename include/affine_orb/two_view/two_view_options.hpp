@@ -293,6 +293,9 @@ struct TwoViewStageReport {
   /// Matches whose image-2 point was aligned (TwoViewOptions::align_correspondences; 0 when it did
   /// not run, as for guided_rounds).
   int aligned = 0;
+  /// The chosen model is the homography of TwoViewOptions::last_stage_search, which replaced
+  /// select_model()'s choice (false when the search did not run or found nothing better).
+  bool last_stage_search = false;
   double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
   double match_ms = 0.0;    ///< matching, milliseconds
   double verify_ms = 0.0;   ///< RANSAC and model selection, milliseconds

@@ -217,8 +217,7 @@ class TwoViewMatcher {
   /// score become the stage's chosen model; returns whether they did.
   bool search_homography(StageModel& stage) const {
     const LastStageSearchOptions& search = *options_.last_stage_search;
-    const TruncatedChi2Score scoring{search.sigma, options_.model.homography_chi2, options_.model.score_constant};
-    const HomographyEstimator estimator(stage.points.points1, stage.points.points2, scoring);
+    const HomographyEstimator estimator(stage.points.points1, stage.points.points2, homography_scoring(search.sigma));
     const RansacResult<HomographyModel> found = ransac(estimator, search.ransac);
     if (!found.success) return false;
     const std::optional<HomographyModel> current = HomographyModel::from_pixels(stage.model.homography);
@@ -322,9 +321,16 @@ class TwoViewMatcher {
 
   /// The local optimisation of `start` on `points` (TwoViewOptions::refit).
   RansacResult<HomographyModel> refit(const MatchedPoints& points, const HomographyModel& start) const {
-    const TruncatedChi2Score scoring{options_.refit.sigma, options_.model.homography_chi2, options_.model.score_constant};
-    const HomographyEstimator estimator(points.points1, points.points2, scoring);
+    const HomographyEstimator estimator(points.points1, points.points2, homography_scoring(options_.refit.sigma));
     return optimise_locally(estimator, evaluate_model(estimator, start), options_.refit.passes);
+  }
+
+  /// The model selection's homography score (ModelSelectionOptions::homography_scoring) at the
+  /// noise `sigma`, pixels.
+  TruncatedChi2Score homography_scoring(double sigma) const {
+    TruncatedChi2Score scoring = options_.model.homography_scoring();
+    scoring.sigma = sigma;
+    return scoring;
   }
 
   /// `stage`'s chosen homography, its score, inlier flags and count become `fitted`'s, on

@@ -478,7 +478,7 @@ PYBIND11_MODULE(affine_orb, m) {
       "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
       "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
       "accepts, never looser than the unguided ones. last_stage_search (off by default): when the last stage's "
-      "model lacks support, a RANSAC of 10 000 samples for a homography alone on its matches, whose homography "
+      "model lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose homography "
       "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
       "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
       "matches are a few percent. "

@@ -29,6 +29,15 @@ def grey(path):
     return image
 
 
+def corner_distances(estimate, truth, shape):
+    """The distances, pixels, between where `estimate` and `truth` (3x3 homographies) put the four
+    corners of an image of `shape` (rows, columns)."""
+    h, w = shape[:2]
+    corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], float).T
+    a, b = estimate @ corners, truth @ corners
+    return np.linalg.norm(a[:2] / a[2] - b[:2] / b[2], axis=0)
+
+
 def graf_homography_1to3():
     storage = cv2.FileStorage(os.path.join(SAMPLES, "H1to3p.xml"), cv2.FILE_STORAGE_READ)
     return storage.getNode("H13").mat()
@@ -125,12 +134,7 @@ def test_match_images_guided_matching_and_precision_test_are_reported():
     assert r["verified"] and r["stage"] == 0 and r["model"] == "homography"
     assert r["stages"][0]["guided_rounds"] > 0
     assert 0.0 <= r["stages"][0]["half_disagreement"] < 5.0
-    h, w = image1.shape
-    corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], float).T
-    def project(m):
-        p = m @ corners
-        return p[:2] / p[2]
-    assert np.abs(project(r["homography"]) - project(truth)).max() < 2.0
+    assert corner_distances(r["homography"], truth, image1.shape).max() < 2.0
 
 
 @pytest.mark.data
@@ -141,12 +145,8 @@ def test_match_images_last_stage_search_finds_bark_1_to_6s_plane():
     image1 = cv2.imread(os.path.join(DATA, "oxford", "bark", "img1.png"), cv2.IMREAD_GRAYSCALE)
     image6 = cv2.imread(os.path.join(DATA, "oxford", "bark", "img6.png"), cv2.IMREAD_GRAYSCALE)
     truth = np.loadtxt(os.path.join(DATA, "oxford", "bark", "H1to6p"))
-    h, w = image1.shape
-    corners = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1]], float).T
-
     def corner_error(estimate):
-        a, b = estimate @ corners, truth @ corners
-        return float(np.mean(np.linalg.norm(a[:2] / a[2] - b[:2] / b[2], axis=0)))
+        return corner_distances(estimate, truth, image1.shape).mean()
 
     default = affine_orb.match_images(image1, image6)
     searched = affine_orb.match_images(image1, image6, last_stage_search=True)
@@ -386,11 +386,7 @@ def test_cv2_interop_and_matching_graf():
     assert result["success"] and result["homography"] is not None
     assert result["homography_inliers"].dtype == bool and len(result["homography_inliers"]) == len(ours)
     truth = graf_homography_1to3()
-    corners = np.array([[0, 0, 1], [a.shape[1] - 1, 0, 1], [0, a.shape[0] - 1, 1], [a.shape[1] - 1, a.shape[0] - 1, 1]]).T
-    estimated = result["homography"] @ corners
-    expected = truth @ corners
-    error = np.linalg.norm(estimated[:2] / estimated[2] - expected[:2] / expected[2], axis=0)
-    assert error.max() < 10.0  # the image corners: extrapolated beyond most matches (800 x 640 image)
+    assert corner_distances(result["homography"], truth, a.shape).max() < 10.0  # the image corners: extrapolated beyond most matches (800 x 640 image)
     # The default rule (plane and parallax) finds no parallax beyond chance on this plane; every rule
     # is selectable, with or without the keypoints' octaves.
     assert result["model"] == "homography"

@@ -1,7 +1,7 @@
 // affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]
 //                  [--features N] [--threads K] [--spreading strongest|quadtree] [--all-stages]
-//                  [--min-inliers N] [--one-shot] [--out PNG] [--rectified PNG] [--save-matches FILE]
-//                  [--json]
+//                  [--min-inliers N] [--last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]
+//                  [--save-matches FILE] [--json]
 //
 // Matches two images with views on demand (TwoViewMatcher, two_view.hpp): plain Affine-ORB
 // keypoints first, the affine views of stronger tilts only while the pair is not verified; each
@@ -52,7 +52,8 @@ std::string usage() {
   const affine_orb::ExtractorOptions one_shot;
   return "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
          "                        [--features N] [--threads K] [--spreading S] [--all-stages] [--min-inliers N]\n"
-         "                        [--one-shot] [--out PNG] [--rectified PNG] [--save-matches FILE] [--json]\n"
+         "                        [--last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]\n"
+         "                        [--save-matches FILE] [--json]\n"
          "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian\n"
          "             opencv-doc), writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
          "  views on demand (the default): stage 0 matches the images' own keypoints; while the pair is not\n"
@@ -72,6 +73,12 @@ std::string usage() {
          "  --min-inliers N    inliers that verify a pair and end the escalation (default " +
          std::to_string(two_view.min_inliers) +
          ")\n"
+         "  --last-stage-search\n"
+         "                     when the last stage's model lacks support, a RANSAC of up to " +
+         std::to_string(affine_orb::LastStageSearchOptions{}.ransac.max_iterations) +
+         " samples\n"
+         "                     for a homography alone on its matches, whose homography replaces the stage's\n"
+         "                     when it scores higher (off by default; not with --one-shot)\n"
          "  --one-shot         every view at once (Extractor::extract), matched once; --features then defaults to " +
          std::to_string(one_shot.features) +
          "\n"
@@ -106,6 +113,8 @@ struct Outcome {
   int stage = -1, stages = 0;
   double stage_tilt = 1.0;
   bool verified = false;
+  /// Views on demand: the last stage's search (--last-stage-search) gave the chosen homography.
+  bool searched = false;
   affine_orb::ModelSelectionResult selection;
   /// Where --rectified came from: "" (not written), "chosen homography", or "estimated homography"
   /// (select_model() chose F but had estimated H too).
@@ -118,6 +127,7 @@ struct Plan {
   bool one_shot = false;
   bool all_stages = false;
   int min_inliers = affine_orb::TwoViewOptions{}.min_inliers;
+  bool last_stage_search = false;
 };
 
 /// The matcher's options for `plan`: its stages up to the extractor's max_tilt (stages_up_to()).
@@ -127,6 +137,7 @@ affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
   options.stages = affine_orb::stages_up_to(plan.extractor.views);
   options.all_stages = plan.all_stages;
   options.min_inliers = plan.min_inliers;
+  if (plan.last_stage_search) options.last_stage_search = affine_orb::LastStageSearchOptions{};
   return options;
 }
 
@@ -183,6 +194,7 @@ Matched<Descriptor> match_on_demand(const cv::Mat& image1, const cv::Mat& image2
   o.stage = r.stage;
   o.verified = r.verified;
   o.stage_tilt = r.stages.back().max_tilt;
+  o.searched = r.stages.back().last_stage_search;
   o.stages = static_cast<int>(matcher.options().stages.size());
   for (const affine_orb::TwoViewStageReport& s : r.stages) {
     o.ms_extract1 += s.extract_ms;
@@ -312,6 +324,10 @@ std::optional<Settings> parse_settings(affine_orb::examples::Args& args) {
   s.plan.one_shot = args.flag("--one-shot");
   s.plan.all_stages = args.flag("--all-stages");
   s.plan.min_inliers = args.integer("--min-inliers", s.plan.min_inliers);
+  s.plan.last_stage_search = args.flag("--last-stage-search");
+  if (s.plan.one_shot && s.plan.last_stage_search) {
+    throw std::invalid_argument("--last-stage-search: a stage of views on demand, not --one-shot");
+  }
   affine_orb::ExtractorOptions& options = s.plan.extractor;
   // Views on demand: the matcher's extractor (2000 image keypoints, the strongest corners). One
   // shot: 1000 from each image and as many from its views (the additive budget), 2000 in all.
@@ -351,8 +367,8 @@ void print_json(const Settings& s, const Outcome& o) {
   if (s.plan.one_shot) {
     std::printf("\"stage\": null, \"verified\": null, ");
   } else {
-    std::printf("\"stage\": %d, \"stage_max_tilt\": %.4f, \"verified\": %s, ", o.stage, o.stage_tilt,
-                o.verified ? "true" : "false");
+    std::printf("\"stage\": %d, \"stage_max_tilt\": %.4f, \"verified\": %s, \"last_stage_search\": %s, ", o.stage,
+                o.stage_tilt, o.verified ? "true" : "false", o.searched ? "true" : "false");
   }
   if (o.ground_truth) {
     std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct, precision);
@@ -392,8 +408,13 @@ void print_text(const Settings& s, const Outcome& o) {
   std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
   if (o.ground_truth)
     std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
-  std::printf("\nmodel %s (parallax off the plane: z = %.1f, H when <= %.1f), %zu inliers\n",
-              affine_orb::model_name(o.selection.model), o.selection.parallax_significance, threshold, o.inliers);
+  if (o.searched) {
+    // The parallax verdict belongs to the stage's own estimate, which the search replaced.
+    std::printf("\nmodel homography (the last stage's search for a homography alone), %zu inliers\n", o.inliers);
+  } else {
+    std::printf("\nmodel %s (parallax off the plane: z = %.1f, H when <= %.1f), %zu inliers\n",
+                affine_orb::model_name(o.selection.model), o.selection.parallax_significance, threshold, o.inliers);
+  }
   if (s.plan.one_shot) {
     std::printf("time: extract %.1f + %.1f ms (the extractor's first call: %.1f ms), match %.1f ms, model %.1f ms\n",
                 o.ms_extract1, o.ms_extract2, o.ms_first_extract, o.ms_match, o.ms_model);

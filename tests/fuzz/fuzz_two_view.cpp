@@ -172,7 +172,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const affine_orb::TwoViewStageReport& s = r.stages[k];
       if (!s.last_stage_search) continue;
       require(options.last_stage_search.has_value() && s.model == affine_orb::GeometricModel::kHomography);
-      require(options.all_stages || k + 1 == static_cast<std::size_t>(n_stages) + 1);
+      require(options.all_stages || k == static_cast<std::size_t>(n_stages));
     }
     if (r.stages.back().guided_rounds > 0) {
       require(r.model.model == affine_orb::GeometricModel::kHomography);

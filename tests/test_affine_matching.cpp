@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -149,6 +150,122 @@ TEST_CASE("the location-aware ratio test equals a naive reference") {
   bad.matcher.ratio = 0.0f;
   CHECK_THROWS_AS(affine_orb::match_features(a, b, bad), std::invalid_argument);
   CHECK(affine_orb::match_features(affine_orb::Features<256>{}, b).empty());
+}
+
+namespace {
+
+/// `n` features whose descriptors are a few bits off one of `kinds` prototypes (the same ones on
+/// every call), so that many distances tie, at positions in a 300 x 300 image, some in clusters
+/// within the exclusion radius.
+affine_orb::Features<256> tied_features(std::mt19937_64& rng, int n, int kinds) {
+  std::mt19937_64 r(5);
+  std::vector<affine_orb::BinaryDescriptor<256>> prototypes;
+  for (int k = 0; k < kinds; ++k) prototypes.push_back({r(), r(), r(), r()});
+  affine_orb::Features<256> f;
+  for (int i = 0; i < n; ++i) {
+    affine_orb::BinaryDescriptor<256> d = prototypes[rng() % prototypes.size()];
+    for (int flip = static_cast<int>(rng() % 4); flip > 0; --flip) {
+      const unsigned bit = static_cast<unsigned>(rng() % 256);
+      d[bit / 64] ^= 1ull << (bit % 64);
+    }
+    f.descriptors.push_back(d);
+    const float x = static_cast<float>(rng() % 60) * 5.0f, y = static_cast<float>(rng() % 60) * 5.0f;
+    f.keypoints.emplace_back(cv::Point2f(x, y) + cv::Point2f(static_cast<float>(rng() % 3), 0.0f), 31.0f);
+    f.views.push_back(static_cast<int>(rng() % 3));
+  }
+  return f;
+}
+
+/// The first `n` features of `f`.
+affine_orb::Features<256> first(const affine_orb::Features<256>& f, std::size_t n) {
+  affine_orb::Features<256> out;
+  out.keypoints.assign(f.keypoints.begin(), f.keypoints.begin() + static_cast<std::ptrdiff_t>(n));
+  out.descriptors.assign(f.descriptors.begin(), f.descriptors.begin() + static_cast<std::ptrdiff_t>(n));
+  out.views.assign(f.views.begin(), f.views.begin() + static_cast<std::ptrdiff_t>(n));
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("searches extended to grown sets equal the searches of the whole sets, ties included") {
+  std::mt19937_64 rng(41);
+  const affine_orb::Features<256> a = tied_features(rng, 150, 8);
+  const affine_orb::Features<256> b = tied_features(rng, 170, 8);
+  // The reference: every distance, sorted by (distance, train index).
+  auto naive = [&](std::size_t i) {
+    std::vector<std::pair<int, int>> all;
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      all.push_back({affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]), static_cast<int>(j)});
+    }
+    std::sort(all.begin(), all.end());
+    return all;
+  };
+  int ties = 0;
+  for (std::size_t known_query : {std::size_t{0}, std::size_t{1}, std::size_t{77}, a.size()}) {
+    for (std::size_t known_train : {std::size_t{0}, std::size_t{1}, std::size_t{90}, b.size()}) {
+      CAPTURE(known_query);
+      CAPTURE(known_train);
+      const std::vector<affine_orb::BinaryDescriptor<256>> old_query(a.descriptors.begin(),
+                                                             a.descriptors.begin() + static_cast<std::ptrdiff_t>(known_query));
+      const std::vector<affine_orb::BinaryDescriptor<256>> old_train(b.descriptors.begin(),
+                                                             b.descriptors.begin() + static_cast<std::ptrdiff_t>(known_train));
+      const auto got = affine_orb::detail::extend_knn2(affine_orb::knn2(old_query, old_train), known_train,
+                                                       a.descriptors, b.descriptors);
+      REQUIRE(got.size() == a.size());
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        const auto all = naive(i);
+        REQUIRE(got[i].count == 2);
+        CHECK(got[i].query == static_cast<int>(i));
+        CHECK(got[i].best.distance == all[0].first);
+        CHECK(got[i].best.train == all[0].second);
+        CHECK(got[i].second.distance == all[1].first);
+        CHECK(got[i].second.train == all[1].second);
+        ties += all[0].first == all[1].first || all[1].first == all[2].first;
+      }
+    }
+  }
+  CHECK(ties > 500);  // the ties the order of the merge decides are there to be decided
+  // Train sets of one descriptor: count 1, the second left at Neighbour's defaults.
+  const std::vector<affine_orb::BinaryDescriptor<256>> one(b.descriptors.begin(), b.descriptors.begin() + 1);
+  const auto single = affine_orb::detail::extend_knn2(affine_orb::knn2(a.descriptors, {}), 0, a.descriptors, one);
+  for (const affine_orb::KnnMatch& k : single) {
+    CHECK(k.count == 1);
+    CHECK(k.best.train == 0);
+    CHECK(k.second.distance == affine_orb::Neighbour{}.distance);
+  }
+}
+
+TEST_CASE("matching sets stage by stage equals matching each stage's sets whole") {
+  std::mt19937_64 rng(43);
+  const affine_orb::Features<256> a = tied_features(rng, 160, 100);
+  const affine_orb::Features<256> b = tied_features(rng, 140, 100);
+  const std::vector<std::pair<std::size_t, std::size_t>> stages = {{0, 60}, {40, 60}, {100, 90}, {100, 140}, {160, 140}};
+  for (double radius : {0.0, 4.0}) {
+    for (bool cross : {false, true}) {
+      CAPTURE(radius);
+      CAPTURE(cross);
+      affine_orb::AffineMatchOptions options;
+      options.ratio_exclusion_radius = radius;
+      options.matcher.cross_check = cross;
+      options.matcher.ratio = 0.95f;
+      affine_orb::detail::KnnSearches searches;
+      std::size_t matched = 0;
+      for (const auto& [na, nb] : stages) {
+        CAPTURE(na);
+        const affine_orb::Features<256> fa = first(a, na), fb = first(b, nb);
+        const auto grown = affine_orb::detail::match_growing_features(fa, fb, options, searches);
+        const auto whole = affine_orb::match_features(fa, fb, options);
+        REQUIRE(grown.size() == whole.size());
+        for (std::size_t k = 0; k < grown.size(); ++k) {
+          CHECK(grown[k].query == whole[k].query);
+          CHECK(grown[k].train == whole[k].train);
+          CHECK(grown[k].distance == whole[k].distance);
+        }
+        matched += whole.size();
+      }
+      CHECK(matched > 50);
+    }
+  }
 }
 
 TEST_CASE("guided matching equals a naive reference over every keypoint of image 2") {

@@ -138,7 +138,16 @@ inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, c
 /// descriptor widths cannot be mixed (the template parameter differs). Empty sets give no matches.
 template <int Bits>
 std::vector<Match> match_features(const Features<Bits>& a, const Features<Bits>& b,
-                                  const AffineMatchOptions& options = {}) {
+                                  const AffineMatchOptions& options = {});
+
+namespace detail {
+
+/// match_features() with the knn2() searches of its default path kept in `searches`, which holds
+/// those of the sets' first features (detail::KnnSearches): TwoViewMatcher's stages append
+/// features to the same two sets, and each stage searches only the pairs the previous ones did not.
+template <int Bits>
+std::vector<Match> match_growing_features(const Features<Bits>& a, const Features<Bits>& b,
+                                          const AffineMatchOptions& options, KnnSearches& searches) {
   options.check();
   detail::require(a.descriptors.size() == a.keypoints.size() && b.descriptors.size() == b.keypoints.size(),
                   "match_features: keypoints and descriptors differ in number");
@@ -148,7 +157,7 @@ std::vector<Match> match_features(const Features<Bits>& a, const Features<Bits>&
 
   std::vector<Match> all;
   if (!options.per_view_pairs) {
-    all = detail::match_excluding_duplicates(a, b, options.matcher, options.ratio_exclusion_radius);
+    all = match_excluding_duplicates(a, b, options.matcher, options.ratio_exclusion_radius, searches);
   } else {
     // Indices of each view's keypoints.
     auto group = [](const Features<Bits>& f) {
@@ -179,8 +188,16 @@ std::vector<Match> match_features(const Features<Bits>& a, const Features<Bits>&
       }
     }
   }
-  return remove_duplicate_matches(std::move(all), detail::positions(a.keypoints), detail::positions(b.keypoints),
+  return remove_duplicate_matches(std::move(all), positions(a.keypoints), positions(b.keypoints),
                                   options.duplicate_radius);
+}
+
+}  // namespace detail
+
+template <int Bits>
+std::vector<Match> match_features(const Features<Bits>& a, const Features<Bits>& b, const AffineMatchOptions& options) {
+  detail::KnnSearches searches;
+  return detail::match_growing_features(a, b, options, searches);
 }
 
 /// Guided matching: every keypoint i of `a` whose predicted position `predicted[i]` (pixels of

@@ -75,7 +75,8 @@ inline double half_disagreement(const std::vector<cv::Point2f>& points1, const s
 /// not verified (TwoViewOptions). Per stage k = 0, 1, ...: both images get the keypoints of the
 /// stage (stage 0: Extractor::extract_image(); then ViewSession::extend() with the stage's tilts
 /// and budget), every keypoint so far of image 1 is matched against every keypoint so far of image 2
-/// (match_features()), and select_model() estimates H and F and chooses one (on the last stage,
+/// (match_features(), each stage computing only the descriptor distances of pairs with a new
+/// keypoint: the same matches), and select_model() estimates H and F and chooses one (on the last stage,
 /// when that model lacks support, TwoViewOptions::last_stage_search may replace it); a chosen homography
 /// is put to the precision test (max_half_disagreement) and, with min_inliers inliers that pass
 /// the support test (max_false_alarms, min_inlier_ratio), refined by
@@ -112,6 +113,7 @@ class TwoViewMatcher {
     StagedFeatures<Descriptor> staged2 = extractor2_.extract_image(image2, mask2);
     result.features1 = std::move(staged1.features);
     result.features2 = std::move(staged2.features);
+    detail::KnnSearches searches;  // each stage appends features: it searches only the new pairs
     for (int k = 0; k <= n_stages; ++k) {
       TwoViewStageReport report;
       if (k > 0) {
@@ -122,7 +124,8 @@ class TwoViewMatcher {
         append(result.features2, staged2.session.extend(stage.max_tilt, budget));
       }
       const Clock::time_point extracted = Clock::now();
-      std::vector<Match> matches = match_features(result.features1, result.features2, options_.matching);
+      std::vector<Match> matches =
+          detail::match_growing_features(result.features1, result.features2, options_.matching, searches);
       const Clock::time_point matched = Clock::now();
       StageModel verified = verify(result.features1, result.features2, std::move(matches), image1, image2,
                                    k == n_stages || options_.all_stages);

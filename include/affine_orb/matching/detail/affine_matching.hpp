@@ -4,9 +4,12 @@
 /// and the gated search of match_guided() (matching/affine_matching.hpp).
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "affine_orb/core/detail/check.hpp"
@@ -101,17 +104,82 @@ inline std::vector<cv::Point2f> positions(const std::vector<cv::KeyPoint>& keypo
   return out;
 }
 
+/// `into`'s two nearest neighbours merged with `more`'s, whose train indices all exceed `into`'s:
+/// the two nearest of both by distance, ties broken by the smaller train index, as knn2() does.
+inline void merge_neighbours(KnnMatch& into, const KnnMatch& more) {
+  const Neighbour left[2] = {into.best, into.second};
+  const Neighbour right[2] = {more.best, more.second};
+  int i = 0, j = 0;
+  Neighbour merged[2];
+  const int count = std::min(2, into.count + more.count);
+  for (int k = 0; k < count; ++k) {
+    // A tie goes to `into`: its train indices are the smaller ones.
+    const bool take_left = j >= more.count || (i < into.count && left[i].distance <= right[j].distance);
+    merged[k] = take_left ? left[i++] : right[j++];
+  }
+  into.count = count;
+  into.best = count > 0 ? merged[0] : Neighbour{};
+  into.second = count > 1 ? merged[1] : Neighbour{};
+}
+
+/// knn2(query, train), given `known` = knn2(query[0, known.size()), train[0, known_train)): those
+/// queries are searched on train[known_train, end) alone and their neighbours merged with the known
+/// ones; the later queries are searched on every train descriptor. The same result as knn2() on the
+/// whole sets, which it costs only for the pairs `known` lacks.
+template <std::size_t Words>
+std::vector<KnnMatch> extend_knn2(std::vector<KnnMatch> known, std::size_t known_train,
+                                  const std::vector<std::array<std::uint64_t, Words>>& query,
+                                  const std::vector<std::array<std::uint64_t, Words>>& train) {
+  using Descriptors = std::vector<std::array<std::uint64_t, Words>>;
+  require(known.size() <= query.size() && known_train <= train.size(), "extend_knn2: known sets larger than the sets");
+  if (known.empty()) return knn2(query, train);
+  const auto known_query = static_cast<std::ptrdiff_t>(known.size());
+  if (known_train < train.size() && known_query > 0) {
+    const Descriptors old_query(query.begin(), query.begin() + known_query);
+    const Descriptors new_train(train.begin() + static_cast<std::ptrdiff_t>(known_train), train.end());
+    std::vector<KnnMatch> more = knn2(old_query, new_train);
+    for (std::size_t i = 0; i < known.size(); ++i) {
+      more[i].best.train += static_cast<int>(known_train);
+      more[i].second.train += static_cast<int>(known_train);
+      merge_neighbours(known[i], more[i]);
+    }
+  }
+  if (known.size() < query.size()) {
+    const std::vector<KnnMatch> rest = knn2(Descriptors(query.begin() + known_query, query.end()), train);
+    for (KnnMatch k : rest) {
+      k.query += static_cast<int>(known_query);
+      known.push_back(k);
+    }
+  }
+  return known;
+}
+
+/// The knn2() searches of match_excluding_duplicates() on two feature sets, kept so that the same
+/// sets with more features appended (the stages of TwoViewMatcher) search only the new pairs.
+struct KnnSearches {
+  std::size_t size_a = 0;           ///< features of a the searches cover
+  std::size_t size_b = 0;           ///< and of b
+  std::vector<KnnMatch> forward;    ///< a against b[0, size_b)
+  std::vector<KnnMatch> backward;   ///< b against a[0, size_a) (with MatcherOptions::cross_check)
+};
+
 /// Global matching with the location-aware ratio test of AffineMatchOptions::ratio_exclusion_radius
 /// (`exclusion_radius`, pixels of image b).
 /// knn2() gives the best neighbour j1 and the runner-up; when the runner-up lies within the radius
 /// of j1 (a duplicate of the same point), the train set is scanned again for the nearest descriptor
-/// outside the radius.
+/// outside the radius. `searches` holds the searches of the sets' first features (a and b may
+/// only have grown since) and is extended to all of them.
 template <int Bits>
 std::vector<Match> match_excluding_duplicates(const Features<Bits>& a, const Features<Bits>& b, const MatcherOptions& m,
-                                              double exclusion_radius) {
-  const std::vector<KnnMatch> forward = knn2(a.descriptors, b.descriptors);
-  std::vector<KnnMatch> backward;
-  if (m.cross_check) backward = knn2(b.descriptors, a.descriptors);
+                                              double exclusion_radius, KnnSearches& searches) {
+  searches.forward = extend_knn2(std::move(searches.forward), searches.size_b, a.descriptors, b.descriptors);
+  if (m.cross_check) {
+    searches.backward = extend_knn2(std::move(searches.backward), searches.size_a, b.descriptors, a.descriptors);
+  }
+  searches.size_a = a.size();
+  searches.size_b = b.size();
+  const std::vector<KnnMatch>& forward = searches.forward;
+  const std::vector<KnnMatch>& backward = searches.backward;
   const double r2 = exclusion_radius * exclusion_radius;
   auto near = [&](int j, int k) {
     const cv::Point2f& p = b.keypoints[static_cast<std::size_t>(j)].pt;

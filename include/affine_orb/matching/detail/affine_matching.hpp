@@ -197,9 +197,9 @@ std::vector<Match> match_excluding_duplicates(const Features<Bits>& a, const Fea
       distances.resize(b.size());
       hamming_row(a.descriptors[static_cast<std::size_t>(k.query)], b.descriptors.data(), b.size(), distances.data());
       for (std::size_t j = 0; j < b.size(); ++j) {
-        if (near(k.best.train, static_cast<int>(j))) continue;
+        // The distance first: it rules out most j, and costs less than the radius test.
         const int d = distances[j];
-        if (d < test.second.distance) {
+        if (d < test.second.distance && !near(k.best.train, static_cast<int>(j))) {
           test.second = {static_cast<int>(j), d};
           test.count = 2;
         }

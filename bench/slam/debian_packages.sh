@@ -1,5 +1,5 @@
 # shellcheck shell=bash
-# debian_packages.sh -- sourced by the build scripts of bench/slam: install_missing PACKAGE... installs
+# debian_packages.sh -- sourced by the scripts of bench/slam: install_missing PACKAGE... installs
 # with apt-get the Debian packages that are not installed yet (as root; otherwise it names them and
 # exits 1).
 install_missing() {

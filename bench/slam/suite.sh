@@ -82,9 +82,15 @@ FORK=$(fork "$STOCK")
 grep -q "SetRecovering" "$ADAPTER/src/Tracking.cc" ||
   { echo "$ADAPTER: no recovery lines in src/Tracking.cc (adapters/$FORK/install.sh --recovery)" >&2; exit 2; }
 
-names=()
-for s in $SEQUENCES; do
-  for seed in $SEEDS; do
+# The renderer and the tables (../shared/slam/README.md: synth_rgbd.py needs scipy besides numpy and
+# OpenCV's Python module).
+# shellcheck source=bench/slam/debian_packages.sh
+. "$HERE/debian_packages.sh"
+install_missing python3-numpy python3-scipy python3-opencv
+
+names=()  # seeds outermost, then the sequences
+for seed in $SEEDS; do
+  for s in $SEQUENCES; do
     d=$SYNTH/${s}_s$seed; names+=("${s}_s$seed")
     [ -f "$d/render_done.txt" ] && continue
     if [ "$s" = revisit_sweep_A ]; then
@@ -110,7 +116,7 @@ if [ "$FORK" = orbslam3 ]; then
     { cat "$SYNTH/$name/camera.yaml"; echo; echo 'Camera.type: "PinHole"'; } > "$RUN_SEQS/$name/camera.yaml"
   done
 fi
-# Seeds outermost (run.sh interleaves the configurations within each sequence and run).
+# In the order of names (run.sh interleaves the configurations within each sequence and run).
 for name in "${names[@]}"; do
   "$HARNESS/run.sh" --stock "$STOCK" --affine "$ADAPTER" --vocab "$VOCAB" --seqs "$RUN_SEQS" --runs "$RUNS" \
     --conf S=stock --conf 'A0=affine AFFINE_ORB_RECOVERY_IMAGE_FEATURES=1' --conf R3=affine \

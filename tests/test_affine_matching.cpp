@@ -18,6 +18,26 @@
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
 
+namespace {
+
+/// The four combinations of the location-aware ratio test (exclusion radius 0 or 4 px) and the
+/// cross-check that the matching tests try, duplicates kept.
+std::vector<affine_orb::AffineMatchOptions> exclusion_and_cross_check() {
+  std::vector<affine_orb::AffineMatchOptions> out;
+  for (double radius : {0.0, 4.0}) {
+    for (bool cross : {false, true}) {
+      affine_orb::AffineMatchOptions options;
+      options.ratio_exclusion_radius = radius;
+      options.matcher.cross_check = cross;
+      options.duplicate_radius = 0.0;
+      out.push_back(options);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 TEST_CASE("duplicate correspondences are removed exactly as defined") {
   // Points in a 40 px square (many duplicates), then the same spread over 4e6 px with a few points
   // at ±1e30 and NaN (the grid's cells widen; a NaN point is never within the radius).
@@ -92,56 +112,52 @@ TEST_CASE("the location-aware ratio test equals a naive reference") {
       b.views.push_back(copy);
     }
   }
-  for (double radius : {0.0, 4.0}) {
-    for (bool cross : {false, true}) {
-      CAPTURE(radius);
-      CAPTURE(cross);
-      affine_orb::AffineMatchOptions options;
-      options.ratio_exclusion_radius = radius;
-      options.matcher.cross_check = cross;
-      options.duplicate_radius = 0.0;
-      const auto got = affine_orb::match_features(a, b, options);
-      std::vector<affine_orb::Match> expected;
-      for (std::size_t i = 0; i < a.size(); ++i) {
-        int best = 1 << 30;
-        std::size_t j1 = 0;
-        for (std::size_t j = 0; j < b.size(); ++j) {
-          const int d = affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]);
-          if (d < best) {
-            best = d;
-            j1 = j;
+  for (const affine_orb::AffineMatchOptions& options : exclusion_and_cross_check()) {
+    const double radius = options.ratio_exclusion_radius;
+    const bool cross = options.matcher.cross_check;
+    CAPTURE(radius);
+    CAPTURE(cross);
+    const auto got = affine_orb::match_features(a, b, options);
+    std::vector<affine_orb::Match> expected;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      int best = 1 << 30;
+      std::size_t j1 = 0;
+      for (std::size_t j = 0; j < b.size(); ++j) {
+        const int d = affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]);
+        if (d < best) {
+          best = d;
+          j1 = j;
+        }
+      }
+      int second = 1 << 30;
+      for (std::size_t j = 0; j < b.size(); ++j) {
+        if (j == j1) continue;
+        const auto& p = b.keypoints[j].pt;
+        const auto& q = b.keypoints[j1].pt;
+        if (std::hypot(p.x - q.x, p.y - q.y) <= radius) continue;
+        second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
+      }
+      if (!(best < 0.8 * second)) continue;
+      if (cross) {
+        int back = 1 << 30;
+        std::size_t i1 = 0;
+        for (std::size_t k = 0; k < a.size(); ++k) {
+          const int d = affine_orb::hamming_distance(a.descriptors[k], b.descriptors[j1]);
+          if (d < back) {
+            back = d;
+            i1 = k;
           }
         }
-        int second = 1 << 30;
-        for (std::size_t j = 0; j < b.size(); ++j) {
-          if (j == j1) continue;
-          const auto& p = b.keypoints[j].pt;
-          const auto& q = b.keypoints[j1].pt;
-          if (std::hypot(p.x - q.x, p.y - q.y) <= radius) continue;
-          second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
-        }
-        if (!(best < 0.8 * second)) continue;
-        if (cross) {
-          int back = 1 << 30;
-          std::size_t i1 = 0;
-          for (std::size_t k = 0; k < a.size(); ++k) {
-            const int d = affine_orb::hamming_distance(a.descriptors[k], b.descriptors[j1]);
-            if (d < back) {
-              back = d;
-              i1 = k;
-            }
-          }
-          if (i1 != i) continue;
-        }
-        expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
+        if (i1 != i) continue;
       }
-      REQUIRE(got.size() == expected.size());
-      for (std::size_t k = 0; k < got.size(); ++k) {
-        CHECK(got[k].query == expected[k].query);
-        CHECK(got[k].train == expected[k].train);
-      }
-      if (radius > 0.0) CHECK(got.size() > 60);  // the planted copies no longer veto their originals
+      expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
     }
+    REQUIRE(got.size() == expected.size());
+    for (std::size_t k = 0; k < got.size(); ++k) {
+      CHECK(got[k].query == expected[k].query);
+      CHECK(got[k].train == expected[k].train);
+    }
+    if (radius > 0.0) CHECK(got.size() > 60);  // the planted copies no longer veto their originals
   }
   affine_orb::AffineMatchOptions bad;
   bad.ratio_exclusion_radius = -1.0;
@@ -205,10 +221,10 @@ TEST_CASE("searches extended to grown sets equal the searches of the whole sets,
     for (std::size_t known_train : {std::size_t{0}, std::size_t{1}, std::size_t{90}, b.size()}) {
       CAPTURE(known_query);
       CAPTURE(known_train);
-      const std::vector<affine_orb::BinaryDescriptor<256>> old_query(a.descriptors.begin(),
-                                                             a.descriptors.begin() + static_cast<std::ptrdiff_t>(known_query));
-      const std::vector<affine_orb::BinaryDescriptor<256>> old_train(b.descriptors.begin(),
-                                                             b.descriptors.begin() + static_cast<std::ptrdiff_t>(known_train));
+      const std::vector<affine_orb::BinaryDescriptor<256>> old_query(
+          a.descriptors.begin(), a.descriptors.begin() + static_cast<std::ptrdiff_t>(known_query));
+      const std::vector<affine_orb::BinaryDescriptor<256>> old_train(
+          b.descriptors.begin(), b.descriptors.begin() + static_cast<std::ptrdiff_t>(known_train));
       const auto got = affine_orb::detail::extend_knn2(affine_orb::knn2(old_query, old_train), known_train,
                                                        a.descriptors, b.descriptors);
       REQUIRE(got.size() == a.size());
@@ -239,32 +255,28 @@ TEST_CASE("matching sets stage by stage equals matching each stage's sets whole"
   std::mt19937_64 rng(43);
   const affine_orb::Features<256> a = tied_features(rng, 160, 100);
   const affine_orb::Features<256> b = tied_features(rng, 140, 100);
-  const std::vector<std::pair<std::size_t, std::size_t>> stages = {{0, 60}, {40, 60}, {100, 90}, {100, 140}, {160, 140}};
-  for (double radius : {0.0, 4.0}) {
-    for (bool cross : {false, true}) {
-      CAPTURE(radius);
-      CAPTURE(cross);
-      affine_orb::AffineMatchOptions options;
-      options.ratio_exclusion_radius = radius;
-      options.matcher.cross_check = cross;
-      options.matcher.ratio = 0.95f;
-      affine_orb::detail::KnnSearches searches;
-      std::size_t matched = 0;
-      for (const auto& [na, nb] : stages) {
-        CAPTURE(na);
-        const affine_orb::Features<256> fa = first(a, na), fb = first(b, nb);
-        const auto grown = affine_orb::detail::match_growing_features(fa, fb, options, searches);
-        const auto whole = affine_orb::match_features(fa, fb, options);
-        REQUIRE(grown.size() == whole.size());
-        for (std::size_t k = 0; k < grown.size(); ++k) {
-          CHECK(grown[k].query == whole[k].query);
-          CHECK(grown[k].train == whole[k].train);
-          CHECK(grown[k].distance == whole[k].distance);
-        }
-        matched += whole.size();
+  const std::vector<std::pair<std::size_t, std::size_t>> stages = {
+      {0, 60}, {40, 60}, {100, 90}, {100, 140}, {160, 140}};
+  for (affine_orb::AffineMatchOptions options : exclusion_and_cross_check()) {
+    CAPTURE(options.ratio_exclusion_radius);
+    CAPTURE(options.matcher.cross_check);
+    options.matcher.ratio = 0.95f;
+    affine_orb::detail::KnnSearches searches;
+    std::size_t matched = 0;
+    for (const auto& [na, nb] : stages) {
+      CAPTURE(na);
+      const affine_orb::Features<256> fa = first(a, na), fb = first(b, nb);
+      const auto grown = affine_orb::detail::match_growing_features(fa, fb, options, searches);
+      const auto whole = affine_orb::match_features(fa, fb, options);
+      REQUIRE(grown.size() == whole.size());
+      for (std::size_t k = 0; k < grown.size(); ++k) {
+        CHECK(grown[k].query == whole[k].query);
+        CHECK(grown[k].train == whole[k].train);
+        CHECK(grown[k].distance == whole[k].distance);
       }
-      CHECK(matched > 50);
+      matched += whole.size();
     }
+    CHECK(matched > 50);
   }
 }
 

@@ -157,10 +157,10 @@ std::vector<KnnMatch> extend_knn2(std::vector<KnnMatch> known, std::size_t known
 /// The knn2() searches of match_excluding_duplicates() on two feature sets, kept so that the same
 /// sets with more features appended (the stages of TwoViewMatcher) search only the new pairs.
 struct KnnSearches {
-  std::size_t size_a = 0;           ///< features of a the searches cover
-  std::size_t size_b = 0;           ///< and of b
-  std::vector<KnnMatch> forward;    ///< a against b[0, size_b)
-  std::vector<KnnMatch> backward;   ///< b against a[0, size_a) (with MatcherOptions::cross_check)
+  std::size_t size_a = 0;          ///< features of a the searches cover
+  std::size_t size_b = 0;          ///< and of b
+  std::vector<KnnMatch> forward;   ///< a against b[0, size_b)
+  std::vector<KnnMatch> backward;  ///< b against a[0, size_a) (with MatcherOptions::cross_check)
 };
 
 /// Global matching with the location-aware ratio test of AffineMatchOptions::ratio_exclusion_radius

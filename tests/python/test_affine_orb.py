@@ -386,7 +386,8 @@ def test_cv2_interop_and_matching_graf():
     assert result["success"] and result["homography"] is not None
     assert result["homography_inliers"].dtype == bool and len(result["homography_inliers"]) == len(ours)
     truth = graf_homography_1to3()
-    assert corner_distances(result["homography"], truth, a.shape).max() < 10.0  # the image corners: extrapolated beyond most matches (800 x 640 image)
+    # The image corners: extrapolated beyond most matches (800 x 640 image).
+    assert corner_distances(result["homography"], truth, a.shape).max() < 10.0
     # The default rule (plane and parallax) finds no parallax beyond chance on this plane; every rule
     # is selectable, with or without the keypoints' octaves.
     assert result["model"] == "homography"

@@ -134,7 +134,7 @@ std::vector<KnnMatch> extend_knn2(std::vector<KnnMatch> known, std::size_t known
   require(known.size() <= query.size() && known_train <= train.size(), "extend_knn2: known sets larger than the sets");
   if (known.empty()) return knn2(query, train);
   const auto known_query = static_cast<std::ptrdiff_t>(known.size());
-  if (known_train < train.size() && known_query > 0) {
+  if (known_train < train.size()) {
     const Descriptors old_query(query.begin(), query.begin() + known_query);
     const Descriptors new_train(train.begin() + static_cast<std::ptrdiff_t>(known_train), train.end());
     std::vector<KnnMatch> more = knn2(old_query, new_train);
@@ -156,11 +156,11 @@ std::vector<KnnMatch> extend_knn2(std::vector<KnnMatch> known, std::size_t known
 
 /// The knn2() searches of match_excluding_duplicates() on two feature sets, kept so that the same
 /// sets with more features appended (the stages of TwoViewMatcher) search only the new pairs.
+/// forward.size() is the number of a's features they cover.
 struct KnnSearches {
-  std::size_t size_a = 0;          ///< features of a the searches cover
-  std::size_t size_b = 0;          ///< and of b
-  std::vector<KnnMatch> forward;   ///< a against b[0, size_b)
-  std::vector<KnnMatch> backward;  ///< b against a[0, size_a) (with MatcherOptions::cross_check)
+  std::size_t size_b = 0;          ///< features of b they cover
+  std::vector<KnnMatch> forward;   ///< a[0, forward.size()) against b[0, size_b)
+  std::vector<KnnMatch> backward;  ///< b against a[0, forward.size()) (with MatcherOptions::cross_check)
 };
 
 /// Global matching with the location-aware ratio test of AffineMatchOptions::ratio_exclusion_radius
@@ -172,11 +172,11 @@ struct KnnSearches {
 template <int Bits>
 std::vector<Match> match_excluding_duplicates(const Features<Bits>& a, const Features<Bits>& b, const MatcherOptions& m,
                                               double exclusion_radius, KnnSearches& searches) {
-  searches.forward = extend_knn2(std::move(searches.forward), searches.size_b, a.descriptors, b.descriptors);
   if (m.cross_check) {
-    searches.backward = extend_knn2(std::move(searches.backward), searches.size_a, b.descriptors, a.descriptors);
+    searches.backward =
+        extend_knn2(std::move(searches.backward), searches.forward.size(), b.descriptors, a.descriptors);
   }
-  searches.size_a = a.size();
+  searches.forward = extend_knn2(std::move(searches.forward), searches.size_b, a.descriptors, b.descriptors);
   searches.size_b = b.size();
   const std::vector<KnnMatch>& forward = searches.forward;
   const std::vector<KnnMatch>& backward = searches.backward;

@@ -1,6 +1,6 @@
 // eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b,...]
 //               [--methods SUBSTRING,...] [--asift-sequences a,b,...|all] [--peer-cache FILE] [--sweep]
-//               [--placement] [--origins] [--repeats N]
+//               [--placement] [--origins] [--repeats N] [--judge-spread N]
 //
 // Two-view matching judged where users feel it: on every Oxford pair 1->2 ... 1->6, opencv-doc's
 // graf 1->3 (subset "oxford") and every pair of ../shared/data/pairs/ (hpatches, homogr, evd), per
@@ -35,7 +35,10 @@
 // runs every method it computes N times on each pair in a row and reports the median time (the
 // methods are deterministic: the outcome is the last run's); one run by default. Rows read from
 // --peer-cache keep the time of the run that wrote them. --origins adds, per matcher and subset, the
-// correct matches by the stage that extracted them (which stage finds them).
+// correct matches by the stage that extracted them (which stage finds them). --judge-spread N runs,
+// for the matchers, the MAGSAC++ judge on N seeded reorderings of the same returned matches and
+// tables where the own model lies against the range of those estimates (the judge's own run-to-run
+// range: differences inside it are not the estimator's).
 //
 // --methods keeps the methods whose name contains one of the comma-separated substrings, or, for an
 // entry that starts with '=', whose name is the rest of it.
@@ -57,6 +60,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -268,6 +272,34 @@ JudgeErrors judge_errors(const PointPairs& matches, const affine_orb::bench::Vie
   return e;
 }
 
+/// The MAGSAC++ judge's corner errors over reorderings of the same matches (--judge-spread).
+struct JudgeSpread {
+  double min = 0.0, median = 0.0, max = 0.0;
+};
+
+/// The MAGSAC++ judge of judge_errors() on `orderings` random orderings of `matches` (std::mt19937
+/// seeded with `seed`): cv::findHomography's sampling depends on the order of its points, so this
+/// is how far the judge moves on one set of matches, the range within which the own model and the
+/// judge cannot be told apart.
+JudgeSpread judge_spread(PointPairs matches, const affine_orb::bench::ViewpointPair& pair, cv::Size size1,
+                         cv::Size size2, int orderings, unsigned seed) {
+  std::mt19937 random(seed);
+  std::vector<double> errors;
+  for (int k = 0; k < orderings && matches.size() >= 4; ++k) {
+    std::shuffle(matches.begin(), matches.end(), random);
+    std::vector<cv::Point2f> p1, p2;
+    for (const auto& [a, b] : matches) {
+      p1.push_back(a);
+      p2.push_back(b);
+    }
+    errors.push_back(pair_error(cv::findHomography(p1, p2, cv::USAC_MAGSAC, 3.0, cv::noArray(), 10000, 0.999), pair,
+                                size1, size2));
+  }
+  if (errors.empty()) return {1e9, 1e9, 1e9};
+  std::sort(errors.begin(), errors.end());
+  return {errors.front(), errors[errors.size() / 2], errors.back()};
+}
+
 struct Row {
   std::string pair;
   std::string subset;
@@ -280,6 +312,7 @@ struct Row {
   affine_orb::bench::CorrectMatches correct;
   std::size_t matches = 0;
   Outcome outcome;
+  std::optional<JudgeSpread> spread;  ///< --judge-spread, matcher methods only
 };
 
 /// One cached peer row, tab-separated: pair, method, keypoints1, keypoints2, matches, correct,
@@ -431,6 +464,46 @@ void verification_table(const std::vector<Method>& methods, const std::vector<Ro
   md << "\n";
 }
 
+/// --judge-spread: per matcher method, over the pairs where the own model or the judge's median
+/// is within 10 px (the range of AUC@10), how the own model's corner error lies against the MAGSAC++ judge's over
+/// reorderings of the returned matches (judge_spread()), and the median width of that range; then
+/// each such pair whose own error is more than 0.5 px above the judge's median.
+void spread_tables(const std::vector<Method>& methods, const std::vector<Row>& rows, int orderings,
+                   std::ostringstream& md) {
+  const auto counted = [](const Row& r) { return r.spread && std::min(r.own_corner_error, r.spread->median) <= 10.0; };
+  md << "| method | pairs, own or judge ≤ 10 px | own > judge's median + 0.5 px | own above the judge's range | "
+        "own below it | judge's range, median width px |\n|---|---:|---:|---:|---:|---:|\n";
+  for (const Method& m : methods) {
+    if (!m.matcher) continue;
+    int pairs = 0, behind = 0, above = 0, below = 0;
+    std::vector<double> widths;
+    for (const Row& r : rows) {
+      if (r.method != m.name || !counted(r)) continue;
+      ++pairs;
+      behind += r.own_corner_error > r.spread->median + 0.5;
+      above += r.own_corner_error > r.spread->max;
+      below += r.own_corner_error < r.spread->min;
+      widths.push_back(r.spread->max - r.spread->min);
+    }
+    if (pairs == 0) continue;
+    std::nth_element(widths.begin(), widths.begin() + static_cast<std::ptrdiff_t>(widths.size() / 2), widths.end());
+    char cells[160];
+    std::snprintf(cells, sizeof(cells), " %d | %d | %d | %d | %.2f |\n", pairs, behind, above, below,
+                  widths[widths.size() / 2]);
+    md << "| " << m.name << " |" << cells;
+  }
+  md << "\n| method | pair | own px | judge's median px | judge's range px (" << orderings
+     << " orderings) |\n|---|---|---:|---:|---|\n";
+  for (const Row& r : rows) {
+    if (!counted(r) || r.own_corner_error <= r.spread->median + 0.5) continue;
+    char cells[160];
+    std::snprintf(cells, sizeof(cells), " %.2f | %.2f | %.2f–%.2f |\n", std::min(r.own_corner_error, 9999.0),
+                  r.spread->median, r.spread->min, std::min(r.spread->max, 9999.0));
+    md << "| " << r.method << " | " << r.pair << " |" << cells;
+  }
+  md << "\n";
+}
+
 /// --origins: per matcher method and subset, the returned matches within 3 px of the ground truth
 /// by the stage that extracted the later of their two keypoints (0: both the images' own), summed
 /// over the subset's pairs: which stage finds the correct matches.
@@ -493,6 +566,7 @@ int main(int argc, char** argv) {
   bool placement = false;
   bool origins = false;
   int repeats = 1;
+  int spread_orderings = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     const bool has_value = i + 1 < argc;
@@ -512,6 +586,8 @@ int main(int argc, char** argv) {
       method_filter = argv[++i];
     } else if (flag == "--repeats" && has_value && std::atoi(argv[i + 1]) >= 1) {
       repeats = std::atoi(argv[++i]);
+    } else if (flag == "--judge-spread" && has_value && std::atoi(argv[i + 1]) >= 1) {
+      spread_orderings = std::atoi(argv[++i]);
     } else if (flag == "--peer-cache" && has_value) {
       cache_path = argv[++i];
     } else if (flag == "--asift-sequences" && has_value) {
@@ -521,7 +597,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b] "
                    "[--methods SUBSTRING,...] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement] "
-                   "[--origins] [--repeats N]\n");
+                   "[--origins] [--repeats N] [--judge-spread N]\n");
       return 2;
     }
   }
@@ -715,6 +791,10 @@ int main(int argc, char** argv) {
         row.own_corner_error =
             row.outcome.homography_found ? pair_error(cv::Mat(row.outcome.homography), pair, a.size(), b.size()) : 1e9;
         row.solved = row.corner_error <= affine_orb::bench::kSolvedCornerError;
+        if (method.matcher && spread_orderings > 0) {
+          row.spread = judge_spread(row.outcome.matches, pair, a.size(), b.size(), spread_orderings,
+                                    static_cast<unsigned>(index + 1));
+        }
         if (method.peer && cache_out.is_open()) cache_out << cache_line(row) << std::flush;
       }
       row.subset = pair.subset;
@@ -776,6 +856,7 @@ int main(int argc, char** argv) {
   auc_tables(methods, rows, subset_names, md);
   verification_table(methods, rows, md);
   if (origins) origin_table(methods, rows, pairs, subset_names, md);
+  if (spread_orderings > 0) spread_tables(methods, rows, spread_orderings, md);
 
   // Per method: pairs solved; total time over all pairs and over the pairs plain 2000 solves,
   // against plain 2000 and the affine default in the same run; pairs verified with a wrong model.

@@ -13,6 +13,8 @@
 
 #include <cstring>
 #include <memory>
+#include <mutex>
+#include <tuple>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -108,7 +110,9 @@ std::vector<cv::Point2f> point_list(const py::handle& object, const char* what) 
   return points;
 }
 
-/// The Python Extractor: an affine_orb::Extractor of either descriptor.
+/// The Python Extractor: an affine_orb::Extractor of either descriptor. A mutex makes calls from
+/// several Python threads take turns (the C++ extractor is not for two threads at once); it is
+/// taken with the GIL released.
 class PyExtractor {
  public:
   PyExtractor(const affine_orb::ExtractorOptions& options, const std::string& descriptor) {
@@ -138,6 +142,7 @@ class PyExtractor {
           Result features;
           {
             py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);
             features = extractor.extract(frame, mask_mat);
           }
           py::array_t<int> views(static_cast<py::ssize_t>(features.views.size()));
@@ -162,6 +167,7 @@ class PyExtractor {
   std::variant<affine_orb::Extractor<affine_orb::Rbrief>, affine_orb::Extractor<affine_orb::Brisk>> extractor_{
       std::in_place_index<0>};
   affine_orb::ExtractorOptions options_;
+  std::mutex mutex_;
 };
 
 /// The enum value named by `text` among two, or ValueError naming the argument and both choices.
@@ -217,15 +223,9 @@ py::array_t<bool> flag_array(const std::vector<std::uint8_t>& v) {
   return out;
 }
 
-/// match_images() for one descriptor: the C++ TwoViewMatcher, its result as Python objects.
-template <class Descriptor>
-py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const cv::Mat& mask1, const cv::Mat& mask2,
-                           const affine_orb::TwoViewOptions& options) {
-  affine_orb::TwoViewResult<Descriptor::kBits> r;
-  {
-    py::gil_scoped_release release;
-    r = affine_orb::TwoViewMatcher<Descriptor>(options).match(image1, image2, mask1, mask2);
-  }
+/// A TwoViewMatcher's result as the Python dict of TwoViewMatcher.match().
+template <int kBits>
+py::dict result_dict(const affine_orb::TwoViewResult<kBits>& r) {
   const auto views = [](const std::vector<int>& v) {
     py::array_t<int> out(static_cast<py::ssize_t>(v.size()));
     if (!v.empty()) std::memcpy(out.mutable_data(), v.data(), v.size() * sizeof(int));
@@ -279,6 +279,105 @@ py::dict match_images_with(const cv::Mat& image1, const cv::Mat& image2, const c
   out["stages"] = stages;
   return out;
 }
+
+/// The TwoViewOptions of the Python matcher's arguments (two_view_arguments()); ValueError for an
+/// invalid value.
+affine_orb::TwoViewOptions two_view_options(int features, double max_tilt,
+                                            const std::optional<std::vector<std::pair<double, double>>>& stages,
+                                            int min_inliers, std::optional<double> max_false_alarms,
+                                            std::optional<double> min_inlier_ratio, int guided_rounds,
+                                            std::optional<double> max_half_disagreement, bool align_correspondences,
+                                            bool final_fit, bool last_stage_search, bool progressive_sampling,
+                                            bool all_stages, const std::string& spreading, int threads) {
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = features;
+  options.extractor.views.max_tilt = max_tilt;
+  options.extractor.threads = threads;
+  options.extractor.spreading = one_of(spreading, "spreading", "quadtree", affine_orb::Spreading::kQuadtree,
+                                       "strongest", affine_orb::Spreading::kStrongest);
+  if (stages) {
+    options.stages.clear();
+    for (const auto& [tilt, view_features] : *stages) options.stages.push_back({tilt, view_features});
+  } else {
+    options.stages = affine_orb::stages_up_to(options.extractor.views);
+  }
+  options.min_inliers = min_inliers;
+  options.max_false_alarms = max_false_alarms;
+  options.min_inlier_ratio = min_inlier_ratio;
+  if (guided_rounds == 0) {
+    options.guided_matching.reset();
+  } else {
+    options.guided_matching->rounds = guided_rounds;
+  }
+  options.max_half_disagreement = max_half_disagreement;
+  if (align_correspondences) options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
+  if (!final_fit) options.final_fit.reset();
+  if (last_stage_search) options.last_stage_search = affine_orb::LastStageSearchOptions{};
+  options.model.ransac.progressive_sampling = progressive_sampling;
+  options.all_stages = all_stages;
+  options.check();
+  return options;
+}
+
+/// The keyword arguments of TwoViewMatcher() and match_images() with their defaults, in
+/// two_view_options()'s order with `descriptor` before `spreading`: one list for both.
+auto two_view_arguments() {
+  const affine_orb::TwoViewOptions d;
+  return std::make_tuple(
+      py::arg("features") = d.extractor.features, py::arg("max_tilt") = d.extractor.views.max_tilt,
+      py::arg("stages") = py::none(), py::arg("min_inliers") = d.min_inliers,
+      py::arg("max_false_alarms") = d.max_false_alarms, py::arg("min_inlier_ratio") = d.min_inlier_ratio,
+      py::arg("guided_rounds") = d.guided_matching->rounds, py::arg("max_half_disagreement") = d.max_half_disagreement,
+      py::arg("align_correspondences") = false, py::arg("final_fit") = d.final_fit.has_value(),
+      py::arg("last_stage_search") = d.last_stage_search.has_value(),
+      py::arg("progressive_sampling") = d.model.ransac.progressive_sampling, py::arg("all_stages") = d.all_stages,
+      py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest", py::arg("threads") = d.extractor.threads);
+}
+
+/// The Python TwoViewMatcher: an affine_orb::TwoViewMatcher of either descriptor, which keeps its
+/// extractors' buffers from call to call. A mutex makes calls from several Python threads take
+/// turns (the C++ matcher is not for two threads at once); it is taken with the GIL released.
+class PyTwoViewMatcher {
+ public:
+  PyTwoViewMatcher(const affine_orb::TwoViewOptions& options, const std::string& descriptor) {
+    if (descriptor == "rbrief") {
+      matcher_.emplace<affine_orb::TwoViewMatcher<affine_orb::Rbrief>>(options);
+    } else if (descriptor == "brisk") {
+      matcher_.emplace<affine_orb::TwoViewMatcher<affine_orb::Brisk>>(options);
+    } else {
+      throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
+    }
+  }
+
+  py::dict match(const py::handle& image1, const py::handle& image2, const py::handle& mask1,
+                 const py::handle& mask2) {
+    py::array_t<std::uint8_t> s1, s2, s3, s4;
+    const cv::Mat a = as_gray(image1, "image1", s1);
+    const cv::Mat b = as_gray(image2, "image2", s2);
+    const cv::Mat ma = mask1.is_none() ? cv::Mat() : as_gray(mask1, "mask1", s3);
+    const cv::Mat mb = mask2.is_none() ? cv::Mat() : as_gray(mask2, "mask2", s4);
+    return std::visit(
+        [&](auto& matcher) {
+          decltype(matcher.match(a, b, ma, mb)) r;
+          {
+            py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);
+            r = matcher.match(a, b, ma, mb);
+          }
+          return result_dict(r);
+        },
+        matcher_);
+  }
+
+  int descriptor_size() const {
+    return std::holds_alternative<affine_orb::TwoViewMatcher<affine_orb::Rbrief>>(matcher_) ? 32 : 64;
+  }
+
+ private:
+  std::variant<affine_orb::TwoViewMatcher<affine_orb::Rbrief>, affine_orb::TwoViewMatcher<affine_orb::Brisk>>
+      matcher_{std::in_place_index<0>};
+  std::mutex mutex_;
+};
 
 }  // namespace
 
@@ -406,63 +505,7 @@ PYBIND11_MODULE(affine_orb, m) {
       "\"score_ratio\" (eq. 22), \"gric\" or \"inlier_ratio\" (affine_orb::SelectionRule). octaves1, "
       "octaves2: the keypoints' pyramid octaves (cv2.KeyPoint.octave), which scale each point's sigma by "
       "1.2^octave; both or neither.");
-  const affine_orb::TwoViewOptions two_view;
-  m.def(
-      "match_images",
-      [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
-         const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers,
-         std::optional<double> max_false_alarms, std::optional<double> min_inlier_ratio, int guided_rounds,
-         std::optional<double> max_half_disagreement, bool align_correspondences, bool final_fit,
-         bool last_stage_search, bool progressive_sampling, bool all_stages, const std::string& descriptor,
-         const std::string& spreading, int threads, const py::handle& mask1, const py::handle& mask2) {
-        affine_orb::TwoViewOptions options;
-        options.extractor.features = features;
-        options.extractor.views.max_tilt = max_tilt;
-        options.extractor.threads = threads;
-        options.extractor.spreading = one_of(spreading, "spreading", "quadtree", affine_orb::Spreading::kQuadtree,
-                                             "strongest", affine_orb::Spreading::kStrongest);
-        if (stages) {
-          options.stages.clear();
-          for (const auto& [tilt, view_features] : *stages) options.stages.push_back({tilt, view_features});
-        } else {
-          options.stages = affine_orb::stages_up_to(options.extractor.views);
-        }
-        options.min_inliers = min_inliers;
-        options.max_false_alarms = max_false_alarms;
-        options.min_inlier_ratio = min_inlier_ratio;
-        if (guided_rounds == 0) {
-          options.guided_matching.reset();
-        } else {
-          options.guided_matching->rounds = guided_rounds;
-        }
-        options.max_half_disagreement = max_half_disagreement;
-        if (align_correspondences) options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
-        if (!final_fit) options.final_fit.reset();
-        if (last_stage_search) options.last_stage_search = affine_orb::LastStageSearchOptions{};
-        options.model.ransac.progressive_sampling = progressive_sampling;
-        options.all_stages = all_stages;
-        options.check();
-        py::array_t<std::uint8_t> s1, s2, s3, s4;
-        const cv::Mat a = as_gray(image1, "image1", s1);
-        const cv::Mat b = as_gray(image2, "image2", s2);
-        const cv::Mat ma = mask1.is_none() ? cv::Mat() : as_gray(mask1, "mask1", s3);
-        const cv::Mat mb = mask2.is_none() ? cv::Mat() : as_gray(mask2, "mask2", s4);
-        if (descriptor == "rbrief") return match_images_with<affine_orb::Rbrief>(a, b, ma, mb, options);
-        if (descriptor == "brisk") return match_images_with<affine_orb::Brisk>(a, b, ma, mb, options);
-        throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
-      },
-      py::arg("image1"), py::arg("image2"), py::arg("features") = two_view.extractor.features,
-      py::arg("max_tilt") = two_view.extractor.views.max_tilt, py::arg("stages") = py::none(),
-      py::arg("min_inliers") = two_view.min_inliers, py::arg("max_false_alarms") = two_view.max_false_alarms,
-      py::arg("min_inlier_ratio") = two_view.min_inlier_ratio,
-      py::arg("guided_rounds") = two_view.guided_matching->rounds,
-      py::arg("max_half_disagreement") = two_view.max_half_disagreement, py::arg("align_correspondences") = false,
-      py::arg("final_fit") = two_view.final_fit.has_value(),
-      py::arg("last_stage_search") = two_view.last_stage_search.has_value(),
-      py::arg("progressive_sampling") = two_view.model.ransac.progressive_sampling,
-      py::arg("all_stages") = two_view.all_stages, py::arg("descriptor") = "rbrief", py::arg("spreading") = "strongest",
-      py::arg("threads") = two_view.extractor.threads, py::arg("mask1") = py::none(), py::arg("mask2") = py::none(),
-      "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
+  const std::string options_doc = "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
       "`features` keypoints; while the pair is not verified, each stage (max_tilt, view_features) adds the views of "
       "tilts up to max_tilt with view_features x features keypoints per image, and matching and H/F selection run "
       "again. stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
@@ -481,8 +524,8 @@ PYBIND11_MODULE(affine_orb, m) {
       "model lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose homography "
       "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
       "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
-      "matches are a few percent. "
-      "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
+      "matches are a few percent. ";
+  const std::string result_doc = "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
       "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image 2's "
       "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model "
@@ -490,5 +533,59 @@ PYBIND11_MODULE(affine_orb, m) {
       "or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement "
       "(pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned (matches aligned), "
       "last_stage_search (the model is the last stage's search's), milliseconds). Invalid options raise "
-      "ValueError, wrong types TypeError.");
+      "ValueError, wrong types TypeError.";
+  auto matcher_class = py::class_<PyTwoViewMatcher>(
+      m, "TwoViewMatcher",
+      "Two-view matcher (affine_orb::TwoViewMatcher) that keeps its buffers from call to call: build one and "
+      "call match() on many pairs. match_images(image1, image2, **options) is TwoViewMatcher(**options)"
+      ".match(image1, image2).");
+  std::apply(
+      [&](auto... arguments) {
+        matcher_class.def(py::init([](int features, double max_tilt,
+                                      const std::optional<std::vector<std::pair<double, double>>>& stages,
+                                      int min_inliers, std::optional<double> max_false_alarms,
+                                      std::optional<double> min_inlier_ratio, int guided_rounds,
+                                      std::optional<double> max_half_disagreement, bool align_correspondences,
+                                      bool final_fit, bool last_stage_search, bool progressive_sampling,
+                                      bool all_stages, const std::string& descriptor,
+                                      const std::string& spreading, int threads) {
+                            return std::make_unique<PyTwoViewMatcher>(
+                                two_view_options(features, max_tilt, stages, min_inliers, max_false_alarms,
+                                                 min_inlier_ratio, guided_rounds, max_half_disagreement,
+                                                 align_correspondences, final_fit, last_stage_search,
+                                                 progressive_sampling, all_stages, spreading, threads),
+                                descriptor);
+                          }),
+                          arguments..., options_doc.c_str());
+      },
+      two_view_arguments());
+  matcher_class
+      .def("match", &PyTwoViewMatcher::match, py::arg("image1"), py::arg("image2"), py::arg("mask1") = py::none(),
+           py::arg("mask2") = py::none(),
+           ("Matches two 2-D uint8 grey images (any sizes); mask1, mask2: None or a 2-D uint8 array of their "
+            "image's size (non-zero = allowed). " + result_doc).c_str())
+      .def_property_readonly("descriptor_size", &PyTwoViewMatcher::descriptor_size, "Bytes per descriptor row.");
+  std::apply(
+      [&](auto... arguments) {
+        m.def(
+            "match_images",
+            [](const py::handle& image1, const py::handle& image2, int features, double max_tilt,
+               const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers,
+               std::optional<double> max_false_alarms, std::optional<double> min_inlier_ratio, int guided_rounds,
+               std::optional<double> max_half_disagreement, bool align_correspondences, bool final_fit,
+               bool last_stage_search, bool progressive_sampling, bool all_stages, const std::string& descriptor,
+               const std::string& spreading, int threads, const py::handle& mask1, const py::handle& mask2) {
+              PyTwoViewMatcher matcher(
+                  two_view_options(features, max_tilt, stages, min_inliers, max_false_alarms, min_inlier_ratio,
+                                   guided_rounds, max_half_disagreement, align_correspondences, final_fit,
+                                   last_stage_search, progressive_sampling, all_stages, spreading, threads),
+                  descriptor);
+              return matcher.match(image1, image2, mask1, mask2);
+            },
+            py::arg("image1"), py::arg("image2"), arguments..., py::arg("mask1") = py::none(),
+            py::arg("mask2") = py::none(),
+            (options_doc + " Builds a TwoViewMatcher for the one pair: to match many pairs, build a TwoViewMatcher "
+                           "once and call its match(). " + result_doc).c_str());
+      },
+      two_view_arguments());
 }

@@ -91,6 +91,22 @@ def cpp_match(path1, path2, features, min_inliers):
     return stage, verified, features(blocks[0]), features(blocks[1]), matches
 
 
+def assert_equals_cpp_match(r, cpp):
+    """Asserts that match_images()'s or TwoViewMatcher.match()'s dict `r` holds cpp_match()'s stage,
+    keypoints, descriptors, matches and inlier flags; returns the stage."""
+    stage, verified, (numbers1, want1), (numbers2, want2), matches = cpp
+    assert (r["stage"], r["verified"]) == (stage, verified)
+    assert len(r["stages"]) == stage + 1
+    for keypoints, views, descriptors, numbers, want in ((r["keypoints1"], r["views1"], r["descriptors1"], numbers1, want1),
+                                                         (r["keypoints2"], r["views2"], r["descriptors2"], numbers2, want2)):
+        got = np.array([[k.pt[0], k.pt[1], k.size, k.angle, k.response, k.octave, v] for k, v in zip(keypoints, views)])
+        assert np.array_equal(got.astype(np.float32), numbers.astype(np.float32))
+        assert np.array_equal(descriptors, want)
+    got = np.array([[m.queryIdx, m.trainIdx, int(m.distance), int(i)] for m, i in zip(r["matches"], r["inliers"])])
+    assert np.array_equal(got, matches)
+    return stage
+
+
 @pytest.mark.skipif(PROBE is None, reason="needs the C++ probe (run through ctest)")
 @pytest.mark.parametrize("pair,min_inliers", [(3, 15), pytest.param(5, 15, marks=pytest.mark.data), (3, 1000)])
 def test_match_images_equals_the_cpp_matcher(pair, min_inliers):
@@ -99,22 +115,63 @@ def test_match_images_equals_the_cpp_matcher(pair, min_inliers):
     unreachable min_inliers (every stage runs)."""
     path1 = GRAF1
     path2 = GRAF3 if pair == 3 else os.path.join(DATA, "oxford", "graf", "img%d.png" % pair)
-    stage, verified, (numbers1, want1), (numbers2, want2), matches = cpp_match(path1, path2, 1000, min_inliers)
     r = affine_orb.match_images(cv2.imread(path1, cv2.IMREAD_GRAYSCALE), cv2.imread(path2, cv2.IMREAD_GRAYSCALE),
                                 features=1000, min_inliers=min_inliers)
-    assert (r["stage"], r["verified"]) == (stage, verified)
-    assert len(r["stages"]) == stage + 1
+    stage = assert_equals_cpp_match(r, cpp_match(path1, path2, 1000, min_inliers))
     if min_inliers == 1000:
-        assert stage == len(r["stages"]) - 1 == 2 and not verified
-    for keypoints, views, descriptors, numbers, want in ((r["keypoints1"], r["views1"], r["descriptors1"], numbers1, want1),
-                                                         (r["keypoints2"], r["views2"], r["descriptors2"], numbers2, want2)):
-        got = np.array([[k.pt[0], k.pt[1], k.size, k.angle, k.response, k.octave, v] for k, v in zip(keypoints, views)])
-        assert np.array_equal(got.astype(np.float32), numbers.astype(np.float32))
-        assert np.array_equal(descriptors, want)
-    got = np.array([[m.queryIdx, m.trainIdx, int(m.distance), int(i)] for m, i in zip(r["matches"], r["inliers"])])
-    assert np.array_equal(got, matches)
+        assert stage == len(r["stages"]) - 1 == 2 and not r["verified"]
     assert r["model"] in ("homography", "fundamental")
     assert r["homography"].shape == (3, 3)
+
+
+@pytest.mark.skipif(PROBE is None, reason="needs the C++ probe (run through ctest)")
+def test_two_view_matcher_reused_on_pairs_of_other_sizes_equals_the_cpp_matcher():
+    """One TwoViewMatcher, which keeps its buffers from call to call, on graf 1->3, then a pair whose
+    image 1 is another photo of another size, then graf 1->3 again: each result is a fresh C++
+    TwoViewMatcher's on that pair."""
+    matcher = affine_orb.TwoViewMatcher(features=1000)
+    assert matcher.descriptor_size == 32 and grey(PHOTO).shape != grey(GRAF1).shape
+    for path1, path2 in ((GRAF1, GRAF3), (PHOTO, GRAF3), (GRAF1, GRAF3)):
+        r = matcher.match(grey(path1), grey(path2))
+        assert_equals_cpp_match(r, cpp_match(path1, path2, 1000, 15))
+
+
+def test_two_view_matcher_from_several_threads_gives_the_serial_results():
+    """Calls on one TwoViewMatcher from three Python threads at once take turns: each gets what
+    match_images() gives for its pair."""
+    pairs = [(grey(GRAF1), grey(GRAF3)), (grey(PHOTO), grey(GRAF3)), (grey(GRAF3), grey(GRAF1))]
+    want = [affine_orb.match_images(a, b, features=600) for a, b in pairs]
+    matcher = affine_orb.TwoViewMatcher(features=600)
+    got = [None] * len(pairs)
+
+    def work(i):
+        got[i] = matcher.match(*pairs[i])
+
+    workers = [threading.Thread(target=work, args=(i,)) for i in range(len(pairs))]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    for r, w in zip(got, want):
+        assert [(m.queryIdx, m.trainIdx) for m in r["matches"]] == [(m.queryIdx, m.trainIdx) for m in w["matches"]]
+        assert np.array_equal(r["descriptors1"], w["descriptors1"]) and np.array_equal(r["inliers"], w["inliers"])
+        assert np.array_equal(r["homography"], w["homography"])
+
+
+def test_two_view_matcher_refuses_bad_input():
+    image = np.zeros((64, 64), np.uint8)
+    with pytest.raises(ValueError):
+        affine_orb.TwoViewMatcher(descriptor="sift")
+    with pytest.raises(ValueError):
+        affine_orb.TwoViewMatcher(min_inliers=3)
+    matcher = affine_orb.TwoViewMatcher(descriptor="brisk")
+    assert matcher.descriptor_size == 64
+    with pytest.raises(TypeError):
+        matcher.match(image.astype(np.float32), image)
+    with pytest.raises(ValueError):
+        matcher.match(image, image, mask2=np.zeros((3, 3), np.uint8))
+    r = matcher.match(image, image)  # a flat image: no keypoints, documented empty result
+    assert not r["verified"] and r["matches"] == [] and r["model"] == "none"
 
 
 @pytest.mark.data
@@ -348,19 +405,21 @@ def test_threads_give_identical_output_and_run_concurrently():
         other = affine_orb.Extractor(features=600, threads=threads).extract(image)
         assert [k.pt for k in other[0]] == [k.pt for k in reference[0]]
         assert np.array_equal(other[1], reference[1]) and np.array_equal(other[2], reference[2])
-    # Two Python threads, one Extractor each (the GIL is released while they work).
-    results = [None, None]
+    # Two Python threads with one Extractor each (the GIL is released while they work), then three
+    # sharing one Extractor, whose calls take turns.
+    shared = affine_orb.Extractor(features=600)
+    results = [None] * 5
 
     def work(i):
-        results[i] = affine_orb.Extractor(features=600).extract(image)
+        results[i] = (affine_orb.Extractor(features=600) if i < 2 else shared).extract(image)
 
-    workers = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    workers = [threading.Thread(target=work, args=(i,)) for i in range(5)]
     for w in workers:
         w.start()
     for w in workers:
         w.join()
     for r in results:
-        assert np.array_equal(r[1], reference[1])
+        assert np.array_equal(r[1], reference[1]) and np.array_equal(r[2], reference[2])
 
 
 def test_cv2_interop_and_matching_graf():

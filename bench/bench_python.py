@@ -7,7 +7,11 @@ For graf1 and KITTI 06 frame 10 cut to 640x480 (as bench_affine_speed does), wit
 options (18 views) and plain (max_tilt 1): the median time of Extractor.detect_and_compute() in
 Python (keypoints converted to cv2.KeyPoint, descriptors to a numpy array) against the median
 time of Extractor::extract() in C++ (the probe program affine_orb_python_probe, same options,
-same image file), interleaved round by round."""
+same image file), interleaved round by round.
+
+Then, for the two-view matcher with its defaults on graf 1->3 (verified at stage 0) and EVD girl
+(every stage runs): the median time of match_images(), which builds a matcher per call, against
+TwoViewMatcher.match() on one matcher built before, interleaved call by call."""
 import argparse
 import os
 import statistics
@@ -65,6 +69,30 @@ def main():
                     py.append(statistics.median(times))
                 c, p = statistics.median(cpp), statistics.median(py)
                 print("| %s | %s | %.2f | %.2f | %.3f |" % (name, label, c, p, p / c))
+    two_view_table(args.rounds * args.repeat)
+
+
+def two_view_table(calls):
+    """match_images() against a reused TwoViewMatcher.match(), `calls` interleaved calls each."""
+    pairs = {"graf 1->3": ("oxford/graf/img1.png", "oxford/graf/img3.png"),
+             "EVD girl": ("pairs/evd/girl/1.png", "pairs/evd/girl/2.png")}
+    print("\n| pair | match_images() ms | TwoViewMatcher.match() ms | ratio |\n|---|---:|---:|---:|")
+    for name, (path1, path2) in pairs.items():
+        image1, image2 = (cv2.imread(os.path.join(DATA, p), cv2.IMREAD_GRAYSCALE) for p in (path1, path2))
+        if image1 is None or image2 is None:
+            raise SystemExit("cannot read the %s pair under %s" % (name, DATA))
+        matcher = affine_orb.TwoViewMatcher()
+        matcher.match(image1, image2)
+        once, reused = [], []
+        for _ in range(calls):
+            start = time.perf_counter()
+            affine_orb.match_images(image1, image2)
+            once.append((time.perf_counter() - start) * 1000.0)
+            start = time.perf_counter()
+            matcher.match(image1, image2)
+            reused.append((time.perf_counter() - start) * 1000.0)
+        a, b = statistics.median(once), statistics.median(reused)
+        print("| %s | %.1f | %.1f | %.3f |" % (name, a, b, b / a))
 
 
 if __name__ == "__main__":

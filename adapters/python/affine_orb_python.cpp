@@ -110,20 +110,27 @@ std::vector<cv::Point2f> point_list(const py::handle& object, const char* what) 
   return points;
 }
 
+/// Emplaces into `holder`, a std::variant of a class template over Rbrief (index 0) and Brisk (index
+/// 1), the alternative that `descriptor` names ("rbrief" or "brisk"), built from `options`;
+/// ValueError for another name.
+template <class Variant, class Options>
+void emplace_descriptor(Variant& holder, const std::string& descriptor, const Options& options) {
+  if (descriptor == "rbrief") {
+    holder.template emplace<0>(options);
+  } else if (descriptor == "brisk") {
+    holder.template emplace<1>(options);
+  } else {
+    throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
+  }
+}
+
 /// The Python Extractor: an affine_orb::Extractor of either descriptor. A mutex makes calls from
 /// several Python threads take turns (the C++ extractor is not for two threads at once); it is
 /// taken with the GIL released.
 class PyExtractor {
  public:
-  PyExtractor(const affine_orb::ExtractorOptions& options, const std::string& descriptor) {
-    if (descriptor == "rbrief") {
-      extractor_.emplace<affine_orb::Extractor<affine_orb::Rbrief>>(options);
-    } else if (descriptor == "brisk") {
-      extractor_.emplace<affine_orb::Extractor<affine_orb::Brisk>>(options);
-    } else {
-      throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
-    }
-    options_ = options;
+  PyExtractor(const affine_orb::ExtractorOptions& options, const std::string& descriptor) : options_(options) {
+    emplace_descriptor(extractor_, descriptor, options);
   }
 
   /// (keypoints, descriptors, views).
@@ -340,13 +347,7 @@ auto two_view_arguments() {
 class PyTwoViewMatcher {
  public:
   PyTwoViewMatcher(const affine_orb::TwoViewOptions& options, const std::string& descriptor) {
-    if (descriptor == "rbrief") {
-      matcher_.emplace<affine_orb::TwoViewMatcher<affine_orb::Rbrief>>(options);
-    } else if (descriptor == "brisk") {
-      matcher_.emplace<affine_orb::TwoViewMatcher<affine_orb::Brisk>>(options);
-    } else {
-      throw py::value_error("descriptor must be \"rbrief\" or \"brisk\", got \"" + descriptor + "\"");
-    }
+    emplace_descriptor(matcher_, descriptor, options);
   }
 
   py::dict match(const py::handle& image1, const py::handle& image2, const py::handle& mask1,

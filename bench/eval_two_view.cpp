@@ -20,7 +20,8 @@
 // and without sub-pixel keypoints; with stages to tilt 4√2; with the precision test
 // max_half_disagreement at 5 px and off; without guided matching, with and without the
 // precision test; without the final fit of the homography (TwoViewOptions::final_fit), with and
-// without guided matching), cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
+// without guided matching; with min_inliers 15 and without the last stage's search, the matcher
+// before those defaults), cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
 // 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
 // unless --asift-sequences says otherwise: its float matching takes minutes a pair). Every method
 // but the matcher is verified by select_model() with the matcher's ModelSelectionOptions, so the
@@ -646,6 +647,12 @@ int main(int argc, char** argv) {
                      : std::nullopt;
     return o;
   };
+  // The matcher before min_inliers 12 and the last stage's search: 15 inliers, no search.
+  const auto before_search = [](affine_orb::TwoViewOptions o) {
+    o.min_inliers = 15;
+    o.last_stage_search.reset();
+    return o;
+  };
   // The default stages and two more to extreme tilts (4 and 4√2, as MODS and ASIFT's maxTilt 5),
   // run only while the pair is not verified.
   affine_orb::TwoViewOptions extreme = defaults;
@@ -672,6 +679,7 @@ int main(int argc, char** argv) {
       two_view("ours views on demand, no guided matching, no precision test", precise(unguided(defaults), std::nullopt)),
       two_view("ours views on demand, no final fit", final_fit(defaults, false)),
       two_view("ours views on demand, no guided matching, no final fit", final_fit(unguided(defaults), false)),
+      two_view("ours views on demand, min_inliers 15, no last-stage search", before_search(defaults)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),
       peer("cv::SIFT", cv::SIFT::create(), model),
@@ -695,7 +703,13 @@ int main(int argc, char** argv) {
       o.extractor.views.max_tilt = 4.0;
       o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}, {4.0, 0.5}};
     });
-    for (int n : {10, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
+    for (int n : {8, 10, 15, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
+    for (int n : {8, 10, 12, 15}) {
+      variant("min_inliers " + std::to_string(n) + ", no last-stage search", [n](auto& o) {
+        o.min_inliers = n;
+        o.last_stage_search.reset();
+      });
+    }
     for (double r : {0.05, 0.1, 0.2}) {
       variant("min_inlier_ratio " + std::to_string(r).substr(0, 4) + ", no false-alarm test", [r](auto& o) {
         o.min_inlier_ratio = r;
@@ -732,10 +746,6 @@ int main(int argc, char** argv) {
         o.last_stage_search->sigma = sigma;
       });
     }
-    variant("stages to 5.66, last-stage search", [&extreme](auto& o) {
-      o = extreme;
-      o.last_stage_search = affine_orb::LastStageSearchOptions{};
-    });
     variant("plain 1000 first", [](auto& o) {
       o.extractor.features = 1000;
       o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}};
@@ -916,7 +926,7 @@ int main(int argc, char** argv) {
      << "|---|---|---:|---:|---:|---:|---:|---|---:|---:|\n";
   std::ofstream csv(out_dir + "/eval_two_view.csv");
   csv << "pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,corner_error,own_corner_error,solved,"
-         "stage,verified,ms,magsac_corner_error,pair_index\n";
+         "stage,verified,ms,magsac_corner_error,pair_index,judge_spread_min,judge_spread_median,judge_spread_max\n";
   for (const Row& r : rows) {
     char line[512];
     std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f / %.1f | %s | %s | %.0f |\n",
@@ -926,11 +936,19 @@ int main(int argc, char** argv) {
                   r.solved ? "yes" : "no", r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "",
                   r.outcome.ms);
     md << line;
-    std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f,%.2f,%zu\n", r.pair.c_str(),
+    std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f,%.2f,%zu,", r.pair.c_str(),
                   r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches, r.correct.correct,
                   r.correct.distinct, std::min(r.corner_error, 1e6), std::min(r.own_corner_error, 1e6), r.solved,
                   r.outcome.stage, r.outcome.verified, r.outcome.ms, std::min(r.magsac_error, 1e6), r.index);
     csv << line;
+    if (r.spread) {
+      std::snprintf(line, sizeof(line), "%.2f,%.2f,%.2f", std::min(r.spread->min, 1e6), std::min(r.spread->median, 1e6),
+                    std::min(r.spread->max, 1e6));
+      csv << line;
+    } else {
+      csv << ",,";
+    }
+    csv << '\n';
   }
   std::ofstream(out_dir + "/eval_two_view.md") << md.str();
   std::fputs(md.str().c_str(), stdout);

@@ -1,6 +1,6 @@
 // affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]
 //                  [--features N] [--threads K] [--spreading strongest|quadtree] [--all-stages]
-//                  [--min-inliers N] [--last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]
+//                  [--min-inliers N] [--no-last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]
 //                  [--save-matches FILE] [--json]
 //
 // Matches two images with views on demand (TwoViewMatcher, two_view.hpp): plain Affine-ORB
@@ -52,7 +52,7 @@ std::string usage() {
   const affine_orb::ExtractorOptions one_shot;
   return "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
          "                        [--features N] [--threads K] [--spreading S] [--all-stages] [--min-inliers N]\n"
-         "                        [--last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]\n"
+         "                        [--no-last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]\n"
          "                        [--save-matches FILE] [--json]\n"
          "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian\n"
          "             opencv-doc), writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
@@ -73,12 +73,12 @@ std::string usage() {
          "  --min-inliers N    inliers that verify a pair and end the escalation (default " +
          std::to_string(two_view.min_inliers) +
          ")\n"
-         "  --last-stage-search\n"
-         "                     when the last stage's model lacks support, a RANSAC of up to " +
+         "  --no-last-stage-search\n"
+         "                     keep the last stage's model as model selection chose it; by default, when it\n"
+         "                     lacks support, a RANSAC of up to " +
          std::to_string(affine_orb::LastStageSearchOptions{}.ransac.max_iterations) +
-         " samples\n"
-         "                     for a homography alone on its matches, whose homography replaces the stage's\n"
-         "                     when it scores higher (off by default; not with --one-shot)\n"
+         " samples for a homography alone on its matches\n"
+         "                     replaces it when it scores higher (not with --one-shot)\n"
          "  --one-shot         every view at once (Extractor::extract), matched once; --features then defaults to " +
          std::to_string(one_shot.features) +
          "\n"
@@ -113,7 +113,8 @@ struct Outcome {
   int stage = -1, stages = 0;
   double stage_tilt = 1.0;
   bool verified = false;
-  /// Views on demand: the last stage's search (--last-stage-search) gave the chosen homography.
+  /// Views on demand: the last stage's search (off with --no-last-stage-search) gave the chosen
+  /// homography.
   bool searched = false;
   affine_orb::ModelSelectionResult selection;
   /// Where --rectified came from: "" (not written), "chosen homography", or "estimated homography"
@@ -127,7 +128,7 @@ struct Plan {
   bool one_shot = false;
   bool all_stages = false;
   int min_inliers = affine_orb::TwoViewOptions{}.min_inliers;
-  bool last_stage_search = false;
+  bool last_stage_search = affine_orb::TwoViewOptions{}.last_stage_search.has_value();
 };
 
 /// The matcher's options for `plan`: its stages up to the extractor's max_tilt (stages_up_to()).
@@ -137,7 +138,7 @@ affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
   options.stages = affine_orb::stages_up_to(plan.extractor.views);
   options.all_stages = plan.all_stages;
   options.min_inliers = plan.min_inliers;
-  if (plan.last_stage_search) options.last_stage_search = affine_orb::LastStageSearchOptions{};
+  if (!plan.last_stage_search) options.last_stage_search.reset();
   return options;
 }
 
@@ -324,10 +325,11 @@ std::optional<Settings> parse_settings(affine_orb::examples::Args& args) {
   s.plan.one_shot = args.flag("--one-shot");
   s.plan.all_stages = args.flag("--all-stages");
   s.plan.min_inliers = args.integer("--min-inliers", s.plan.min_inliers);
-  s.plan.last_stage_search = args.flag("--last-stage-search");
-  if (s.plan.one_shot && s.plan.last_stage_search) {
-    throw std::invalid_argument("--last-stage-search: a stage of views on demand, not --one-shot");
+  const bool no_search = args.flag("--no-last-stage-search");
+  if (s.plan.one_shot && no_search) {
+    throw std::invalid_argument("--no-last-stage-search: a stage of views on demand, not --one-shot");
   }
+  s.plan.last_stage_search = !no_search;
   affine_orb::ExtractorOptions& options = s.plan.extractor;
   // Views on demand: the matcher's extractor (2000 image keypoints, the strongest corners). One
   // shot: 1000 from each image and as many from its views (the additive budget), 2000 in all.

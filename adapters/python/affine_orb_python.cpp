@@ -319,7 +319,7 @@ affine_orb::TwoViewOptions two_view_options(int features, double max_tilt,
   options.max_half_disagreement = max_half_disagreement;
   if (align_correspondences) options.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
   if (!final_fit) options.final_fit.reset();
-  if (last_stage_search) options.last_stage_search = affine_orb::LastStageSearchOptions{};
+  if (!last_stage_search) options.last_stage_search.reset();
   options.model.ransac.progressive_sampling = progressive_sampling;
   options.all_stages = all_stages;
   options.check();
@@ -521,7 +521,7 @@ PYBIND11_MODULE(affine_orb, m) {
       "(sub-pixel correspondences) and the homography re-estimated on them; with final_fit (the default), a "
       "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
       "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
-      "accepts, never looser than the unguided ones. last_stage_search (off by default): when the last stage's "
+      "accepts, never looser than the unguided ones. last_stage_search (on by default): when the last stage's "
       "model lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose homography "
       "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
       "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "

@@ -111,6 +111,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     options.last_stage_search = affine_orb::LastStageSearchOptions{};
     options.last_stage_search->ransac = options.model.ransac;
     options.last_stage_search->sigma = 0.75 * ((fit >> 1) & 3);
+  } else {
+    options.last_stage_search.reset();
   }
 
   const int width1 = 1 + bytes.next() % 48;

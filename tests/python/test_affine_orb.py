@@ -129,7 +129,7 @@ def test_two_view_matcher_reused_on_pairs_of_other_sizes_equals_the_cpp_matcher(
     """One TwoViewMatcher, which keeps its buffers from call to call, on graf 1->3, then a pair whose
     image 1 is another photo of another size, then graf 1->3 again: each result is a fresh C++
     TwoViewMatcher's on that pair."""
-    matcher = affine_orb.TwoViewMatcher(features=1000)
+    matcher = affine_orb.TwoViewMatcher(features=1000, min_inliers=15)
     assert matcher.descriptor_size == 32 and grey(PHOTO).shape != grey(GRAF1).shape
     for path1, path2 in ((GRAF1, GRAF3), (PHOTO, GRAF3), (GRAF1, GRAF3)):
         r = matcher.match(grey(path1), grey(path2))
@@ -196,21 +196,24 @@ def test_match_images_guided_matching_and_precision_test_are_reported():
 
 @pytest.mark.data
 def test_match_images_last_stage_search_finds_bark_1_to_6s_plane():
-    """last_stage_search reaches the C++ options: bark 1->6 ends unverified either way, with a
-    homography hundreds of pixels off by default and within 10 px of the ground truth (corners) when
-    the last stage searches for a homography alone."""
+    """last_stage_search and min_inliers reach the C++ options. At 15 inliers bark 1->6 ends
+    unverified either way, with a homography hundreds of pixels off without the last stage's search
+    and within 10 px of the ground truth (corners) with it; the defaults (12 inliers) verify it at
+    stage 1 within 3 px."""
     image1 = cv2.imread(os.path.join(DATA, "oxford", "bark", "img1.png"), cv2.IMREAD_GRAYSCALE)
     image6 = cv2.imread(os.path.join(DATA, "oxford", "bark", "img6.png"), cv2.IMREAD_GRAYSCALE)
     truth = np.loadtxt(os.path.join(DATA, "oxford", "bark", "H1to6p"))
     def corner_error(estimate):
         return corner_distances(estimate, truth, image1.shape).mean()
 
-    default = affine_orb.match_images(image1, image6)
-    searched = affine_orb.match_images(image1, image6, last_stage_search=True)
-    assert not default["verified"] and not searched["verified"]
-    assert corner_error(default["homography"]) > 50.0
+    plain = affine_orb.match_images(image1, image6, min_inliers=15, last_stage_search=False)
+    searched = affine_orb.match_images(image1, image6, min_inliers=15)
+    assert not plain["verified"] and not searched["verified"]
+    assert corner_error(plain["homography"]) > 50.0
     assert searched["model"] == "homography" and corner_error(searched["homography"]) < 10.0
-    assert searched["stages"][-1]["last_stage_search"] and not default["stages"][-1]["last_stage_search"]
+    assert searched["stages"][-1]["last_stage_search"] and not plain["stages"][-1]["last_stage_search"]
+    default = affine_orb.match_images(image1, image6)
+    assert default["verified"] and default["stage"] == 1 and corner_error(default["homography"]) < 3.0
 
 
 @pytest.mark.data

@@ -15,18 +15,17 @@
 // its query keypoints and TwoViewResult::points2 (the train keypoints' positions unless aligned).
 //
 // Methods: ours plain 2000 (rBRIEF, strongest corners), the affine default (1000 image + 1000 view
-// keypoints, one-shot views), both also with ExtractorOptions::subpixel, the two-view matcher with views on demand (TwoViewMatcher's
-// defaults; with sub-pixel keypoints; with aligned correspondences (TwoViewOptions::align_correspondences), with
-// and without sub-pixel keypoints; with stages to tilt 4√2; with the precision test
-// max_half_disagreement at 5 px and off; without guided matching, with and without the
-// precision test; without the final fit of the homography (TwoViewOptions::final_fit), with and
-// without guided matching; with min_inliers 15 and without the last stage's search, the matcher
-// before those defaults), cv::ORB 2000, cv::AKAZE, cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to
-// 4√2, maxTilt 5) and ASIFT (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only
-// unless --asift-sequences says otherwise: its float matching takes minutes a pair). Every method
-// but the matcher is verified by select_model() with the matcher's ModelSelectionOptions, so the
-// own homographies come from the same estimator. --peer-cache FILE reads the OpenCV peers' rows
-// from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
+// keypoints, one-shot views), both also with ExtractorOptions::subpixel, the two-view matcher with views on demand
+// (TwoViewMatcher's defaults; with sub-pixel keypoints; with aligned correspondences
+// (TwoViewOptions::align_correspondences), with and without sub-pixel keypoints; with stages to tilt 4√2; with the
+// precision test max_half_disagreement at 5 px and off; without guided matching, with and without the precision test;
+// without the final fit of the homography (TwoViewOptions::final_fit), with and without guided matching; with
+// min_inliers 15 and without the last stage's search, the matcher before those defaults), cv::ORB 2000, cv::AKAZE,
+// cv::SIFT, cv::AffineFeature(cv::ORB) with 18 views (43 on EVD: tilts to 4√2, maxTilt 5) and ASIFT
+// (cv::AffineFeature(cv::SIFT), the same views; graf and opencv-doc only unless --asift-sequences says otherwise: its
+// float matching takes minutes a pair). Every method but the matcher is verified by select_model() with the matcher's
+// ModelSelectionOptions, so the own homographies come from the same estimator. --peer-cache FILE reads the OpenCV
+// peers' rows from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
 // --sweep adds matcher variants (stages, min_inliers, the support tests, the final fit's Cauchy
 // scale and max_error, the last stage's search), the measurement behind
 // TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
@@ -47,8 +46,8 @@
 // Writes DIR/eval_two_view.md (per subset and method, pairs solved and seconds, and the union of
 // all methods; AUC@3 / @5 / @10 of the corner error for the own model and both judges, per subset,
 // over all pairs and over the pairs of odd and even index in the run's list, the halves on which
-// a default change must win as well (docs/two_view.md); the summary over all pairs; then every pair) and DIR/eval_two_view.csv, and prints
-// the Markdown.
+// a default change must win as well (docs/two_view.md); the summary over all pairs; then every pair) and
+// DIR/eval_two_view.csv, and prints the Markdown.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -87,11 +86,11 @@ struct Outcome {
   cv::Matx33d homography;
   double ms = 0.0;
   int keypoints1 = 0, keypoints2 = 0;
-  int stage = -1;         ///< matcher only: the stage it stopped at
-  bool verified = false;  ///< matcher only
-  std::string stages;     ///< matcher only: per stage run, matches / inliers and the model chosen
+  int stage = -1;                            ///< matcher only: the stage it stopped at
+  bool verified = false;                     ///< matcher only
+  std::string stages;                        ///< matcher only: per stage run, matches / inliers and the model chosen
   std::vector<std::pair<int, int>> octaves;  ///< ours only: per match, the octaves of its two keypoints
-  std::vector<int> origins;  ///< matcher only: per match, the stage that extracted its later keypoint
+  std::vector<int> origins;                  ///< matcher only: per match, the stage that extracted its later keypoint
 };
 
 struct Method {
@@ -293,8 +292,8 @@ JudgeSpread judge_spread(PointPairs matches, const affine_orb::bench::ViewpointP
       p1.push_back(a);
       p2.push_back(b);
     }
-    errors.push_back(pair_error(cv::findHomography(p1, p2, cv::USAC_MAGSAC, 3.0, cv::noArray(), 10000, 0.999), pair,
-                                size1, size2));
+    errors.push_back(
+        pair_error(cv::findHomography(p1, p2, cv::USAC_MAGSAC, 3.0, cv::noArray(), 10000, 0.999), pair, size1, size2));
   }
   if (errors.empty()) return {1e9, 1e9, 1e9};
   std::sort(errors.begin(), errors.end());
@@ -305,10 +304,10 @@ struct Row {
   std::string pair;
   std::string subset;
   std::string method;
-  std::size_t index = 0;  ///< the pair's place in the run's ordered list (the odd and even halves)
-  bool solved = false;           ///< by the RANSAC judge
-  double corner_error = 0.0;     ///< the RANSAC judge's homography
-  double magsac_error = 0.0;     ///< the MAGSAC++ judge's homography
+  std::size_t index = 0;          ///< the pair's place in the run's ordered list (the odd and even halves)
+  bool solved = false;            ///< by the RANSAC judge
+  double corner_error = 0.0;      ///< the RANSAC judge's homography
+  double magsac_error = 0.0;      ///< the MAGSAC++ judge's homography
   double own_corner_error = 0.0;  ///< the method's own (select_model()'s) homography
   affine_orb::bench::CorrectMatches correct;
   std::size_t matches = 0;
@@ -427,8 +426,8 @@ void auc_tables(const std::vector<Method>& methods, const std::vector<Row>& rows
         for (const Row& r : rows) {
           if (r.method == m.name && select(r)) e.push_back(error(r));
         }
-        const auto solved = std::count_if(e.begin(), e.end(),
-                                          [](double x) { return x <= affine_orb::bench::kSolvedCornerError; });
+        const auto solved =
+            std::count_if(e.begin(), e.end(), [](double x) { return x <= affine_orb::bench::kSolvedCornerError; });
         char cell[96];
         std::snprintf(cell, sizeof(cell), e.empty() ? " |" : " %.2f / %.2f / %.2f (%td) |", auc(e, 3.0), auc(e, 5.0),
                       auc(e, 10.0), solved);
@@ -676,7 +675,8 @@ int main(int argc, char** argv) {
       two_view("ours views on demand, half disagreement 5 px", precise(defaults, 5.0)),
       two_view("ours views on demand, no precision test", precise(defaults, std::nullopt)),
       two_view("ours views on demand, no guided matching", unguided(defaults)),
-      two_view("ours views on demand, no guided matching, no precision test", precise(unguided(defaults), std::nullopt)),
+      two_view("ours views on demand, no guided matching, no precision test",
+               precise(unguided(defaults), std::nullopt)),
       two_view("ours views on demand, no final fit", final_fit(defaults, false)),
       two_view("ours views on demand, no guided matching, no final fit", final_fit(unguided(defaults), false)),
       two_view("ours views on demand, min_inliers 15, no last-stage search", before_search(defaults)),
@@ -718,8 +718,15 @@ int main(int argc, char** argv) {
     }
     variant("no support test", [](auto& o) { o.max_false_alarms.reset(); });
     variant("max_false_alarms 0.01", [](auto& o) { o.max_false_alarms = 0.01; });
-    for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{
-             {1.0, 2.0}, {1.0, 2.4}, {1.5, 2.4}, {1.0, 3.0}, {1.5, 3.0}, {3.0, 3.0}, {2.0, 4.0}, {3.0, 4.0}, {5.0, 3.0}}) {
+    for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{{1.0, 2.0},
+                                                                             {1.0, 2.4},
+                                                                             {1.5, 2.4},
+                                                                             {1.0, 3.0},
+                                                                             {1.5, 3.0},
+                                                                             {3.0, 3.0},
+                                                                             {2.0, 4.0},
+                                                                             {3.0, 4.0},
+                                                                             {5.0, 3.0}}) {
       char name[64];
       std::snprintf(name, sizeof(name), "final fit, Cauchy %.1f px, max_error %.1f px", scale, bound);
       variant(name, [scale = scale, bound = bound](auto& o) {
@@ -814,8 +821,8 @@ int main(int argc, char** argv) {
                    "%s%s %.0f ms\n",
                    row.pair.c_str(), method.name.c_str(), row.outcome.keypoints1, row.outcome.keypoints2, row.matches,
                    row.correct.distinct, row.solved ? "solved" : "------", std::min(row.corner_error, 9999.0),
-                   std::min(row.magsac_error, 9999.0), std::min(row.own_corner_error, 9999.0), row.outcome.stage, row.outcome.verified ? "verified" : "",
-                   row.outcome.stages.c_str(), row.outcome.ms);
+                   std::min(row.magsac_error, 9999.0), std::min(row.own_corner_error, 9999.0), row.outcome.stage,
+                   row.outcome.verified ? "verified" : "", row.outcome.stages.c_str(), row.outcome.ms);
       rows.push_back(std::move(row));
     }
   }
@@ -916,8 +923,8 @@ int main(int argc, char** argv) {
     md << "\n| method | octave | image-1 octave: correct matches | median px | 90th percentile px | "
           "image-2 octave: correct matches | median px | 90th percentile px |\n"
        << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const char* method : {"ours plain 2000", "ours plain 2000, sub-pixel", "ours views on demand",
-                               "ours views on demand, sub-pixel"}) {
+    for (const char* method :
+         {"ours plain 2000", "ours plain 2000, sub-pixel", "ours views on demand", "ours views on demand, sub-pixel"}) {
       placement_table(method, rows, pairs, md);
     }
   }
@@ -932,9 +939,8 @@ int main(int argc, char** argv) {
     std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f / %.1f | %s | %s | %.0f |\n",
                   r.pair.c_str(), r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches,
                   r.correct.distinct, std::min(r.corner_error, 9999.0), std::min(r.magsac_error, 9999.0),
-                  std::min(r.own_corner_error, 9999.0),
-                  r.solved ? "yes" : "no", r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "",
-                  r.outcome.ms);
+                  std::min(r.own_corner_error, 9999.0), r.solved ? "yes" : "no",
+                  r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "", r.outcome.ms);
     md << line;
     std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f,%.2f,%zu,", r.pair.c_str(),
                   r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches, r.correct.correct,

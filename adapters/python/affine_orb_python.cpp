@@ -14,10 +14,10 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
-#include <tuple>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <variant>
 #include <vector>
 
@@ -350,8 +350,7 @@ class PyTwoViewMatcher {
     emplace_descriptor(matcher_, descriptor, options);
   }
 
-  py::dict match(const py::handle& image1, const py::handle& image2, const py::handle& mask1,
-                 const py::handle& mask2) {
+  py::dict match(const py::handle& image1, const py::handle& image2, const py::handle& mask1, const py::handle& mask2) {
     py::array_t<std::uint8_t> s1, s2, s3, s4;
     const cv::Mat a = as_gray(image1, "image1", s1);
     const cv::Mat b = as_gray(image2, "image2", s2);
@@ -375,8 +374,8 @@ class PyTwoViewMatcher {
   }
 
  private:
-  std::variant<affine_orb::TwoViewMatcher<affine_orb::Rbrief>, affine_orb::TwoViewMatcher<affine_orb::Brisk>>
-      matcher_{std::in_place_index<0>};
+  std::variant<affine_orb::TwoViewMatcher<affine_orb::Rbrief>, affine_orb::TwoViewMatcher<affine_orb::Brisk>> matcher_{
+      std::in_place_index<0>};
   std::mutex mutex_;
 };
 
@@ -506,7 +505,8 @@ PYBIND11_MODULE(affine_orb, m) {
       "\"score_ratio\" (eq. 22), \"gric\" or \"inlier_ratio\" (affine_orb::SelectionRule). octaves1, "
       "octaves2: the keypoints' pyramid octaves (cv2.KeyPoint.octave), which scale each point's sigma by "
       "1.2^octave; both or neither.");
-  const std::string options_doc = "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
+  const std::string options_doc =
+      "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
       "`features` keypoints; while the pair is not verified, each stage (max_tilt, view_features) adds the views of "
       "tilts up to max_tilt with view_features x features keypoints per image, and matching and H/F selection run "
       "again. stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
@@ -526,7 +526,8 @@ PYBIND11_MODULE(affine_orb, m) {
       "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
       "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
       "matches are a few percent. ";
-  const std::string result_doc = "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
+  const std::string result_doc =
+      "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
       "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
       "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image 2's "
       "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model "
@@ -542,29 +543,29 @@ PYBIND11_MODULE(affine_orb, m) {
       ".match(image1, image2).");
   std::apply(
       [&](auto... arguments) {
-        matcher_class.def(py::init([](int features, double max_tilt,
-                                      const std::optional<std::vector<std::pair<double, double>>>& stages,
-                                      int min_inliers, std::optional<double> max_false_alarms,
-                                      std::optional<double> min_inlier_ratio, int guided_rounds,
-                                      std::optional<double> max_half_disagreement, bool align_correspondences,
-                                      bool final_fit, bool last_stage_search, bool progressive_sampling,
-                                      bool all_stages, const std::string& descriptor,
-                                      const std::string& spreading, int threads) {
-                            return std::make_unique<PyTwoViewMatcher>(
-                                two_view_options(features, max_tilt, stages, min_inliers, max_false_alarms,
-                                                 min_inlier_ratio, guided_rounds, max_half_disagreement,
-                                                 align_correspondences, final_fit, last_stage_search,
-                                                 progressive_sampling, all_stages, spreading, threads),
-                                descriptor);
-                          }),
-                          arguments..., options_doc.c_str());
+        matcher_class.def(
+            py::init([](int features, double max_tilt,
+                        const std::optional<std::vector<std::pair<double, double>>>& stages, int min_inliers,
+                        std::optional<double> max_false_alarms, std::optional<double> min_inlier_ratio,
+                        int guided_rounds, std::optional<double> max_half_disagreement, bool align_correspondences,
+                        bool final_fit, bool last_stage_search, bool progressive_sampling, bool all_stages,
+                        const std::string& descriptor, const std::string& spreading, int threads) {
+              return std::make_unique<PyTwoViewMatcher>(
+                  two_view_options(features, max_tilt, stages, min_inliers, max_false_alarms, min_inlier_ratio,
+                                   guided_rounds, max_half_disagreement, align_correspondences, final_fit,
+                                   last_stage_search, progressive_sampling, all_stages, spreading, threads),
+                  descriptor);
+            }),
+            arguments..., options_doc.c_str());
       },
       two_view_arguments());
   matcher_class
       .def("match", &PyTwoViewMatcher::match, py::arg("image1"), py::arg("image2"), py::arg("mask1") = py::none(),
            py::arg("mask2") = py::none(),
            ("Matches two 2-D uint8 grey images (any sizes); mask1, mask2: None or a 2-D uint8 array of their "
-            "image's size (non-zero = allowed). " + result_doc).c_str())
+            "image's size (non-zero = allowed). " +
+            result_doc)
+               .c_str())
       .def_property_readonly("descriptor_size", &PyTwoViewMatcher::descriptor_size, "Bytes per descriptor row.");
   std::apply(
       [&](auto... arguments) {
@@ -585,8 +586,11 @@ PYBIND11_MODULE(affine_orb, m) {
             },
             py::arg("image1"), py::arg("image2"), arguments..., py::arg("mask1") = py::none(),
             py::arg("mask2") = py::none(),
-            (options_doc + " Builds a TwoViewMatcher for the one pair: to match many pairs, build a TwoViewMatcher "
-                           "once and call its match(). " + result_doc).c_str());
+            (options_doc +
+             " Builds a TwoViewMatcher for the one pair: to match many pairs, build a TwoViewMatcher "
+             "once and call its match(). " +
+             result_doc)
+                .c_str());
       },
       two_view_arguments());
 }

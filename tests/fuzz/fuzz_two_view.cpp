@@ -1,13 +1,12 @@
 // libFuzzer target: two-view matching with views on demand (TwoViewMatcher). The input bytes choose
 // two small images (up to 48x40; the second may be the first shifted, so that pairs do verify),
 // masks and the options: image keypoints, stages (tilts and budgets), min_inliers, the support
-// tests (max_false_alarms, min_inlier_ratio), PROSAC (progressive_sampling), all_stages, the precision test (max_half_disagreement), guided matching
-// (rounds, gate radius, ratio), the aligned correspondences (align_correspondences), the final fit
-// (final_fit: Cauchy scale, max_error, iterations, some invalid), the last stage's search
-// (last_stage_search: σ, some invalid), stages to the extreme
-// tilts 4 and 4√2, given or from stages_up_to(). Invalid options must end in
-// std::invalid_argument, valid ones in a result that keeps every documented invariant: stage
-// reports, the stopping rule, inlier flags, match indices, keypoints inside their image and mask,
+// tests (max_false_alarms, min_inlier_ratio), PROSAC (progressive_sampling), all_stages, the precision test
+// (max_half_disagreement), guided matching (rounds, gate radius, ratio), the aligned correspondences
+// (align_correspondences), the final fit (final_fit: Cauchy scale, max_error, iterations, some invalid), the last
+// stage's search (last_stage_search: σ, some invalid), stages to the extreme tilts 4 and 4√2, given or from
+// stages_up_to(). Invalid options must end in std::invalid_argument, valid ones in a result that keeps every documented
+// invariant: stage reports, the stopping rule, inlier flags, match indices, keypoints inside their image and mask,
 // image-2 points of the correspondences within max_shift of their keypoints, each stage's
 // keypoints a superset of the stage before;
 // anything else (a crash, a sanitizer report, another exception, a broken invariant) is a finding.
@@ -67,7 +66,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       options.stages.push_back({kTilts[b % 6], (b >> 3) * 0.125 - 0.25});  // view_features may be < 0
     }
   }
-  options.min_inliers = bytes.next() % 40;               // < 8 is invalid
+  options.min_inliers = bytes.next() % 40;  // < 8 is invalid
   // The support tests: the a-contrario bound (default 1, off, 1e-6, or 0: invalid) and the inlier
   // share (off, or 0 to 1.1: > 1 is invalid); PROSAC on or off.
   const std::uint8_t support = bytes.next();

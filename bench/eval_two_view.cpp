@@ -97,9 +97,8 @@ struct Method {
   std::string name;
   std::function<Outcome(const cv::Mat&, const cv::Mat&, const affine_orb::bench::ViewpointPair&)> run;
   bool matcher = false;
-  bool peer = false;
-  int stages = 0;  ///< matcher only: its number of stages after stage 0  ///< an OpenCV peer: its rows may come from
-                   ///< the --peer-cache file
+  bool peer = false;  ///< an OpenCV peer: its rows may come from the --peer-cache file
+  int stages = 0;     ///< matcher only: its number of stages after stage 0
 };
 
 double since(Clock::time_point start) {
@@ -553,132 +552,141 @@ Outcome run_repeated(const Method& method, const cv::Mat& a, const cv::Mat& b,
   return o;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+/// The command line (the file comment).
+struct Arguments {
   std::string out_dir = ".";
-  std::string only;
-  std::string subsets;
-  std::string method_filter;
-  std::string asift_only = ",graf,opencv-doc graf,";
-  std::string cache_path;
+  std::string sequences;                                   ///< ",a,b,"; empty: every sequence
+  std::string subsets;                                     ///< ",oxford,evd,"; empty: every subset
+  std::string methods;                                     ///< --methods' list; empty: every method
+  std::string asift_sequences = ",graf,opencv-doc graf,";  ///< empty: every sequence
+  std::string peer_cache;                                  ///< empty: no cache
   bool sweep = false;
   bool placement = false;
   bool origins = false;
   int repeats = 1;
-  int spread_orderings = 0;
+  int judge_spread = 0;  ///< orderings of the MAGSAC++ judge; 0: none
+};
+
+/// The arguments of `argv`, or nullopt after the usage line on stderr for an unknown flag or a
+/// missing or invalid value.
+std::optional<Arguments> parse_arguments(int argc, char** argv) {
+  Arguments a;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     const bool has_value = i + 1 < argc;
+    const bool has_count = has_value && std::atoi(argv[i + 1]) >= 1;
     if (flag == "--sweep") {
-      sweep = true;
+      a.sweep = true;
     } else if (flag == "--placement") {
-      placement = true;
+      a.placement = true;
     } else if (flag == "--origins") {
-      origins = true;
+      a.origins = true;
     } else if (flag == "--out" && has_value) {
-      out_dir = argv[++i];
+      a.out_dir = argv[++i];
     } else if (flag == "--sequences" && has_value) {
-      only = std::string(",") + argv[++i] + ",";
+      a.sequences = std::string(",") + argv[++i] + ",";
     } else if (flag == "--subsets" && has_value) {
-      subsets = std::string(",") + argv[++i] + ",";
+      a.subsets = std::string(",") + argv[++i] + ",";
     } else if (flag == "--methods" && has_value) {
-      method_filter = argv[++i];
-    } else if (flag == "--repeats" && has_value && std::atoi(argv[i + 1]) >= 1) {
-      repeats = std::atoi(argv[++i]);
-    } else if (flag == "--judge-spread" && has_value && std::atoi(argv[i + 1]) >= 1) {
-      spread_orderings = std::atoi(argv[++i]);
+      a.methods = argv[++i];
+    } else if (flag == "--repeats" && has_count) {
+      a.repeats = std::atoi(argv[++i]);
+    } else if (flag == "--judge-spread" && has_count) {
+      a.judge_spread = std::atoi(argv[++i]);
     } else if (flag == "--peer-cache" && has_value) {
-      cache_path = argv[++i];
+      a.peer_cache = argv[++i];
     } else if (flag == "--asift-sequences" && has_value) {
       const std::string value = argv[++i];
-      asift_only = value == "all" ? "" : "," + value + ",";
+      a.asift_sequences = value == "all" ? "" : "," + value + ",";
     } else {
       std::fprintf(stderr,
                    "usage: eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b] "
                    "[--methods SUBSTRING,...] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement] "
                    "[--origins] [--repeats N] [--judge-spread N]\n");
-      return 2;
+      return std::nullopt;
     }
   }
-  std::error_code made;
-  std::filesystem::create_directories(out_dir, made);
-  if (made) {
-    std::fprintf(stderr, "eval_two_view: cannot create %s: %s\n", out_dir.c_str(), made.message().c_str());
-    return 2;
-  }
-  cv::setNumThreads(1);
-  const affine_orb::TwoViewOptions defaults;
-  const affine_orb::ModelSelectionOptions& model = defaults.model;
+  return a;
+}
 
+/// `o` with sub-pixel keypoint positions (ExtractorOptions::subpixel).
+affine_orb::ExtractorOptions with_subpixel(affine_orb::ExtractorOptions o) {
+  o.subpixel = true;
+  return o;
+}
+
+/// `o` with the precision test at another bound, or off (TwoViewOptions::max_half_disagreement).
+affine_orb::TwoViewOptions with_precision_test(affine_orb::TwoViewOptions o, std::optional<double> pixels) {
+  o.max_half_disagreement = pixels;
+  return o;
+}
+
+/// `o` with image 2's points aligned with image 1's patches under the verified homography
+/// (TwoViewOptions::align_correspondences).
+affine_orb::TwoViewOptions with_alignment(affine_orb::TwoViewOptions o) {
+  o.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
+  return o;
+}
+
+/// `o` without guided matching of a verified homography (TwoViewOptions::guided_matching).
+affine_orb::TwoViewOptions without_guided_matching(affine_orb::TwoViewOptions o) {
+  o.guided_matching.reset();
+  return o;
+}
+
+/// `o` with the final fit of the homography (TwoViewOptions::final_fit), or without it.
+affine_orb::TwoViewOptions with_final_fit(affine_orb::TwoViewOptions o, bool on) {
+  o.final_fit = on ? std::optional<affine_orb::HomographyRefinementOptions>(affine_orb::HomographyRefinementOptions{})
+                   : std::nullopt;
+  return o;
+}
+
+/// `o` as the matcher was before min_inliers 12 and the last stage's search: 15 inliers, no search.
+affine_orb::TwoViewOptions before_search(affine_orb::TwoViewOptions o) {
+  o.min_inliers = 15;
+  o.last_stage_search.reset();
+  return o;
+}
+
+/// An affine peer on `backend`: 18 views (tilts to 2.83, cv::AffineFeature's maxTilt 3) or 43 (tilts
+/// to 5.66, maxTilt 5), rotation step 72°/t as ASIFT.
+cv::Ptr<cv::Feature2D> affine_peer(cv::Ptr<cv::Feature2D> backend, int max_tilt) {
+  return cv::AffineFeature::create(backend, max_tilt, 0, std::sqrt(2.0), 72);
+}
+
+/// The methods of every run (before --methods chooses among them): ours, the matcher and its
+/// variants of record, the OpenCV peers.
+std::vector<Method> standard_methods(const affine_orb::TwoViewOptions& defaults) {
+  const affine_orb::ModelSelectionOptions& model = defaults.model;
   affine_orb::ExtractorOptions plain = affine_orb::TwoViewOptions::default_extractor();
   plain.views.max_tilt = 1.0;
-  // Sub-pixel keypoint positions (ExtractorOptions::subpixel).
-  const auto subpixel = [](affine_orb::ExtractorOptions o) {
-    o.subpixel = true;
-    return o;
-  };
   affine_orb::TwoViewOptions subpixel_views = defaults;
   subpixel_views.extractor.subpixel = true;
   affine_orb::ExtractorOptions affine;
   affine.spreading = affine_orb::Spreading::kStrongest;
-  affine_orb::TwoViewOptions many = defaults;
-  many.min_inliers = 200;
-  // The precision test at another bound, or off (TwoViewOptions::max_half_disagreement).
-  const auto precise = [](affine_orb::TwoViewOptions o, std::optional<double> pixels) {
-    o.max_half_disagreement = pixels;
-    return o;
-  };
-  // Image 2's points aligned with image 1's patches under the verified homography
-  // (TwoViewOptions::align_correspondences).
-  const auto aligned = [](affine_orb::TwoViewOptions o) {
-    o.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
-    return o;
-  };
-  // Without guided matching of a verified homography (TwoViewOptions::guided_matching).
-  const auto unguided = [](affine_orb::TwoViewOptions o) {
-    o.guided_matching.reset();
-    return o;
-  };
-  // With the final fit of the homography (TwoViewOptions::final_fit), or without it.
-  const auto final_fit = [](affine_orb::TwoViewOptions o, bool on) {
-    o.final_fit = on ? std::optional<affine_orb::HomographyRefinementOptions>(affine_orb::HomographyRefinementOptions{})
-                     : std::nullopt;
-    return o;
-  };
-  // The matcher before min_inliers 12 and the last stage's search: 15 inliers, no search.
-  const auto before_search = [](affine_orb::TwoViewOptions o) {
-    o.min_inliers = 15;
-    o.last_stage_search.reset();
-    return o;
-  };
   // The default stages and two more to extreme tilts (4 and 4√2, as MODS and ASIFT's maxTilt 5),
   // run only while the pair is not verified.
   affine_orb::TwoViewOptions extreme = defaults;
   extreme.extractor.views.max_tilt = 4.0 * std::sqrt(2.0);
   extreme.stages = affine_orb::stages_up_to(extreme.extractor.views);
-  // The affine peers: 18 views (tilts to 2.83, cv::AffineFeature's maxTilt 3), 43 on EVD (tilts to
-  // 5.66, maxTilt 5), rotation step 72°/t as ASIFT.
-  const auto affine_peer = [](cv::Ptr<cv::Feature2D> backend, int max_tilt) {
-    return cv::AffineFeature::create(backend, max_tilt, 0, std::sqrt(2.0), 72);
-  };
-  std::vector<Method> methods = {
+  return {
       ours("ours plain 2000", plain, model),
-      ours("ours plain 2000, sub-pixel", subpixel(plain), model),
+      ours("ours plain 2000, sub-pixel", with_subpixel(plain), model),
       ours("ours affine default 1000 + 1000", affine, model),
-      ours("ours affine default 1000 + 1000, sub-pixel", subpixel(affine), model),
+      ours("ours affine default 1000 + 1000, sub-pixel", with_subpixel(affine), model),
       two_view("ours views on demand", defaults),
       two_view("ours views on demand, sub-pixel", subpixel_views),
-      two_view("ours views on demand, aligned", aligned(defaults)),
-      two_view("ours views on demand, sub-pixel, aligned", aligned(subpixel_views)),
+      two_view("ours views on demand, aligned", with_alignment(defaults)),
+      two_view("ours views on demand, sub-pixel, aligned", with_alignment(subpixel_views)),
       two_view("ours views on demand, stages to 5.66", extreme),
-      two_view("ours views on demand, half disagreement 5 px", precise(defaults, 5.0)),
-      two_view("ours views on demand, no precision test", precise(defaults, std::nullopt)),
-      two_view("ours views on demand, no guided matching", unguided(defaults)),
+      two_view("ours views on demand, half disagreement 5 px", with_precision_test(defaults, 5.0)),
+      two_view("ours views on demand, no precision test", with_precision_test(defaults, std::nullopt)),
+      two_view("ours views on demand, no guided matching", without_guided_matching(defaults)),
       two_view("ours views on demand, no guided matching, no precision test",
-               precise(unguided(defaults), std::nullopt)),
-      two_view("ours views on demand, no final fit", final_fit(defaults, false)),
-      two_view("ours views on demand, no guided matching, no final fit", final_fit(unguided(defaults), false)),
+               with_precision_test(without_guided_matching(defaults), std::nullopt)),
+      two_view("ours views on demand, no final fit", with_final_fit(defaults, false)),
+      two_view("ours views on demand, no guided matching, no final fit",
+               with_final_fit(without_guided_matching(defaults), false)),
       two_view("ours views on demand, min_inliers 15, no last-stage search", before_search(defaults)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),
@@ -686,105 +694,173 @@ int main(int argc, char** argv) {
       peer("cv::AffineFeature(ORB)", affine_peer(cv::ORB::create(112), 3), model, affine_peer(cv::ORB::create(112), 5)),
       peer("ASIFT", affine_peer(cv::SIFT::create(), 3), model, affine_peer(cv::SIFT::create(), 5)),
   };
-  if (sweep) {
-    methods.push_back(two_view("ours views on demand, min_inliers 200", many));
-    const auto variant = [&](const std::string& name, const std::function<void(affine_orb::TwoViewOptions&)>& change) {
-      affine_orb::TwoViewOptions o = defaults;
-      change(o);
-      methods.push_back(two_view("sweep: " + name, o));
-    };
-    variant("one stage up to 2.83, +1000", [](auto& o) { o.stages = {{2.0 * std::sqrt(2.0), 0.5}}; });
-    variant("stages 1.41 +250, 2 +250, 2.83 +500", [](auto& o) {
-      o.stages = {{std::sqrt(2.0), 0.125}, {2.0, 0.125}, {2.0 * std::sqrt(2.0), 0.25}};
-    });
-    variant("stages 2 +500, 2.83 +1000", [](auto& o) { o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}}; });
-    variant("stages 2 +1000, 2.83 +2000", [](auto& o) { o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}}; });
-    variant("stages up to 4: 2 +500, 2.83 +1000, 4 +1000", [](auto& o) {
-      o.extractor.views.max_tilt = 4.0;
-      o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}, {4.0, 0.5}};
-    });
-    for (int n : {8, 10, 15, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
-    for (int n : {8, 10, 12, 15}) {
-      variant("min_inliers " + std::to_string(n) + ", no last-stage search", [n](auto& o) {
-        o.min_inliers = n;
-        o.last_stage_search.reset();
-      });
-    }
-    for (double r : {0.05, 0.1, 0.2}) {
-      variant("min_inlier_ratio " + std::to_string(r).substr(0, 4) + ", no false-alarm test", [r](auto& o) {
-        o.min_inlier_ratio = r;
-        o.max_false_alarms.reset();
-      });
-    }
-    variant("no support test", [](auto& o) { o.max_false_alarms.reset(); });
-    variant("max_false_alarms 0.01", [](auto& o) { o.max_false_alarms = 0.01; });
-    for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{{1.0, 2.0},
-                                                                             {1.0, 2.4},
-                                                                             {1.5, 2.4},
-                                                                             {1.0, 3.0},
-                                                                             {1.5, 3.0},
-                                                                             {3.0, 3.0},
-                                                                             {2.0, 4.0},
-                                                                             {3.0, 4.0},
-                                                                             {5.0, 3.0}}) {
-      char name[64];
-      std::snprintf(name, sizeof(name), "final fit, Cauchy %.1f px, max_error %.1f px", scale, bound);
-      variant(name, [scale = scale, bound = bound](auto& o) {
-        o.final_fit = affine_orb::HomographyRefinementOptions{};
-        o.final_fit->cauchy_scale = scale;
-        o.final_fit->max_error = bound;
-      });
-    }
-    variant("PROSAC", [](auto& o) { o.model.ransac.progressive_sampling = true; });
-    variant("PROSAC, up to 2000 iterations", [](auto& o) {
-      o.model.ransac.progressive_sampling = true;
-      o.model.ransac.max_iterations = 2000;
-    });
-    variant("RANSAC up to 2000 iterations", [](auto& o) { o.model.ransac.max_iterations = 2000; });
-    variant("RANSAC up to 10000 iterations, confidence 0.999", [](auto& o) {
-      o.model.ransac.max_iterations = 10000;
-      o.model.ransac.confidence = 0.999;
-    });
-    for (double sigma : {1.0, 1.5, 2.0}) {
-      char name[64];
-      std::snprintf(name, sizeof(name), "last-stage search, sigma %.1f px", sigma);
-      variant(name, [sigma](auto& o) {
-        o.last_stage_search = affine_orb::LastStageSearchOptions{};
-        o.last_stage_search->sigma = sigma;
-      });
-    }
-    variant("plain 1000 first", [](auto& o) {
-      o.extractor.features = 1000;
-      o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}};
-    });
-  }
-  if (!method_filter.empty()) {
-    const auto wanted = [&](const Method& m) {
-      std::istringstream names(method_filter);
-      std::string name;
-      while (std::getline(names, name, ',')) {
-        if (name.size() > 1 && name[0] == '=' && m.name == name.substr(1)) return true;
-        if (!name.empty() && name[0] != '=' && m.name.find(name) != std::string::npos) return true;
-      }
-      return false;
-    };
-    methods.erase(std::remove_if(methods.begin(), methods.end(), [&](const Method& m) { return !wanted(m); }),
-                  methods.end());
-  }
-  const auto runs_on = [&](const Method& m, const std::string& sequence) {
-    return m.name != "ASIFT" || asift_only.empty() || asift_only.find("," + sequence + ",") != std::string::npos;
-  };
+}
 
+using Variant = std::function<void(const std::string&, const std::function<void(affine_orb::TwoViewOptions&)>&)>;
+
+/// --sweep's variants of the stages, min_inliers and the support tests, each given to `variant`
+/// as a name and a change of the default.
+void stage_and_support_variants(const Variant& variant) {
+  variant("one stage up to 2.83, +1000", [](auto& o) { o.stages = {{2.0 * std::sqrt(2.0), 0.5}}; });
+  variant("stages 1.41 +250, 2 +250, 2.83 +500", [](auto& o) {
+    o.stages = {{std::sqrt(2.0), 0.125}, {2.0, 0.125}, {2.0 * std::sqrt(2.0), 0.25}};
+  });
+  variant("stages 2 +500, 2.83 +1000", [](auto& o) { o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}}; });
+  variant("stages 2 +1000, 2.83 +2000", [](auto& o) { o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}}; });
+  variant("stages up to 4: 2 +500, 2.83 +1000, 4 +1000", [](auto& o) {
+    o.extractor.views.max_tilt = 4.0;
+    o.stages = {{2.0, 0.25}, {2.0 * std::sqrt(2.0), 0.5}, {4.0, 0.5}};
+  });
+  for (int n : {8, 10, 15, 20, 30}) variant("min_inliers " + std::to_string(n), [n](auto& o) { o.min_inliers = n; });
+  for (int n : {8, 10, 12, 15}) {
+    variant("min_inliers " + std::to_string(n) + ", no last-stage search", [n](auto& o) {
+      o.min_inliers = n;
+      o.last_stage_search.reset();
+    });
+  }
+  for (double r : {0.05, 0.1, 0.2}) {
+    variant("min_inlier_ratio " + std::to_string(r).substr(0, 4) + ", no false-alarm test", [r](auto& o) {
+      o.min_inlier_ratio = r;
+      o.max_false_alarms.reset();
+    });
+  }
+  variant("no support test", [](auto& o) { o.max_false_alarms.reset(); });
+  variant("max_false_alarms 0.01", [](auto& o) { o.max_false_alarms = 0.01; });
+}
+
+/// --sweep's variants of the estimation: the final fit's Cauchy scale and max_error, the RANSAC
+/// searches, the last stage's search, a plain stage of 1000.
+void estimation_variants(const Variant& variant) {
+  for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{{1.0, 2.0},
+                                                                           {1.0, 2.4},
+                                                                           {1.5, 2.4},
+                                                                           {1.0, 3.0},
+                                                                           {1.5, 3.0},
+                                                                           {3.0, 3.0},
+                                                                           {2.0, 4.0},
+                                                                           {3.0, 4.0},
+                                                                           {5.0, 3.0}}) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "final fit, Cauchy %.1f px, max_error %.1f px", scale, bound);
+    variant(name, [scale = scale, bound = bound](auto& o) {
+      o.final_fit = affine_orb::HomographyRefinementOptions{};
+      o.final_fit->cauchy_scale = scale;
+      o.final_fit->max_error = bound;
+    });
+  }
+  variant("PROSAC", [](auto& o) { o.model.ransac.progressive_sampling = true; });
+  variant("PROSAC, up to 2000 iterations", [](auto& o) {
+    o.model.ransac.progressive_sampling = true;
+    o.model.ransac.max_iterations = 2000;
+  });
+  variant("RANSAC up to 2000 iterations", [](auto& o) { o.model.ransac.max_iterations = 2000; });
+  variant("RANSAC up to 10000 iterations, confidence 0.999", [](auto& o) {
+    o.model.ransac.max_iterations = 10000;
+    o.model.ransac.confidence = 0.999;
+  });
+  for (double sigma : {1.0, 1.5, 2.0}) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "last-stage search, sigma %.1f px", sigma);
+    variant(name, [sigma](auto& o) {
+      o.last_stage_search = affine_orb::LastStageSearchOptions{};
+      o.last_stage_search->sigma = sigma;
+    });
+  }
+  variant("plain 1000 first", [](auto& o) {
+    o.extractor.features = 1000;
+    o.stages = {{2.0, 0.5}, {2.0 * std::sqrt(2.0), 1.0}};
+  });
+}
+
+/// --sweep: the matcher with 200 inliers, then every variant of the default, named "sweep: ...".
+void add_sweep(const affine_orb::TwoViewOptions& defaults, std::vector<Method>& methods) {
+  affine_orb::TwoViewOptions many = defaults;
+  many.min_inliers = 200;
+  methods.push_back(two_view("ours views on demand, min_inliers 200", many));
+  const Variant variant = [&](const std::string& name, const std::function<void(affine_orb::TwoViewOptions&)>& change) {
+    affine_orb::TwoViewOptions o = defaults;
+    change(o);
+    methods.push_back(two_view("sweep: " + name, o));
+  };
+  stage_and_support_variants(variant);
+  estimation_variants(variant);
+}
+
+/// Keeps the methods that --methods' comma-separated `filter` names: by a substring of the name,
+/// or, for an entry starting with '=', by the whole name.
+void keep_named(const std::string& filter, std::vector<Method>& methods) {
+  const auto wanted = [&](const Method& m) {
+    std::istringstream names(filter);
+    std::string name;
+    while (std::getline(names, name, ',')) {
+      if (name.size() > 1 && name[0] == '=' && m.name == name.substr(1)) return true;
+      if (!name.empty() && name[0] != '=' && m.name.find(name) != std::string::npos) return true;
+    }
+    return false;
+  };
+  methods.erase(std::remove_if(methods.begin(), methods.end(), [&](const Method& m) { return !wanted(m); }),
+                methods.end());
+}
+
+/// The pairs of --subsets and --sequences, Oxford and opencv-doc first, then the data pairs.
+std::vector<affine_orb::bench::ViewpointPair> selected_pairs(const Arguments& args) {
   std::vector<affine_orb::bench::ViewpointPair> pairs;
-  if (subsets.empty() || subsets.find(",oxford,") != std::string::npos) {
-    pairs = affine_orb::bench::viewpoint_pairs(only);
+  if (args.subsets.empty() || args.subsets.find(",oxford,") != std::string::npos) {
+    pairs = affine_orb::bench::viewpoint_pairs(args.sequences);
   }
-  for (auto& pair : affine_orb::bench::data_pairs(subsets)) {
-    if (only.empty() || only.find("," + pair.sequence + ",") != std::string::npos) pairs.push_back(std::move(pair));
+  for (auto& pair : affine_orb::bench::data_pairs(args.subsets)) {
+    if (args.sequences.empty() || args.sequences.find("," + pair.sequence + ",") != std::string::npos) {
+      pairs.push_back(std::move(pair));
+    }
   }
-  std::map<std::string, Row> cache = cache_path.empty() ? std::map<std::string, Row>{} : read_cache(cache_path);
+  return pairs;
+}
+
+/// `method` on `pair` (images `a`, `b`), the pair's `index`-th in the run: its outcome, judged.
+Row evaluate(const Method& method, const cv::Mat& a, const cv::Mat& b, const affine_orb::bench::ViewpointPair& pair,
+             std::size_t index, const Arguments& args) {
+  Row row;
+  row.pair = pair.name();
+  row.method = method.name;
+  row.outcome = run_repeated(method, a, b, pair, args.repeats);
+  row.matches = row.outcome.matches.size();
+  row.correct = affine_orb::bench::correct_matches(row.outcome.matches, pair.h);
+  const JudgeErrors judged = judge_errors(row.outcome.matches, pair, a.size(), b.size());
+  row.corner_error = judged.ransac;
+  row.magsac_error = judged.magsac;
+  row.own_corner_error =
+      row.outcome.homography_found ? pair_error(cv::Mat(row.outcome.homography), pair, a.size(), b.size()) : 1e9;
+  row.solved = row.corner_error <= affine_orb::bench::kSolvedCornerError;
+  if (method.matcher && args.judge_spread > 0) {
+    row.spread = judge_spread(row.outcome.matches, pair, a.size(), b.size(), args.judge_spread,
+                              static_cast<unsigned>(index + 1));
+  }
+  return row;
+}
+
+/// One line per row on stderr, as the run goes.
+void print_progress(const Row& row) {
+  std::fprintf(stderr,
+               "%-24s %-46s kp %5d/%5d matches %5zu distinct %5zu %s (%.1f px, MAGSAC %.1f, own %.1f) stage %d "
+               "%s%s %.0f ms\n",
+               row.pair.c_str(), row.method.c_str(), row.outcome.keypoints1, row.outcome.keypoints2, row.matches,
+               row.correct.distinct, row.solved ? "solved" : "------", std::min(row.corner_error, 9999.0),
+               std::min(row.magsac_error, 9999.0), std::min(row.own_corner_error, 9999.0), row.outcome.stage,
+               row.outcome.verified ? "verified" : "", row.outcome.stages.c_str(), row.outcome.ms);
+}
+
+/// Every method on every pair, pair after pair; the peers' rows from --peer-cache where it has
+/// them, and appended to it where it does not.
+std::vector<Row> run_methods(const std::vector<Method>& methods,
+                             const std::vector<affine_orb::bench::ViewpointPair>& pairs, const Arguments& args) {
+  const auto runs_on = [&](const Method& m, const std::string& sequence) {
+    return m.name != "ASIFT" || args.asift_sequences.empty() ||
+           args.asift_sequences.find("," + sequence + ",") != std::string::npos;
+  };
+  const std::map<std::string, Row> cache =
+      args.peer_cache.empty() ? std::map<std::string, Row>{} : read_cache(args.peer_cache);
   std::ofstream cache_out;
-  if (!cache_path.empty()) cache_out.open(cache_path, std::ios::app);
+  if (!args.peer_cache.empty()) cache_out.open(args.peer_cache, std::ios::app);
   std::vector<Row> rows;
   for (std::size_t index = 0; index < pairs.size(); ++index) {
     const affine_orb::bench::ViewpointPair& pair = pairs[index];
@@ -792,51 +868,22 @@ int main(int argc, char** argv) {
     const cv::Mat b = affine_orb::bench::read_gray(pair.path2);
     for (const Method& method : methods) {
       if (!runs_on(method, pair.sequence)) continue;
-      Row row;
       const auto cached = cache.find(pair.name() + '\t' + method.name);
-      if (method.peer && cached != cache.end()) {
-        row = cached->second;
-      } else {
-        row.pair = pair.name();
-        row.method = method.name;
-        row.outcome = run_repeated(method, a, b, pair, repeats);
-        row.matches = row.outcome.matches.size();
-        row.correct = affine_orb::bench::correct_matches(row.outcome.matches, pair.h);
-        const JudgeErrors judged = judge_errors(row.outcome.matches, pair, a.size(), b.size());
-        row.corner_error = judged.ransac;
-        row.magsac_error = judged.magsac;
-        row.own_corner_error =
-            row.outcome.homography_found ? pair_error(cv::Mat(row.outcome.homography), pair, a.size(), b.size()) : 1e9;
-        row.solved = row.corner_error <= affine_orb::bench::kSolvedCornerError;
-        if (method.matcher && spread_orderings > 0) {
-          row.spread = judge_spread(row.outcome.matches, pair, a.size(), b.size(), spread_orderings,
-                                    static_cast<unsigned>(index + 1));
-        }
-        if (method.peer && cache_out.is_open()) cache_out << cache_line(row) << std::flush;
-      }
+      const bool from_cache = method.peer && cached != cache.end();
+      Row row = from_cache ? cached->second : evaluate(method, a, b, pair, index, args);
+      if (!from_cache && method.peer && cache_out.is_open()) cache_out << cache_line(row) << std::flush;
       row.subset = pair.subset;
       row.index = index;
-      std::fprintf(stderr,
-                   "%-24s %-46s kp %5d/%5d matches %5zu distinct %5zu %s (%.1f px, MAGSAC %.1f, own %.1f) stage %d "
-                   "%s%s %.0f ms\n",
-                   row.pair.c_str(), method.name.c_str(), row.outcome.keypoints1, row.outcome.keypoints2, row.matches,
-                   row.correct.distinct, row.solved ? "solved" : "------", std::min(row.corner_error, 9999.0),
-                   std::min(row.magsac_error, 9999.0), std::min(row.own_corner_error, 9999.0), row.outcome.stage,
-                   row.outcome.verified ? "verified" : "", row.outcome.stages.c_str(), row.outcome.ms);
+      print_progress(row);
       rows.push_back(std::move(row));
     }
   }
+  return rows;
+}
 
-  const auto find = [&](const std::string& pair, const std::string& method) -> const Row* {
-    for (const Row& r : rows) {
-      if (r.pair == pair && r.method == method) return &r;
-    }
-    return nullptr;
-  };
-  std::ostringstream md;
-  // Per subset and method: pairs solved and total seconds; the last row, pairs any method solves.
-  const std::vector<std::pair<std::string, std::string>> subset_names = {
-      {"oxford", "Oxford + opencv-doc"}, {"hpatches", "HPatches"}, {"homogr", "Homogr"}, {"evd", "EVD"}};
+/// Per subset and method: pairs solved and total seconds; the last row, pairs any method solves.
+void solved_table(const std::vector<Method>& methods, const std::vector<Row>& rows,
+                  const std::vector<std::pair<std::string, std::string>>& subset_names, std::ostringstream& md) {
   md << "| method |";
   for (const auto& [key, title] : subset_names) md << " " << title << " solved | s |";
   md << "\n|---|";
@@ -870,68 +917,74 @@ int main(int argc, char** argv) {
     md << " " << count << " / " << solved.size() << " | |";
   }
   md << "\n\n";
-  auc_tables(methods, rows, subset_names, md);
-  verification_table(methods, rows, md);
-  if (origins) origin_table(methods, rows, pairs, subset_names, md);
-  if (spread_orderings > 0) spread_tables(methods, rows, spread_orderings, md);
+}
 
-  // Per method: pairs solved; total time over all pairs and over the pairs plain 2000 solves,
-  // against plain 2000 and the affine default in the same run; pairs verified with a wrong model.
+/// The row of `method` on `pair`, or nullptr when the run has none.
+const Row* find_row(const std::vector<Row>& rows, const std::string& pair, const std::string& method) {
+  for (const Row& r : rows) {
+    if (r.pair == pair && r.method == method) return &r;
+  }
+  return nullptr;
+}
+
+/// `a` / `b` as "0.42x", empty when b is not positive.
+std::string ratio(double a, double b) {
+  char text[32] = "";
+  if (b > 0) std::snprintf(text, sizeof(text), "%.2fx", a / b);
+  return text;
+}
+
+/// One method's line of time_table().
+void time_line(const Method& m, const std::vector<Row>& rows, std::ostringstream& md) {
+  int solved = 0, pairs_run = 0, wrong = 0;
+  std::size_t distinct = 0;
+  double ms = 0.0, ms_default = 0.0, ms_easy = 0.0, ms_plain_easy = 0.0;
+  std::map<int, int> stages;
+  for (const Row& r : rows) {
+    if (r.method != m.name) continue;
+    ++pairs_run;
+    solved += r.solved;
+    distinct += r.correct.distinct;
+    ms += r.outcome.ms;
+    if (const Row* d = find_row(rows, r.pair, "ours affine default 1000 + 1000")) ms_default += d->outcome.ms;
+    const Row* p = find_row(rows, r.pair, "ours plain 2000");
+    if (p && p->solved) {
+      ms_easy += r.outcome.ms;
+      ms_plain_easy += p->outcome.ms;
+    }
+    if (m.matcher) {
+      ++stages[r.outcome.stage];
+      // Stopped early on a wrong model: verified before the last stage, and the matches do not
+      // solve the pair.
+      wrong += r.outcome.verified && !r.solved && r.outcome.stage < m.stages;
+    }
+  }
+  std::string stage_text;
+  for (const auto& [stage, count] : stages) {
+    stage_text += (stage_text.empty() ? "" : ", ") + std::to_string(count) + "× " + std::to_string(stage);
+  }
+  char line[512];
+  std::snprintf(line, sizeof(line), "| %s | %d / %d | %zu | %.0f | %s | %s | %s | %s |\n", m.name.c_str(), solved,
+                pairs_run, distinct, ms, ratio(ms, ms_default).c_str(), ratio(ms_easy, ms_plain_easy).c_str(),
+                m.matcher ? std::to_string(wrong).c_str() : "", stage_text.c_str());
+  md << line;
+}
+
+/// Per method: pairs solved; total time over all pairs and over the pairs plain 2000 solves,
+/// against plain 2000 and the affine default in the same run; pairs verified with a wrong model.
+void time_table(const std::vector<Method>& methods, const std::vector<Row>& rows, std::ostringstream& md) {
   md << "| method | pairs solved | distinct correct matches | total ms | vs affine default, same pairs | "
         "vs plain 2000, pairs it solves | stopped early, unsolved | stages run (matcher) |\n"
      << "|---|---:|---:|---:|---:|---:|---:|---|\n";
-  const auto ratio = [](double a, double b) {
-    char text[32] = "";
-    if (b > 0) std::snprintf(text, sizeof(text), "%.2fx", a / b);
-    return std::string(text);
-  };
-  for (const Method& m : methods) {
-    int solved = 0, pairs_run = 0, wrong = 0;
-    std::size_t distinct = 0;
-    double ms = 0.0, ms_default = 0.0, ms_easy = 0.0, ms_plain_easy = 0.0;
-    std::map<int, int> stages;
-    for (const Row& r : rows) {
-      if (r.method != m.name) continue;
-      ++pairs_run;
-      solved += r.solved;
-      distinct += r.correct.distinct;
-      ms += r.outcome.ms;
-      if (const Row* d = find(r.pair, "ours affine default 1000 + 1000")) ms_default += d->outcome.ms;
-      const Row* p = find(r.pair, "ours plain 2000");
-      if (p && p->solved) {
-        ms_easy += r.outcome.ms;
-        ms_plain_easy += p->outcome.ms;
-      }
-      if (m.matcher) {
-        ++stages[r.outcome.stage];
-        // Stopped early on a wrong model: verified before the last stage, and the matches do not
-        // solve the pair.
-        wrong += r.outcome.verified && !r.solved && r.outcome.stage < m.stages;
-      }
-    }
-    std::string stage_text;
-    for (const auto& [stage, count] : stages) {
-      stage_text += (stage_text.empty() ? "" : ", ") + std::to_string(count) + "× " + std::to_string(stage);
-    }
-    char line[512];
-    std::snprintf(line, sizeof(line), "| %s | %d / %d | %zu | %.0f | %s | %s | %s | %s |\n", m.name.c_str(), solved,
-                  pairs_run, distinct, ms, ratio(ms, ms_default).c_str(), ratio(ms_easy, ms_plain_easy).c_str(),
-                  m.matcher ? std::to_string(wrong).c_str() : "", stage_text.c_str());
-    md << line;
-  }
-  if (placement) {
-    md << "\n| method | octave | image-1 octave: correct matches | median px | 90th percentile px | "
-          "image-2 octave: correct matches | median px | 90th percentile px |\n"
-       << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const char* method :
-         {"ours plain 2000", "ours plain 2000, sub-pixel", "ours views on demand", "ours views on demand, sub-pixel"}) {
-      placement_table(method, rows, pairs, md);
-    }
-  }
+  for (const Method& m : methods) time_line(m, rows, md);
+}
+
+/// Every row, a line each: to the Markdown and to the CSV file at `csv_path`.
+void write_rows(const std::vector<Row>& rows, const std::string& csv_path, std::ostringstream& md) {
   md << "\n| pair | method | kp1 | kp2 | matches | distinct correct | corner error px (RANSAC judge / MAGSAC++ judge / "
         "own) | solved | stage | ms |\n"
      << "|---|---|---:|---:|---:|---:|---:|---|---:|---:|\n";
-  std::ofstream csv(out_dir + "/eval_two_view.csv");
+  std::ofstream csv(csv_path);
   csv << "pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,corner_error,own_corner_error,solved,"
          "stage,verified,ms,magsac_corner_error,pair_index,judge_spread_min,judge_spread_median,judge_spread_max\n";
   for (const Row& r : rows) {
@@ -956,7 +1009,47 @@ int main(int argc, char** argv) {
     }
     csv << '\n';
   }
-  std::ofstream(out_dir + "/eval_two_view.md") << md.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::optional<Arguments> args = parse_arguments(argc, argv);
+  if (!args) return 2;
+  std::error_code made;
+  std::filesystem::create_directories(args->out_dir, made);
+  if (made) {
+    std::fprintf(stderr, "eval_two_view: cannot create %s: %s\n", args->out_dir.c_str(), made.message().c_str());
+    return 2;
+  }
+  cv::setNumThreads(1);
+  const affine_orb::TwoViewOptions defaults;
+  std::vector<Method> methods = standard_methods(defaults);
+  if (args->sweep) add_sweep(defaults, methods);
+  if (!args->methods.empty()) keep_named(args->methods, methods);
+  const std::vector<affine_orb::bench::ViewpointPair> pairs = selected_pairs(*args);
+  const std::vector<Row> rows = run_methods(methods, pairs, *args);
+
+  const std::vector<std::pair<std::string, std::string>> subset_names = {
+      {"oxford", "Oxford + opencv-doc"}, {"hpatches", "HPatches"}, {"homogr", "Homogr"}, {"evd", "EVD"}};
+  std::ostringstream md;
+  solved_table(methods, rows, subset_names, md);
+  auc_tables(methods, rows, subset_names, md);
+  verification_table(methods, rows, md);
+  if (args->origins) origin_table(methods, rows, pairs, subset_names, md);
+  if (args->judge_spread > 0) spread_tables(methods, rows, args->judge_spread, md);
+  time_table(methods, rows, md);
+  if (args->placement) {
+    md << "\n| method | octave | image-1 octave: correct matches | median px | 90th percentile px | "
+          "image-2 octave: correct matches | median px | 90th percentile px |\n"
+       << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const char* method :
+         {"ours plain 2000", "ours plain 2000, sub-pixel", "ours views on demand", "ours views on demand, sub-pixel"}) {
+      placement_table(method, rows, pairs, md);
+    }
+  }
+  write_rows(rows, args->out_dir + "/eval_two_view.csv", md);
+  std::ofstream(args->out_dir + "/eval_two_view.md") << md.str();
   std::fputs(md.str().c_str(), stdout);
   return 0;
 }

@@ -379,14 +379,9 @@ class PyTwoViewMatcher {
   std::mutex mutex_;
 };
 
-}  // namespace
-
-PYBIND11_MODULE(affine_orb, m) {
-  m.doc() = "Affine-ORB feature extraction, Hamming matching and H/F model selection (C++ library affine_orb).";
-  // The version of the headers the module was compiled with (include/affine_orb/version.hpp).
-  m.attr("__version__") = affine_orb::version();
+/// Extractor: keypoints and descriptors of one image.
+void bind_extractor(py::module_& m) {
   const affine_orb::ExtractorOptions defaults;
-
   py::class_<PyExtractor>(m, "Extractor",
                           "Extracts keypoints and binary descriptors from grey images (affine_orb::Extractor).")
       .def(py::init([](int features, double max_tilt, const std::string& descriptor, int threads, double view_features,
@@ -429,7 +424,10 @@ PYBIND11_MODULE(affine_orb, m) {
       .def_property_readonly(
           "carry_shortfalls", [](const PyExtractor& e) { return e.options().carry_shortfalls; },
           "Whether a level's shortfall of corners passes to the other levels.");
+}
 
+/// match(): Hamming matching of two descriptor arrays.
+void bind_match(py::module_& m) {
   m.def(
       "match",
       [](const py::handle& descriptors1, const py::handle& descriptors2, float ratio, bool cross_check,
@@ -458,7 +456,10 @@ PYBIND11_MODULE(affine_orb, m) {
       "Nearest-neighbour Hamming matches (affine_orb::match) of two uint8 descriptor arrays with the same number "
       "of columns, as a list of cv2.DMatch (queryIdx, trainIdx, distance in bits): Lowe's ratio test, optional "
       "mutual check and maximum distance.");
+}
 
+/// select_model(): H or F for two point arrays.
+void bind_select_model(py::module_& m) {
   m.def(
       "select_model",
       [](const py::handle& points1, const py::handle& points2, double sigma, double homography_ratio_threshold,
@@ -505,37 +506,51 @@ PYBIND11_MODULE(affine_orb, m) {
       "\"score_ratio\" (eq. 22), \"gric\" or \"inlier_ratio\" (affine_orb::SelectionRule). octaves1, "
       "octaves2: the keypoints' pyramid octaves (cv2.KeyPoint.octave), which scale each point's sigma by "
       "1.2^octave; both or neither.");
-  const std::string options_doc =
-      "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
-      "`features` keypoints; while the pair is not verified, each stage (max_tilt, view_features) adds the views of "
-      "tilts up to max_tilt with view_features x features keypoints per image, and matching and H/F selection run "
-      "again. stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
-      "stage of 0.5 per further factor sqrt(2), e.g. (4, 0.5) and (5.66, 0.5) for max_tilt=5.66). A stage verifies "
-      "the pair when its chosen model has min_inliers inliers, chance explains it at most max_false_alarms times "
-      "(the a-contrario test: number of false alarms among the matches; None = no test), at least min_inlier_ratio "
-      "of the matches are its inliers (None, the default = no bound) and, for a homography, homographies fitted to "
-      "the two halves of its RANSAC inliers map image 1's corners within max_half_disagreement pixels of each other "
-      "(None = no precision test; 10 by default, twice the 5 px a solved pair may be off). A supported homography is "
-      "refined by guided_rounds rounds of matching within a gate around its predictions and re-estimation (0 = "
-      "off); with align_correspondences, image 2's point of every match is aligned with image 1's patch under it "
-      "(sub-pixel correspondences) and the homography re-estimated on them; with final_fit (the default), a "
-      "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
-      "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
-      "accepts, never looser than the unguided ones. last_stage_search (on by default): when the last stage's "
-      "model lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose homography "
-      "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
-      "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
-      "matches are a few percent. ";
-  const std::string result_doc =
-      "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
-      "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
-      "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image 2's "
-      "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model "
-      "(\"homography\", \"fundamental\" or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = 0, "
-      "or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement "
-      "(pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned (matches aligned), "
-      "last_stage_search (the model is the last stage's search's), milliseconds). Invalid options raise "
-      "ValueError, wrong types TypeError.";
+}
+
+/// What TwoViewMatcher's and match_images()' options do, for their docstrings.
+std::string two_view_options_doc() {
+  return "Two-view matching with views on demand (affine_orb::TwoViewMatcher): stage 0 matches the images' own "
+         "`features` keypoints; while the pair is not verified, each stage (max_tilt, view_features) adds the views of "
+         "tilts up to max_tilt with view_features x features keypoints per image, and matching and H/F selection run "
+         "again. stages=None: the stages up to max_tilt (affine_orb::stages_up_to: (2, 0.25) and (2.83, 0.5), then one "
+         "stage of 0.5 per further factor sqrt(2), e.g. (4, 0.5) and (5.66, 0.5) for max_tilt=5.66). A stage verifies "
+         "the pair when its chosen model has min_inliers inliers, chance explains it at most max_false_alarms times "
+         "(the a-contrario test: number of false alarms among the matches; None = no test), at least min_inlier_ratio "
+         "of the matches are its inliers (None, the default = no bound) and, for a homography, homographies fitted to "
+         "the two halves of its RANSAC inliers map image 1's corners within max_half_disagreement pixels of each other "
+         "(None = no precision test; 10 by default, twice the 5 px a solved pair may be off). A supported homography "
+         "is "
+         "refined by guided_rounds rounds of matching within a gate around its predictions and re-estimation (0 = "
+         "off); with align_correspondences, image 2's point of every match is aligned with image 1's patch under it "
+         "(sub-pixel correspondences) and the homography re-estimated on them; with final_fit (the default), a "
+         "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
+         "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
+         "accepts, never looser than the unguided ones. last_stage_search (on by default): when the last stage's "
+         "model lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose "
+         "homography "
+         "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
+         "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
+         "matches are a few percent. ";
+}
+
+/// What TwoViewMatcher.match() and match_images() return, for their docstrings.
+std::string two_view_result_doc() {
+  return "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
+         "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
+         "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image "
+         "2's "
+         "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model "
+         "(\"homography\", \"fundamental\" or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = "
+         "0, "
+         "or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement "
+         "(pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned (matches aligned), "
+         "last_stage_search (the model is the last stage's search's), milliseconds). Invalid options raise "
+         "ValueError, wrong types TypeError.";
+}
+
+/// TwoViewMatcher: two-view matching that keeps its buffers over many pairs.
+void bind_two_view_matcher(py::module_& m, const std::string& options_doc, const std::string& result_doc) {
   auto matcher_class = py::class_<PyTwoViewMatcher>(
       m, "TwoViewMatcher",
       "Two-view matcher (affine_orb::TwoViewMatcher) that keeps its buffers from call to call: build one and "
@@ -567,6 +582,10 @@ PYBIND11_MODULE(affine_orb, m) {
             result_doc)
                .c_str())
       .def_property_readonly("descriptor_size", &PyTwoViewMatcher::descriptor_size, "Bytes per descriptor row.");
+}
+
+/// match_images(): TwoViewMatcher for one pair.
+void bind_match_images(py::module_& m, const std::string& options_doc, const std::string& result_doc) {
   std::apply(
       [&](auto... arguments) {
         m.def(
@@ -593,4 +612,19 @@ PYBIND11_MODULE(affine_orb, m) {
                 .c_str());
       },
       two_view_arguments());
+}
+
+}  // namespace
+
+PYBIND11_MODULE(affine_orb, m) {
+  m.doc() = "Affine-ORB feature extraction, Hamming matching and H/F model selection (C++ library affine_orb).";
+  // The version of the headers the module was compiled with (include/affine_orb/version.hpp).
+  m.attr("__version__") = affine_orb::version();
+  bind_extractor(m);
+  bind_match(m);
+  bind_select_model(m);
+  const std::string options_doc = two_view_options_doc();
+  const std::string result_doc = two_view_result_doc();
+  bind_two_view_matcher(m, options_doc, result_doc);
+  bind_match_images(m, options_doc, result_doc);
 }

@@ -634,10 +634,9 @@ affine_orb::TwoViewOptions without_guided_matching(affine_orb::TwoViewOptions o)
   return o;
 }
 
-/// `o` with the final fit of the homography (TwoViewOptions::final_fit), or without it.
-affine_orb::TwoViewOptions with_final_fit(affine_orb::TwoViewOptions o, bool on) {
-  o.final_fit = on ? std::optional<affine_orb::HomographyRefinementOptions>(affine_orb::HomographyRefinementOptions{})
-                   : std::nullopt;
+/// `o` without the final fit of the homography (TwoViewOptions::final_fit).
+affine_orb::TwoViewOptions without_final_fit(affine_orb::TwoViewOptions o) {
+  o.final_fit.reset();
   return o;
 }
 
@@ -684,9 +683,9 @@ std::vector<Method> standard_methods(const affine_orb::TwoViewOptions& defaults)
       two_view("ours views on demand, no guided matching", without_guided_matching(defaults)),
       two_view("ours views on demand, no guided matching, no precision test",
                with_precision_test(without_guided_matching(defaults), std::nullopt)),
-      two_view("ours views on demand, no final fit", with_final_fit(defaults, false)),
+      two_view("ours views on demand, no final fit", without_final_fit(defaults)),
       two_view("ours views on demand, no guided matching, no final fit",
-               with_final_fit(without_guided_matching(defaults), false)),
+               without_final_fit(without_guided_matching(defaults))),
       two_view("ours views on demand, min_inliers 15, no last-stage search", before_search(defaults)),
       peer("cv::ORB 2000", cv::ORB::create(2000), model),
       peer("cv::AKAZE", cv::AKAZE::create(), model),

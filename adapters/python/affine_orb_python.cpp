@@ -520,15 +520,13 @@ std::string two_view_options_doc() {
          "of the matches are its inliers (None, the default = no bound) and, for a homography, homographies fitted to "
          "the two halves of its RANSAC inliers map image 1's corners within max_half_disagreement pixels of each other "
          "(None = no precision test; 10 by default, twice the 5 px a solved pair may be off). A supported homography "
-         "is "
-         "refined by guided_rounds rounds of matching within a gate around its predictions and re-estimation (0 = "
+         "is refined by guided_rounds rounds of matching within a gate around its predictions and re-estimation (0 = "
          "off); with align_correspondences, image 2's point of every match is aligned with image 1's patch under it "
          "(sub-pixel correspondences) and the homography re-estimated on them; with final_fit (the default), a "
          "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
          "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
-         "accepts, never looser than the unguided ones. last_stage_search (on by default): when the last stage's "
-         "model lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose "
-         "homography "
+         "accepts, never looser than the unguided ones. last_stage_search (on by default): when the last stage's model "
+         "lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose homography "
          "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
          "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
          "matches are a few percent. ";
@@ -539,14 +537,12 @@ std::string two_view_result_doc() {
   return "Returns a dict: verified, stage (the last stage run, 0 = no views), keypoints1/2 (cv2.KeyPoint lists, "
          "original pixels), descriptors1/2, views1/2, matches (cv2.DMatch list: queryIdx into keypoints1, trainIdx "
          "into keypoints2), inliers (bool per match, of the chosen model), points2 (N x 2 float32: per match, image "
-         "2's "
-         "point of the correspondence, aligned with align_correspondences, else the train keypoint's position), model "
-         "(\"homography\", \"fundamental\" or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F x1 = "
-         "0, "
-         "or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, half_disagreement "
-         "(pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned (matches aligned), "
-         "last_stage_search (the model is the last stage's search's), milliseconds). Invalid options raise "
-         "ValueError, wrong types TypeError.";
+         "2's point of the correspondence, aligned with align_correspondences, else the train keypoint's position), "
+         "model (\"homography\", \"fundamental\" or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F "
+         "x1 = 0, or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, "
+         "half_disagreement (pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned "
+         "(matches aligned), last_stage_search (the model is the last stage's search's), milliseconds). Invalid "
+         "options raise ValueError, wrong types TypeError.";
 }
 
 /// TwoViewMatcher: two-view matching that keeps its buffers over many pairs.

@@ -18,92 +18,97 @@
 #include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
 
-int main(int argc, char** argv) {
-  int rounds = 31;
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::string(argv[i]) == "--rounds") rounds = std::max(1, std::atoi(argv[i + 1]));
-  }
-  cv::setNumThreads(1);
-  const std::string path = affine_orb::bench::data_dir() + "/oxford/graf/img1.png";
-  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) {
-    std::fprintf(stderr, "cannot read %s\n", path.c_str());
-    return 1;
-  }
-  cv::resize(image, image, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+namespace {
 
+/// Plain extraction of 1000 features: the options of both our extractors.
+affine_orb::ExtractorOptions plain_options() {
   affine_orb::ExtractorOptions options;
   options.features = 1000;
   options.views.max_tilt = 1.0;
-  affine_orb::Extractor<affine_orb::Rbrief> rbrief(options);
-  affine_orb::Extractor<affine_orb::Brisk> brisk(options);
-  const cv::Ptr<cv::ORB> orb = cv::ORB::create(1000, 1.2f, 8, 31, 0, 2, cv::ORB::FAST_SCORE);
-  const cv::Ptr<cv::BRISK> cv_brisk = cv::BRISK::create();
+  return options;
+}
 
-  std::size_t n_rbrief = 0, n_brisk = 0, n_orb = 0, n_cv_brisk = 0;
+/// Everything the timed methods run and what they count, kept alive across the rounds.
+struct Contenders {
+  explicit Contenders(const cv::Mat& input) : image(input) {
+    // Keypoints for the description-only comparison: our BRISK keypoints of level 0 (size set to
+    // cv::BRISK's pattern scale 1 for a fair comparison: cv::BRISK picks its pattern from the size).
+    for (const auto& kp : brisk.extract(image).keypoints) {
+      if (kp.octave == 0) level0.push_back(kp);
+    }
+    brisk_out.resize(level0.size());
+  }
+  cv::Mat image;
+  affine_orb::Extractor<affine_orb::Rbrief> rbrief{plain_options()};
+  affine_orb::Extractor<affine_orb::Brisk> brisk{plain_options()};
+  cv::Ptr<cv::ORB> orb = cv::ORB::create(1000, 1.2f, 8, 31, 0, 2, cv::ORB::FAST_SCORE);
+  cv::Ptr<cv::BRISK> cv_brisk = cv::BRISK::create();
+  std::vector<cv::KeyPoint> level0;
+  affine_orb::Brisk::LevelData level_data;
+  std::vector<affine_orb::BinaryDescriptor<512>> brisk_out;
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
+  /// Keypoints each method gave in its last run, in the order of the methods.
+  std::size_t counts[6] = {};
+};
 
-  // Keypoints for the description-only comparison: our BRISK keypoints of level 0 (size set to
-  // cv::BRISK's pattern scale 1 for a fair comparison: cv::BRISK picks its pattern from the size).
-  const auto brisk_features = brisk.extract(image);
-  std::vector<cv::KeyPoint> level0;
-  for (const auto& kp : brisk_features.keypoints) {
-    if (kp.octave == 0) level0.push_back(kp);
-  }
-  const affine_orb::Brisk& policy = brisk.descriptor();
-  affine_orb::Brisk::LevelData level_data;
-  std::vector<affine_orb::BinaryDescriptor<512>> brisk_out(level0.size());
-
-  std::vector<affine_orb::bench::Method> methods = {
-      {"ours rBRIEF extract", [&] { n_rbrief = rbrief.extract(image).size(); }, {}},
+/// The timed methods in pairs, ours then its peer: extraction with rBRIEF and cv::ORB, with BRISK
+/// and cv::BRISK, then BRISK description alone on the same keypoints.
+std::vector<affine_orb::bench::Method> timed_methods(Contenders& c) {
+  const affine_orb::Brisk& policy = c.brisk.descriptor();
+  return {
+      {"ours rBRIEF extract", [&c] { c.counts[0] = c.rbrief.extract(c.image).size(); }, {}},
       {"cv::ORB extract",
-       [&] {
-         orb->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
-         n_orb = keypoints.size();
+       [&c] {
+         c.orb->detectAndCompute(c.image, cv::noArray(), c.keypoints, c.descriptors);
+         c.counts[1] = c.keypoints.size();
        },
        {}},
-      {"ours BRISK extract", [&] { n_brisk = brisk.extract(image).size(); }, {}},
+      {"ours BRISK extract", [&c] { c.counts[2] = c.brisk.extract(c.image).size(); }, {}},
       {"cv::BRISK extract",
-       [&] {
-         cv_brisk->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
-         n_cv_brisk = keypoints.size();
+       [&c] {
+         c.cv_brisk->detectAndCompute(c.image, cv::noArray(), c.keypoints, c.descriptors);
+         c.counts[3] = c.keypoints.size();
        },
        {}},
       {"ours BRISK describe",
-       [&] {
-         policy.prepare(image, level_data);
-         for (std::size_t i = 0; i < level0.size(); ++i) {
-           const float angle = policy.orientation(level_data, level0[i].pt);
-           brisk_out[i] = policy.describe(level_data, level0[i].pt, angle);
+       [&c, &policy] {
+         policy.prepare(c.image, c.level_data);
+         for (std::size_t i = 0; i < c.level0.size(); ++i) {
+           const float angle = policy.orientation(c.level_data, c.level0[i].pt);
+           c.brisk_out[i] = policy.describe(c.level_data, c.level0[i].pt, angle);
          }
+         c.counts[4] = c.level0.size();
        },
        {}},
       {"cv::BRISK describe",
-       [&] {
-         std::vector<cv::KeyPoint> kps = level0;
-         cv_brisk->compute(image, kps, descriptors);
+       [&c] {
+         std::vector<cv::KeyPoint> kps = c.level0;
+         c.cv_brisk->compute(c.image, kps, c.descriptors);
+         c.counts[5] = c.level0.size();
        },
        {}},
   };
-  affine_orb::bench::time_interleaved(methods, rounds);
+}
 
-  auto med = [&](int i) { return affine_orb::bench::median(methods[static_cast<std::size_t>(i)].ms); };
+/// Prints the README's table: per method its keypoints, median time and, on our rows, the ratio
+/// to the peer below it.
+void print_timing(const std::vector<affine_orb::bench::Method>& methods, const Contenders& c, int rounds) {
+  auto med = [&](std::size_t i) { return affine_orb::bench::median(methods[i].ms); };
   std::printf("Plain extraction, 640x480 (graf1 resized), single thread, medians of %d interleaved rounds\n\n", rounds);
   std::printf("| method | keypoints | median ms | ours / peer |\n|---|---:|---:|---:|\n");
-  const std::size_t counts[] = {n_rbrief, n_orb, n_brisk, n_cv_brisk, level0.size(), level0.size()};
   for (std::size_t i = 0; i < methods.size(); ++i) {
-    // Rows come in pairs, ours then its peer; the ratio stands on our row.
-    const int k = static_cast<int>(i);
     char ratio[32] = "";
-    if (i % 2 == 0) std::snprintf(ratio, sizeof(ratio), "%.2f", med(k) / med(k + 1));
-    std::printf("| %s | %zu | %.3f | %s |\n", methods[i].name.c_str(), counts[i], med(k), ratio);
+    if (i % 2 == 0) std::snprintf(ratio, sizeof(ratio), "%.2f", med(i) / med(i + 1));
+    std::printf("| %s | %zu | %.3f | %s |\n", methods[i].name.c_str(), c.counts[i], med(i), ratio);
   }
   std::printf("\n");
+}
 
-  // Bit compatibility with ORB: cv::ORB::compute with our level-0 keypoints (angles provided)
-  // must give our bits.
-  const auto ours = rbrief.extract(image);
+/// Bit compatibility with ORB: cv::ORB::compute with our level-0 keypoints (angles provided) must
+/// give our bits. Prints how many rows are identical of those cv::ORB keeps.
+void print_bit_compatibility(Contenders& c) {
+  const auto ours = c.rbrief.extract(c.image);
   std::vector<cv::KeyPoint> kps;
   std::vector<std::size_t> index;
   for (std::size_t i = 0; i < ours.size(); ++i) {
@@ -113,7 +118,8 @@ int main(int argc, char** argv) {
     }
   }
   std::vector<cv::KeyPoint> computed = kps;
-  orb->detectAndCompute(image, cv::noArray(), computed, descriptors, true);
+  cv::Mat descriptors;
+  c.orb->detectAndCompute(c.image, cv::noArray(), computed, descriptors, true);
   const cv::Mat mine = affine_orb::descriptors_to_mat(ours.descriptors);
   std::size_t equal_rows = 0, compared = 0;
   for (std::size_t i = 0; i < computed.size(); ++i) {
@@ -131,5 +137,27 @@ int main(int argc, char** argv) {
   // the pixels; ORB-SLAM2, whose vocabulary the rows must match, smooths a continuous copy as we do.
   std::printf("rBRIEF rows bit-identical to cv::ORB::compute on our level-0 keypoints: %zu of %zu\n", equal_rows,
               compared);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int rounds = 31;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--rounds") rounds = std::max(1, std::atoi(argv[i + 1]));
+  }
+  cv::setNumThreads(1);
+  const std::string path = affine_orb::bench::data_dir() + "/oxford/graf/img1.png";
+  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (image.empty()) {
+    std::fprintf(stderr, "cannot read %s\n", path.c_str());
+    return 1;
+  }
+  cv::resize(image, image, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+  Contenders contenders(image);
+  std::vector<affine_orb::bench::Method> methods = timed_methods(contenders);
+  affine_orb::bench::time_interleaved(methods, rounds);
+  print_timing(methods, contenders, rounds);
+  print_bit_compatibility(contenders);
   return 0;
 }

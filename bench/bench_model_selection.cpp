@@ -244,12 +244,11 @@ Eigen::Matrix3d read_oxford_homography(const std::string& path) {
   return h;
 }
 
-std::vector<LabelledPair> labelled_pairs() {
-  affine_orb::ExtractorOptions options;
-  options.spreading = affine_orb::Spreading::kStrongest;
-  options.threads = 2;
-  affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
-  std::vector<LabelledPair> pairs;
+using PairExtractor = affine_orb::Extractor<affine_orb::Rbrief>;
+
+/// Every Oxford pair 1->2 ... 1->6 with its ground-truth homography, then opencv-doc's graf1->graf3
+/// (with its homography) and box->box_in_scene; all planar.
+void add_planar_pairs(PairExtractor& extractor, std::vector<LabelledPair>& pairs) {
   const std::string data = AFFINE_ORB_DATA_DIR;
   const std::string doc = AFFINE_ORB_OPENCV_SAMPLES_DIR;
   for (const std::string sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
@@ -261,21 +260,23 @@ std::vector<LabelledPair> labelled_pairs() {
       pairs.push_back(p);
     }
   }
-  {
-    const cv::Mat a = read_gray(doc + "/graf1.png");
-    LabelledPair p = labelled("opencv-doc graf1->graf3", "planar", a);
-    match_into(p, extractor, a, read_gray(doc + "/graf3.png"));
-    cv::FileStorage fs(doc + "/H1to3p.xml", cv::FileStorage::READ);
-    cv::Mat h;
-    fs.getFirstTopLevelNode() >> h;
-    if (h.rows == 3 && h.cols == 3) p.homography = to_eigen(h);
-    pairs.push_back(p);
-    const cv::Mat box = read_gray(doc + "/box.png");
-    LabelledPair q = labelled("opencv-doc box->box_in_scene", "planar", box);
-    match_into(q, extractor, box, read_gray(doc + "/box_in_scene.png"));
-    pairs.push_back(q);
-  }
-  // Pure rotations: a photo and its image by a camera turned by R about its centre, x2 ~ K R K^-1 x1.
+  const cv::Mat a = read_gray(doc + "/graf1.png");
+  LabelledPair p = labelled("opencv-doc graf1->graf3", "planar", a);
+  match_into(p, extractor, a, read_gray(doc + "/graf3.png"));
+  cv::FileStorage fs(doc + "/H1to3p.xml", cv::FileStorage::READ);
+  cv::Mat h;
+  fs.getFirstTopLevelNode() >> h;
+  if (h.rows == 3 && h.cols == 3) p.homography = to_eigen(h);
+  pairs.push_back(p);
+  const cv::Mat box = read_gray(doc + "/box.png");
+  LabelledPair q = labelled("opencv-doc box->box_in_scene", "planar", box);
+  match_into(q, extractor, box, read_gray(doc + "/box_in_scene.png"));
+  pairs.push_back(q);
+}
+
+/// Pure rotations: a photo and its image by a camera turned by R about its centre, x2 ~ K R K^-1 x1.
+void add_rotation_pairs(PairExtractor& extractor, std::vector<LabelledPair>& pairs) {
+  const std::string data = AFFINE_ORB_DATA_DIR;
   const std::array<std::pair<std::string, double>, 4> rotated = {
       std::make_pair("graf", 6.0), std::make_pair("boat", 8.0), std::make_pair("bikes", 10.0),
       std::make_pair("leuven", 12.0)};
@@ -299,24 +300,35 @@ std::vector<LabelledPair> labelled_pairs() {
     match_into(p, extractor, a, b);
     pairs.push_back(p);
   }
-  // KITTI 06: real 3-D street scenes, frame gaps 1, 2, 4, 8.
+}
+
+/// The 3-D pair of `sequence`'s frames i -> i + gap, named "`label` i->i+gap", with its true
+/// relative rotation and the sequence's camera.
+LabelledPair kitti_pair(PairExtractor& extractor, const affine_orb::examples::Sequence& sequence,
+                        const std::string& label, int i, int gap) {
+  const auto& f1 = sequence.frames[static_cast<std::size_t>(i)];
+  const auto& f2 = sequence.frames[static_cast<std::size_t>(i + gap)];
+  const cv::Mat a = affine_orb::examples::load_frame(f1);
+  LabelledPair p = labelled(label + " " + std::to_string(i) + "->" + std::to_string(i + gap), "3-D", a);
+  p.rotation = affine_orb::examples::relative_rotation(*f1.pose, *f2.pose);
+  p.camera = sequence.camera;
+  match_into(p, extractor, a, affine_orb::examples::load_frame(f2));
+  return p;
+}
+
+/// KITTI 06: real 3-D street scenes, frame gaps 1, 2, 4, 8. KITTI 00: real forward driving (the
+/// car drives off and takes its first turn), frames i -> i + 3 and i -> i + 6 for i = 0, 10, ...,
+/// 150, kept when poses.txt gives the camera a translation of at least 2 m between them: under
+/// forward motion parallax grows with the baseline, and 2 m makes the scene clearly 3-D for the
+/// near half of the image (road, parked cars, walls).
+void add_kitti_pairs(PairExtractor& extractor, std::vector<LabelledPair>& pairs) {
+  const std::string data = AFFINE_ORB_DATA_DIR;
   const affine_orb::examples::Sequence kitti = affine_orb::examples::read_kitti(data + "/kitti06");
   for (const int gap : {1, 2, 4, 8}) {
     for (int i = 0; i + gap < static_cast<int>(kitti.frames.size()); i += 10) {
-      const auto& f1 = kitti.frames[static_cast<std::size_t>(i)];
-      const auto& f2 = kitti.frames[static_cast<std::size_t>(i + gap)];
-      const cv::Mat a = affine_orb::examples::load_frame(f1);
-      LabelledPair p = labelled("KITTI 06 " + std::to_string(i) + "->" + std::to_string(i + gap), "3-D", a);
-      p.rotation = affine_orb::examples::relative_rotation(*f1.pose, *f2.pose);
-      p.camera = kitti.camera;
-      match_into(p, extractor, a, affine_orb::examples::load_frame(f2));
-      pairs.push_back(p);
+      pairs.push_back(kitti_pair(extractor, kitti, "KITTI 06", i, gap));
     }
   }
-  // KITTI 00: real forward driving (the car drives off and takes its first turn). Frames i -> i + 3
-  // and i -> i + 6 for i = 0, 10, ..., 150, kept when poses.txt gives the camera a translation of
-  // at least 2 m between them: under forward motion parallax grows with the baseline, and 2 m makes
-  // the scene clearly 3-D for the near half of the image (road, parked cars, walls).
   const affine_orb::examples::Sequence kitti00 = affine_orb::examples::read_kitti(data + "/kitti00");
   for (int i = 0; i + 3 < static_cast<int>(kitti00.frames.size()); i += 10) {
     for (const int gap : {3, 6}) {
@@ -324,15 +336,13 @@ std::vector<LabelledPair> labelled_pairs() {
       const auto& f1 = kitti00.frames[static_cast<std::size_t>(i)];
       const auto& f2 = kitti00.frames[static_cast<std::size_t>(i + gap)];
       if ((f2.pose->position - f1.pose->position).norm() < kMinKittiBaseline) continue;
-      const cv::Mat a = affine_orb::examples::load_frame(f1);
-      LabelledPair p = labelled("KITTI 00 " + std::to_string(i) + "->" + std::to_string(i + gap), "3-D", a);
-      p.rotation = affine_orb::examples::relative_rotation(*f1.pose, *f2.pose);
-      p.camera = kitti00.camera;
-      match_into(p, extractor, a, affine_orb::examples::load_frame(f2));
-      pairs.push_back(p);
+      pairs.push_back(kitti_pair(extractor, kitti00, "KITTI 00", i, gap));
     }
   }
-  // Synthetic 3-D scenes (make_data(): depths 2-10 m, 0.6 m of translation, 30 % outliers).
+}
+
+/// Synthetic 3-D scenes (make_data(): depths 2-10 m, 0.6 m of translation, 30 % outliers).
+void add_synthetic_pairs(std::vector<LabelledPair>& pairs) {
   const Eigen::Matrix3d k = intrinsics();
   for (std::uint64_t seed = 1000; seed < 1010; ++seed) {
     const Data d = make_data(false, seed);
@@ -345,18 +355,32 @@ std::vector<LabelledPair> labelled_pairs() {
     p.camera = affine_orb::PinholeCamera{k(0, 0), k(1, 1), k(0, 2), k(1, 2)};
     pairs.push_back(p);
   }
+}
+
+/// Every labelled pair: planar, rotations, KITTI, synthetic, in that order.
+std::vector<LabelledPair> labelled_pairs() {
+  affine_orb::ExtractorOptions options;
+  options.spreading = affine_orb::Spreading::kStrongest;
+  options.threads = 2;
+  PairExtractor extractor(options);
+  std::vector<LabelledPair> pairs;
+  add_planar_pairs(extractor, pairs);
+  add_rotation_pairs(extractor, pairs);
+  add_kitti_pairs(extractor, pairs);
+  add_synthetic_pairs(pairs);
   return pairs;
 }
 
-/// The decision table: per rule, the right decisions per class and the pose errors.
-void labelled_table() {
-  const std::vector<LabelledPair> pairs = labelled_pairs();
+/// A selection rule of the decision table.
+struct Rule {
+  std::string name;
+  affine_orb::ModelSelectionOptions options;
+  bool octaves = false;  ///< σ scaled by each keypoint's octave (select_model() with octaves)
+};
+
+/// The rules of the decision table, the default first.
+std::vector<Rule> selection_rules() {
   using affine_orb::SelectionRule;
-  struct Rule {
-    std::string name;
-    affine_orb::ModelSelectionOptions options;
-    bool octaves = false;  ///< σ scaled by each keypoint's octave (select_model() with octaves)
-  };
   const auto make_rule = [](const std::string& name, SelectionRule r, bool octaves) {
     Rule out{name, {}, octaves};
     out.options.rule = r;
@@ -376,6 +400,51 @@ void labelled_table() {
   };
   rules[4].options.score_ratio.threshold = 0.40;
   rules[7].options.gric.sigma = 2.0;
+  return rules;
+}
+
+/// Prints the decision table's line of `rule` over `pairs`: right decisions per class, median
+/// corner and rotation errors, the pairs it gets wrong.
+void print_rule_line(const Rule& rule, const std::vector<LabelledPair>& pairs) {
+  std::map<std::string, std::pair<int, int>> right;  // kind -> (right, total)
+  std::vector<double> corner, rotation_error_rot, rotation_error_3d;
+  std::string wrong;
+  for (const LabelledPair& p : pairs) {
+    affine_orb::ModelSelectionResult r;
+    if (p.points1.size() >= 8) {
+      r = rule.octaves ? affine_orb::select_model(p.points1, p.points2, p.octaves1, p.octaves2, rule.options)
+                       : affine_orb::select_model(p.points1, p.points2, rule.options);
+    }
+    const bool want_h = p.kind != "3-D";
+    const bool is_right = r.success && (r.model == affine_orb::GeometricModel::kHomography) == want_h;
+    right[p.kind].first += is_right;
+    right[p.kind].second += 1;
+    if (!is_right) wrong += (wrong.empty() ? "" : ", ") + p.name;
+    if (p.homography && r.model == affine_orb::GeometricModel::kHomography)
+      corner.push_back(corner_error(r.homography, *p.homography, p.size1));
+    if (p.rotation && p.camera && r.success) {
+      const affine_orb::RelativePose pose = affine_orb::relative_pose(r, *p.camera, p.points1, p.points2);
+      if (pose.success)
+        (p.kind == "rotation" ? rotation_error_rot : rotation_error_3d)
+            .push_back(affine_orb::rotation_angle_degrees(pose.rotation, *p.rotation));
+    }
+  }
+  auto share = [&](const std::string& kind) {
+    const auto [ok, total] = right[kind];
+    char text[32];
+    std::snprintf(text, sizeof(text), "%d / %d", ok, total);
+    return std::string(text);
+  };
+  auto med = [](const std::vector<double>& v) { return v.empty() ? std::nan("") : median(v); };
+  std::printf("| %s | %s | %s | %s | %.2f | %.3f / %.3f | %s |\n", rule.name.c_str(), share("planar").c_str(),
+              share("rotation").c_str(), share("3-D").c_str(), med(corner), med(rotation_error_rot),
+              med(rotation_error_3d), wrong.empty() ? "none" : wrong.c_str());
+}
+
+/// The decision table: per rule, the right decisions per class and the pose errors; then the
+/// statistics of the default rule and of eq. 22 per pair, to show the margins.
+void labelled_table() {
+  const std::vector<LabelledPair> pairs = labelled_pairs();
   std::printf(
       "\n## H or F on labelled pairs\n\n%zu pairs; right = H chosen on planar and rotation pairs, F on 3-D "
       "pairs; corner error = median px of the chosen H on the pairs with a ground-truth H where H was "
@@ -384,43 +453,7 @@ void labelled_table() {
   std::printf(
       "| rule | planar right | rotations right | 3-D right | planar corner error px | rotation error deg, "
       "rotations / 3-D | wrong pairs |\n|---|---:|---:|---:|---:|---:|---|\n");
-  const auto run = [](const LabelledPair& p, const Rule& r) {
-    if (p.points1.size() < 8) return affine_orb::ModelSelectionResult{};
-    return r.octaves ? affine_orb::select_model(p.points1, p.points2, p.octaves1, p.octaves2, r.options)
-                     : affine_orb::select_model(p.points1, p.points2, r.options);
-  };
-  for (const Rule& rule : rules) {
-    std::map<std::string, std::pair<int, int>> right;  // kind -> (right, total)
-    std::vector<double> corner, rotation_error_rot, rotation_error_3d;
-    std::string wrong;
-    for (const LabelledPair& p : pairs) {
-      const affine_orb::ModelSelectionResult r = run(p, rule);
-      const bool want_h = p.kind != "3-D";
-      const bool is_right = r.success && (r.model == affine_orb::GeometricModel::kHomography) == want_h;
-      right[p.kind].first += is_right;
-      right[p.kind].second += 1;
-      if (!is_right) wrong += (wrong.empty() ? "" : ", ") + p.name;
-      if (p.homography && r.model == affine_orb::GeometricModel::kHomography)
-        corner.push_back(corner_error(r.homography, *p.homography, p.size1));
-      if (p.rotation && p.camera && r.success) {
-        const affine_orb::RelativePose pose = affine_orb::relative_pose(r, *p.camera, p.points1, p.points2);
-        if (pose.success)
-          (p.kind == "rotation" ? rotation_error_rot : rotation_error_3d)
-              .push_back(affine_orb::rotation_angle_degrees(pose.rotation, *p.rotation));
-      }
-    }
-    auto share = [&](const std::string& kind) {
-      const auto [ok, total] = right[kind];
-      char text[32];
-      std::snprintf(text, sizeof(text), "%d / %d", ok, total);
-      return std::string(text);
-    };
-    auto med = [](const std::vector<double>& v) { return v.empty() ? std::nan("") : median(v); };
-    std::printf("| %s | %s | %s | %s | %.2f | %.3f / %.3f | %s |\n", rule.name.c_str(), share("planar").c_str(),
-                share("rotation").c_str(), share("3-D").c_str(), med(corner), med(rotation_error_rot),
-                med(rotation_error_3d), wrong.empty() ? "none" : wrong.c_str());
-  }
-  // The statistics of the default rule and of eq. 22 per pair, to show the margins.
+  for (const Rule& rule : selection_rules()) print_rule_line(rule, pairs);
   std::printf("\nPer pair: parallax z-score of the default rule (H when <= %.1f), R_H of eq. 22 (H when > %.2f):\n\n",
               affine_orb::ModelSelectionOptions{}.plane_parallax.significance,
               affine_orb::ModelSelectionOptions{}.score_ratio.threshold);
@@ -436,35 +469,53 @@ void labelled_table() {
   }
 }
 
-}  // namespace
+/// The figures of the synthetic runs: per scene, ours with σ 2 (the default) and σ 1 in [0], [1],
+/// both OpenCV calls in [2], and OpenCV's two calls' times separately.
+struct SyntheticFigures {
+  std::array<Figures, 3> planar, general;
+  std::vector<double> cv_h_planar, cv_f_planar, cv_h_general, cv_f_general;
+};
 
-int main(int argc, char** argv) {
-  const bool labelled_only = argc > 1 && std::string(argv[argc - 1]) == "--labelled-only";
-  if (labelled_only) {
-    labelled_table();
-    return 0;
-  }
-  const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 25;
-  cv::setNumThreads(1);  // both sides on one thread
-
+/// Our two σ, the default first.
+std::array<affine_orb::ModelSelectionOptions, 2> our_options() {
   affine_orb::ModelSelectionOptions sigma2;
-  sigma2.sigma =
-      2.0 * kNoise;  // the score's σ for this per-image noise (the default), see ModelSelectionOptions::sigma
+  // The score's σ for this per-image noise (the default), see ModelSelectionOptions::sigma.
+  sigma2.sigma = 2.0 * kNoise;
   affine_orb::ModelSelectionOptions sigma1;
   sigma1.sigma = kNoise;  // ORB-SLAM2's value
-  const std::array<affine_orb::ModelSelectionOptions, 2> ours = {sigma2, sigma1};
-  const std::array<const char*, 2> our_names = {"affine_orb select_model, sigma 2 px (default)",
-                                                "affine_orb select_model, sigma 1 px (ORB-SLAM2)"};
+  return {sigma2, sigma1};
+}
 
-  // [0], [1]: ours with sigma 2 (the default) and sigma 1; [2]: both OpenCV calls.
-  std::array<Figures, 3> planar, general;
-  // OpenCV's two calls timed separately, per scene.
-  std::vector<double> cv_h_planar, cv_f_planar, cv_h_general, cv_f_general;
+/// Runs both OpenCV calls on `data` and records their times and accuracy in `out`.
+void run_opencv(const Data& data, bool is_planar, SyntheticFigures& out) {
+  cv::Mat h_mask, f_mask;
+  const auto start_h = std::chrono::steady_clock::now();
+  const cv::Mat h = cv::findHomography(data.points1, data.points2, cv::RANSAC, kOpenCvThreshold, h_mask);
+  const double h_ms = milliseconds_since(start_h);
+  const auto start_f = std::chrono::steady_clock::now();
+  const cv::Mat f = cv::findFundamentalMat(data.points1, data.points2, cv::FM_RANSAC, kOpenCvThreshold, 0.99, f_mask);
+  const double f_ms = milliseconds_since(start_f);
+  (is_planar ? out.cv_h_planar : out.cv_h_general).push_back(h_ms);
+  (is_planar ? out.cv_f_planar : out.cv_f_general).push_back(f_ms);
+  Figures& peer = (is_planar ? out.planar : out.general)[2];
+  peer.time_ms.push_back(h_ms + f_ms);
+  if (is_planar) {
+    peer.h_corner.push_back(corner_error(to_eigen(h), data.h));
+    peer.h_recall.push_back(h_mask.empty() ? 0.0 : recall(h_mask.ptr<std::uint8_t>(), data));
+  } else {
+    peer.f_distance.push_back(epipolar_distance(to_eigen(f), data));
+    peer.f_recall.push_back(f_mask.empty() ? 0.0 : recall(f_mask.ptr<std::uint8_t>(), data));
+  }
+}
 
+/// `runs` runs of both scenes, new data each (seed = 2 run + scene), ours and OpenCV's.
+SyntheticFigures run_synthetic(int runs) {
+  const std::array<affine_orb::ModelSelectionOptions, 2> ours = our_options();
+  SyntheticFigures out;
   for (int run = 0; run < runs; ++run) {
     for (const bool is_planar : {true, false}) {
       const Data data = make_data(is_planar, static_cast<std::uint64_t>(run) * 2 + (is_planar ? 0 : 1));
-      std::array<Figures, 3>& figures = is_planar ? planar : general;
+      std::array<Figures, 3>& figures = is_planar ? out.planar : out.general;
       for (std::size_t which = 0; which < ours.size(); ++which) {
         const auto start = std::chrono::steady_clock::now();
         const affine_orb::ModelSelectionResult r = affine_orb::select_model(data.points1, data.points2, ours[which]);
@@ -479,28 +530,14 @@ int main(int argc, char** argv) {
           f.f_recall.push_back(recall(r.fundamental_inliers, data));
         }
       }
-      cv::Mat h_mask, f_mask;
-      const auto start_h = std::chrono::steady_clock::now();
-      const cv::Mat h = cv::findHomography(data.points1, data.points2, cv::RANSAC, kOpenCvThreshold, h_mask);
-      const double h_ms = milliseconds_since(start_h);
-      const auto start_f = std::chrono::steady_clock::now();
-      const cv::Mat f =
-          cv::findFundamentalMat(data.points1, data.points2, cv::FM_RANSAC, kOpenCvThreshold, 0.99, f_mask);
-      const double f_ms = milliseconds_since(start_f);
-      (is_planar ? cv_h_planar : cv_h_general).push_back(h_ms);
-      (is_planar ? cv_f_planar : cv_f_general).push_back(f_ms);
-      Figures& peer = figures[2];
-      peer.time_ms.push_back(h_ms + f_ms);
-      if (is_planar) {
-        peer.h_corner.push_back(corner_error(to_eigen(h), data.h));
-        peer.h_recall.push_back(h_mask.empty() ? 0.0 : recall(h_mask.ptr<std::uint8_t>(), data));
-      } else {
-        peer.f_distance.push_back(epipolar_distance(to_eigen(f), data));
-        peer.f_recall.push_back(f_mask.empty() ? 0.0 : recall(f_mask.ptr<std::uint8_t>(), data));
-      }
+      run_opencv(data, is_planar, out);
     }
   }
+  return out;
+}
 
+/// Prints the time table of the synthetic runs: per scene, ours and OpenCV's, and their ratios.
+void print_time_table(const SyntheticFigures& s, int runs) {
   std::printf(
       "Model selection, %d correspondences, %.0f %% outliers, %.1f px Gaussian noise per coordinate in "
       "each image; medians over %d runs (new data each run), one thread.\n\n",
@@ -511,13 +548,21 @@ int main(int argc, char** argv) {
       "ratio ours sigma 2 / both | ratio ours sigma 1 / both |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const bool is_planar : {true, false}) {
-    const std::array<Figures, 3>& f = is_planar ? planar : general;
+    const std::array<Figures, 3>& f = is_planar ? s.planar : s.general;
     const double both = median(f[2].time_ms);
     std::printf("| %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f |\n", is_planar ? "planar" : "3-D",
-                median(f[0].time_ms), median(f[1].time_ms), median(is_planar ? cv_h_planar : cv_h_general),
-                median(is_planar ? cv_f_planar : cv_f_general), both, median(f[0].time_ms) / both,
+                median(f[0].time_ms), median(f[1].time_ms), median(is_planar ? s.cv_h_planar : s.cv_h_general),
+                median(is_planar ? s.cv_f_planar : s.cv_f_general), both, median(f[0].time_ms) / both,
                 median(f[1].time_ms) / both);
   }
+}
+
+/// Prints the accuracy table of the synthetic runs: H on the planar scene, F on the 3-D one.
+void print_accuracy_table(const SyntheticFigures& s) {
+  const std::array<const char*, 2> our_names = {"affine_orb select_model, sigma 2 px (default)",
+                                                "affine_orb select_model, sigma 1 px (ORB-SLAM2)"};
+  const std::array<Figures, 3>& planar = s.planar;
+  const std::array<Figures, 3>& general = s.general;
   std::printf("\nAccuracy (H on the planar scene, F on the 3-D scene):\n\n");
   std::printf(
       "| method | H corner error px | H inlier recall | F epipolar distance px | F inlier recall | H chosen, "
@@ -537,6 +582,19 @@ int main(int argc, char** argv) {
                 median(planar[which].h_recall) / median(planar[2].h_recall),
                 median(general[which].f_distance) / median(general[2].f_distance),
                 median(general[which].f_recall) / median(general[2].f_recall));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool labelled_only = argc > 1 && std::string(argv[argc - 1]) == "--labelled-only";
+  if (!labelled_only) {
+    const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 25;
+    cv::setNumThreads(1);  // both sides on one thread
+    const SyntheticFigures figures = run_synthetic(runs);
+    print_time_table(figures, runs);
+    print_accuracy_table(figures);
   }
   labelled_table();
   return 0;

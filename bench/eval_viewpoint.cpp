@@ -34,6 +34,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -291,9 +292,8 @@ std::string summary_table(const std::vector<Row>& rows, const std::vector<Method
   return out.str();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+/// The command line; parse_args() gives it or nothing when it is wrong.
+struct Args {
   std::string out_dir = ".";
   int features = 1000;
   double view_features = affine_orb::AdditiveBudget{}.view_features;
@@ -303,49 +303,61 @@ int main(int argc, char** argv) {
   std::string method_filter;
   std::string asift_only = ",graf,opencv-doc graf,";
   bool summary = false;
+};
+
+/// Reads the flags (see the top of this file); prints why and gives nothing when one is wrong.
+std::optional<Args> parse_args(int argc, char** argv) {
+  Args args;
   for (int i = 1; i < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--markdown") {
-      summary = true;
+      args.summary = true;
       --i;
     } else if (i + 1 >= argc) {
       std::fprintf(stderr, "eval_viewpoint: %s needs a value\n", argv[i]);
-      return 2;
+      return std::nullopt;
     } else if (flag == "--out")
-      out_dir = argv[i + 1];
+      args.out_dir = argv[i + 1];
     else if (flag == "--features")
-      features = std::atoi(argv[i + 1]);
+      args.features = std::atoi(argv[i + 1]);
     else if (flag == "--view-features")
-      view_features = std::atof(argv[i + 1]);
+      args.view_features = std::atof(argv[i + 1]);
     else if (flag == "--threads")
-      threads = std::atoi(argv[i + 1]);
+      args.threads = std::atoi(argv[i + 1]);
     else if (flag == "--sequences")
-      only = std::string(",") + argv[i + 1] + ",";
+      args.only = std::string(",") + argv[i + 1] + ",";
     else if (flag == "--shortlist")
-      base.shortlist = std::atof(argv[i + 1]);
+      args.base.shortlist = std::atof(argv[i + 1]);
     else if (flag == "--methods")
-      method_filter = argv[i + 1];
+      args.method_filter = argv[i + 1];
     else if (flag == "--asift-sequences")
-      asift_only = std::string(argv[i + 1]) == "all" ? "" : std::string(",") + argv[i + 1] + ",";
+      args.asift_only = std::string(argv[i + 1]) == "all" ? "" : std::string(",") + argv[i + 1] + ",";
     else {
       std::fprintf(stderr,
                    "usage: eval_viewpoint [--out DIR] [--features N] [--view-features F] [--threads K] "
                    "[--sequences a,b] [--methods SUBSTRING] [--shortlist F] [--asift-sequences a,b|all] "
                    "[--markdown]\n");
-      return 2;
+      return std::nullopt;
     }
   }
   try {
-    base.check();
+    args.base.check();
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "eval_viewpoint: %s\n", e.what());
-    return 2;
+    return std::nullopt;
   }
-  if (features < 1 || threads < 1 || !(view_features >= 0.0)) {
+  if (args.features < 1 || args.threads < 1 || !(args.view_features >= 0.0)) {
     std::fprintf(stderr, "eval_viewpoint: --features and --threads must be >= 1, --view-features >= 0\n");
-    return 2;
+    return std::nullopt;
   }
-  cv::setNumThreads(threads);
+  return args;
+}
+
+/// Every method of the run, in the order of the tables, those --methods names only.
+std::vector<Method> make_methods(const Args& args) {
+  const affine_orb::ExtractorOptions& base = args.base;
+  const int features = args.features, threads = args.threads;
+  const double view_features = args.view_features;
   const double max_tilt = 2.0 * std::sqrt(2.0);
   const int total = features + static_cast<int>(std::lround(view_features * features));
   const int per_view = (total + 17) / 18;
@@ -361,18 +373,19 @@ int main(int argc, char** argv) {
     o.view_budget = affine_orb::AreaSplitBudget{};
     o.spreading = affine_orb::Spreading::kStrongest;
   };
-  auto quadtree = [view_features](affine_orb::ExtractorOptions& o) { std::get<affine_orb::AdditiveBudget>(o.view_budget).view_features = view_features; };
+  auto quadtree = [view_features](affine_orb::ExtractorOptions& o) {
+    std::get<affine_orb::AdditiveBudget>(o.view_budget).view_features = view_features;
+  };
+  auto repeats = [strongest](affine_orb::ExtractorOptions& o) {
+    strongest(o);
+    o.merge_duplicates->repeat_levels = 1;
+  };
   std::vector<Method> methods = {
       ours<affine_orb::Rbrief>(base, "ours plain rBRIEF " + n_image, features, 1.0, threads, strongest),
       ours<affine_orb::Rbrief>(base, "ours plain rBRIEF " + n_total, total, 1.0, threads, strongest),
       ours<affine_orb::Rbrief>(base, "ours affine rBRIEF", features, max_tilt, threads, strongest),
       ours<affine_orb::Rbrief>(base, "ours affine rBRIEF area split " + n_total, total, max_tilt, threads, area_split),
-      ours<affine_orb::Rbrief>(base, "ours affine rBRIEF repeats +-1 level", features, max_tilt, threads,
-                               [view_features](affine_orb::ExtractorOptions& o) {
-                                 std::get<affine_orb::AdditiveBudget>(o.view_budget).view_features = view_features;
-                                 o.spreading = affine_orb::Spreading::kStrongest;
-                                 o.merge_duplicates->repeat_levels = 1;
-                               }),
+      ours<affine_orb::Rbrief>(base, "ours affine rBRIEF repeats +-1 level", features, max_tilt, threads, repeats),
       ours<affine_orb::Brisk>(base, "ours plain BRISK " + n_total, total, 1.0, threads, strongest),
       ours<affine_orb::Brisk>(base, "ours affine BRISK", features, max_tilt, threads, strongest),
       ours<affine_orb::Rbrief>(base, "ours plain rBRIEF quadtree " + n_total, total, 1.0, threads, quadtree),
@@ -385,18 +398,20 @@ int main(int argc, char** argv) {
       peer("cv::AffineFeature(ORB)", cv::AffineFeature::create(cv::ORB::create(per_view), 3, 0, std::sqrt(2.0), 72)),
       peer("cv::AffineFeature(SIFT)", cv::AffineFeature::create(cv::SIFT::create(), 3, 0, std::sqrt(2.0), 72)),
   };
-  if (!method_filter.empty()) {
-    methods.erase(std::remove_if(methods.begin(), methods.end(),
-                                 [&](const Method& m) { return m.name.find(method_filter) == std::string::npos; }),
-                  methods.end());
-  }
+  methods.erase(std::remove_if(methods.begin(), methods.end(),
+                               [&](const Method& m) { return m.name.find(args.method_filter) == std::string::npos; }),
+                methods.end());
+  return methods;
+}
+
+/// Every method on every pair, image 1's features extracted once per method and first image;
+/// ASIFT (cv::AffineFeature(SIFT)) only on the sequences of `asift_only` (all when empty).
+std::vector<Row> evaluate_pairs(const std::vector<affine_orb::bench::ViewpointPair>& pairs,
+                                const std::vector<Method>& methods, const std::string& asift_only) {
   auto runs_on = [&](const Method& m, const std::string& sequence) {
     return m.name != "cv::AffineFeature(SIFT)" || asift_only.empty() ||
            asift_only.find("," + sequence + ",") != std::string::npos;
   };
-
-  const std::vector<affine_orb::bench::ViewpointPair> pairs = affine_orb::bench::viewpoint_pairs(only);
-
   std::vector<Row> rows;
   std::map<std::string, Extracted> first;  // image-1 features per (path, method)
   for (const affine_orb::bench::ViewpointPair& pair : pairs) {
@@ -419,14 +434,31 @@ int main(int argc, char** argv) {
                    row.correct, row.distinct, row.per_1000(), row.inliers, row.inliers_correct, row.ms);
     }
   }
+  return rows;
+}
 
-  std::ofstream csv(out_dir + "/eval_viewpoint.csv");
+/// Writes one CSV line per row to `path`.
+void write_csv(const std::vector<Row>& rows, const std::string& path) {
+  std::ofstream csv(path);
   csv << "sequence,pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,precision,inliers,"
          "inliers_correct,repeatability,distinct_per_1000,within_2px,ms_extract\n";
+  for (const Row& r : rows) {
+    char line[512];
+    std::snprintf(line, sizeof(line), "%s,1-%d,%s,%zu,%zu,%zu,%zu,%zu,%.4f,%zu,%zu,%.4f,%.1f,%.4f,%.2f\n",
+                  r.sequence.c_str(), r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct,
+                  r.distinct, r.precision, r.inliers, r.inliers_correct, r.repeatability, r.per_1000(), r.crowded,
+                  r.ms);
+    csv << line;
+  }
+}
+
+/// The full Markdown report: one line per row, then each method's median extraction time per
+/// image over every image of the run.
+std::string full_table(const std::vector<Row>& rows, const std::vector<Method>& methods, const Args& args) {
   std::ostringstream md;
   md << "# Viewpoint evaluation (SPEC §7)\n\n"
-     << features << " image features for ours, plus " << view_features
-     << " x as many from the 18 views (tilts up to 2√2) for the affine rows; " << threads
+     << args.features << " image features for ours, plus " << args.view_features
+     << " x as many from the 18 views (tilts up to 2√2) for the affine rows; " << args.threads
      << " thread(s); correct = ‖H x1 − x2‖ < 3 px; distinct = image-1 points in distinct 2-px cells; /1000 = "
      << "distinct per 1000 keypoints; inliers = cv::findHomography RANSAC 3 px on the matches (share correct); "
      << "2 px = share of image-1 keypoints within 2 px of another; ms = mean extraction time per image of the pair.\n\n"
@@ -435,11 +467,6 @@ int main(int argc, char** argv) {
      << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
     char line[512];
-    std::snprintf(line, sizeof(line), "%s,1-%d,%s,%zu,%zu,%zu,%zu,%zu,%.4f,%zu,%zu,%.4f,%.1f,%.4f,%.2f\n",
-                  r.sequence.c_str(), r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct,
-                  r.distinct, r.precision, r.inliers, r.inliers_correct, r.repeatability, r.per_1000(), r.crowded,
-                  r.ms);
-    csv << line;
     std::snprintf(line, sizeof(line),
                   "| %s 1→%d | %s | %zu | %zu | %zu | %zu | %zu | %.0f | %.2f | %zu (%.0f%%) | %.2f | %.2f | %.1f |\n",
                   r.sequence.c_str(), r.image, r.method.c_str(), r.keypoints1, r.keypoints2, r.matches, r.correct,
@@ -447,7 +474,6 @@ int main(int argc, char** argv) {
                   r.inliers ? 100.0 * r.inliers_correct / r.inliers : 0.0, r.repeatability, r.crowded, r.ms);
     md << line;
   }
-  // Median extraction time per method over every image of the run.
   md << "\n| method | median ms per image |\n|---|---:|\n";
   for (const Method& m : methods) {
     std::vector<double> times;
@@ -458,8 +484,22 @@ int main(int argc, char** argv) {
     std::snprintf(line, sizeof(line), "| %s | %.1f |\n", m.name.c_str(), affine_orb::bench::median(times));
     md << line;
   }
-  std::ofstream(out_dir + "/eval_viewpoint.md") << md.str();
-  plot(rows, methods, out_dir + "/eval_viewpoint.png");
-  std::fputs(summary ? summary_table(rows, methods, pairs.size()).c_str() : md.str().c_str(), stdout);
+  return md.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::optional<Args> args = parse_args(argc, argv);
+  if (!args) return 2;
+  cv::setNumThreads(args->threads);
+  const std::vector<Method> methods = make_methods(*args);
+  const std::vector<affine_orb::bench::ViewpointPair> pairs = affine_orb::bench::viewpoint_pairs(args->only);
+  const std::vector<Row> rows = evaluate_pairs(pairs, methods, args->asift_only);
+  write_csv(rows, args->out_dir + "/eval_viewpoint.csv");
+  const std::string md = full_table(rows, methods, *args);
+  std::ofstream(args->out_dir + "/eval_viewpoint.md") << md;
+  plot(rows, methods, args->out_dir + "/eval_viewpoint.png");
+  std::fputs(args->summary ? summary_table(rows, methods, pairs.size()).c_str() : md.c_str(), stdout);
   return 0;
 }

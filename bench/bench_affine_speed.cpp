@@ -33,6 +33,7 @@
 #include <functional>
 #include <map>
 #include <new>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -293,97 +294,120 @@ void bench_image(const char* name, const std::string& image_name, const cv::Mat&
               med_cpu(3) / med_cpu(4), ratio(3, 4).c_str());
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+/// The command line (see the top of this file).
+struct Args {
   int rounds = 21;
   bool instructions = true;
-  std::string profile;
-  std::string profile_image = "graf";
-  int profile_runs = 0;
   bool memory = true;
-  std::string peak_mode;
+  std::string profile;  ///< --profile's mode, empty without it
+  int profile_runs = 0;
+  std::string profile_image = "graf";
+  std::string peak_mode;  ///< --peak's mode, empty without it
   cv::Size peak_size;
+};
+
+/// Reads the flags; prints why and gives nothing when one is wrong.
+std::optional<Args> parse_args(int argc, char** argv) {
+  Args args;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--rounds" && i + 1 < argc) {
-      rounds = std::max(1, std::atoi(argv[++i]));
+      args.rounds = std::max(1, std::atoi(argv[++i]));
     } else if (arg == "--no-instructions") {
-      instructions = false;
+      args.instructions = false;
     } else if (arg == "--no-memory") {
-      memory = false;
+      args.memory = false;
     } else if (arg == "--peak" && i + 2 < argc) {
-      peak_mode = argv[++i];
-      if (std::sscanf(argv[++i], "%dx%d", &peak_size.width, &peak_size.height) != 2 || peak_size.width < 64 ||
-          peak_size.height < 64) {
+      args.peak_mode = argv[++i];
+      cv::Size& size = args.peak_size;
+      if (std::sscanf(argv[++i], "%dx%d", &size.width, &size.height) != 2 || size.width < 64 || size.height < 64) {
         std::fprintf(stderr, "--peak: expected a size WxH of at least 64x64, got %s\n", argv[i]);
-        return 2;
+        return std::nullopt;
       }
     } else if (arg == "--image" && i + 1 < argc) {
-      profile_image = argv[++i];
+      args.profile_image = argv[++i];
     } else if (arg == "--profile" && i + 2 < argc) {
-      profile = argv[++i];
-      profile_runs = std::max(0, std::atoi(argv[++i]));
+      args.profile = argv[++i];
+      args.profile_runs = std::max(0, std::atoi(argv[++i]));
     } else {
       std::fprintf(stderr,
                    "usage: %s [--rounds N] [--no-instructions] [--no-memory] [--profile affine|affine2|plain|orb|"
                    "affine_feature N [--image graf|kitti]] [--peak baseline|affine|affine2|plain|orb|affine_feature "
                    "WxH]\n",
                    argv[0]);
-      return 2;
+      return std::nullopt;
     }
   }
-  cv::setNumThreads(1);
+  return args;
+}
+
+/// --peak: prints the peak resident memory after three frames of `mode` on graf1 resized to `size`.
+int print_peak(const std::string& mode, cv::Size size) {
+  const cv::Mat photo = affine_orb::bench::read_gray_or_exit(affine_orb::bench::data_dir() + "/oxford/graf/img1.png");
+  cv::Mat image;
+  cv::resize(photo, image, size, 0, 0, size.width < photo.cols ? cv::INTER_AREA : cv::INTER_LINEAR);
+  if (mode == "baseline") {
+    std::printf("peak_kb %ld\n", peak_resident_kb());
+    return 0;
+  }
+  Extractions extractions(image);
+  for (const Extractions::Entry& entry : extractions.entries()) {
+    if (entry.mode != mode) continue;
+    for (int frame = 0; frame < 3; ++frame) entry.run();
+    std::printf("peak_kb %ld\n", peak_resident_kb());
+    return 0;
+  }
+  std::fprintf(stderr, "unknown mode %s\n", mode.c_str());
+  return 2;
+}
+
+/// --profile: one warm-up frame of `mode` on `image`, then `runs` frames inside profiled_frames().
+int run_profile(const std::string& mode, int runs, const cv::Mat& image) {
+  Extractions extractions(image);
+  for (const Extractions::Entry& entry : extractions.entries()) {
+    if (entry.mode != mode) continue;
+    entry.run();
+    std::printf("%s: %d runs, %zu keypoints\n", mode.c_str(), runs, profiled_frames(entry.run, runs));
+    return 0;
+  }
+  std::fprintf(stderr, "unknown profile mode %s\n", mode.c_str());
+  return 2;
+}
+
+/// Prints the accuracy figure: distinct correct matches of graf 1 -> 3 at full size.
+void print_accuracy() {
   const std::string data = affine_orb::bench::data_dir();
-  const cv::Mat graf = to_640x480(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png"));
-  const cv::Mat kitti = to_640x480(affine_orb::bench::read_gray_or_exit(data + "/kitti06/image_0/000010.png"));
-
-  if (!peak_mode.empty()) {
-    cv::Mat image;
-    const cv::Mat photo = affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png");
-    cv::resize(photo, image, peak_size, 0, 0, peak_size.width < photo.cols ? cv::INTER_AREA : cv::INTER_LINEAR);
-    if (peak_mode == "baseline") {
-      std::printf("peak_kb %ld\n", peak_resident_kb());
-      return 0;
-    }
-    Extractions extractions(image);
-    for (const Extractions::Entry& entry : extractions.entries()) {
-      if (entry.mode != peak_mode) continue;
-      for (int frame = 0; frame < 3; ++frame) entry.run();
-      std::printf("peak_kb %ld\n", peak_resident_kb());
-      return 0;
-    }
-    std::fprintf(stderr, "unknown mode %s\n", peak_mode.c_str());
-    return 2;
-  }
-  if (!profile.empty()) {
-    Extractions extractions(profile_image == "kitti" ? kitti : graf);
-    for (const Extractions::Entry& entry : extractions.entries()) {
-      if (entry.mode != profile) continue;
-      entry.run();
-      std::printf("%s: %d runs, %zu keypoints\n", profile.c_str(), profile_runs,
-                  profiled_frames(entry.run, profile_runs));
-      return 0;
-    }
-    std::fprintf(stderr, "unknown profile mode %s\n", profile.c_str());
-    return 2;
-  }
-  if (instructions && std::system("valgrind --version > /dev/null 2>&1") != 0) {
-    std::printf("(valgrind not found: no instruction counts)\n\n");
-    instructions = false;
-  }
-
-  bench_image("graf1", "graf", graf, rounds, instructions);
-  bench_image("KITTI 06 frame 10", "kitti", kitti, rounds, instructions);
-  if (memory) memory_table();
-
   affine_orb::ExtractorOptions options = affine_options(1);
   options.merge_duplicates.reset();
   affine_orb::Extractor<affine_orb::Rbrief> extractor(options);
   const auto f1 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png"));
   const auto f3 = extractor.extract(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img3.png"));
-  std::printf("Accuracy, graf 1 -> 3 at full size, %d affine features per image, duplicates kept, ratio 0.8: ", kAffineFeatures);
+  std::printf("Accuracy, graf 1 -> 3 at full size, %d affine features per image, duplicates kept, ratio 0.8: ",
+              kAffineFeatures);
   std::printf("%d distinct correct matches (< 3 px, 2-px cells)\n",
               distinct_correct(f1, f3, affine_orb::bench::read_oxford_homography(data + "/oxford/graf/H1to3p")));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::optional<Args> args = parse_args(argc, argv);
+  if (!args) return 2;
+  cv::setNumThreads(1);
+  const std::string data = affine_orb::bench::data_dir();
+  const cv::Mat graf = to_640x480(affine_orb::bench::read_gray_or_exit(data + "/oxford/graf/img1.png"));
+  const cv::Mat kitti = to_640x480(affine_orb::bench::read_gray_or_exit(data + "/kitti06/image_0/000010.png"));
+  if (!args->peak_mode.empty()) return print_peak(args->peak_mode, args->peak_size);
+  if (!args->profile.empty()) {
+    return run_profile(args->profile, args->profile_runs, args->profile_image == "kitti" ? kitti : graf);
+  }
+  if (args->instructions && std::system("valgrind --version > /dev/null 2>&1") != 0) {
+    std::printf("(valgrind not found: no instruction counts)\n\n");
+    args->instructions = false;
+  }
+  bench_image("graf1", "graf", graf, args->rounds, args->instructions);
+  bench_image("KITTI 06 frame 10", "kitti", kitti, args->rounds, args->instructions);
+  if (args->memory) memory_table();
+  print_accuracy();
   return 0;
 }

@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -84,37 +85,41 @@ std::pair<int, int> matches(const Extracted& a, const Extracted& b) {
   return {static_cast<int>(p.size()), static_cast<int>(std::count(inliers.begin(), inliers.end(), 1))};
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: eval_blur DIR [--features N] [--step K]\n");
-    return 2;
-  }
+/// The command line: the sequence's folder, the keypoints per frame, the frame step.
+struct Args {
+  std::string dir;
   int features = 1000;
   int step = 1;
+};
+
+/// Reads the flags; prints why and gives nothing when one is wrong.
+std::optional<Args> parse_args(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: eval_blur DIR [--features N] [--step K]\n");
+    return std::nullopt;
+  }
+  Args args;
+  args.dir = argv[1];
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--features") {
-      features = std::atoi(argv[i + 1]);
+      args.features = std::atoi(argv[i + 1]);
     } else if (flag == "--step") {
-      step = std::atoi(argv[i + 1]);
+      args.step = std::atoi(argv[i + 1]);
     } else {
       std::fprintf(stderr, "unknown option %s\n", argv[i]);
-      return 2;
+      return std::nullopt;
     }
   }
-  if (features < 1 || step < 1) {
+  if (args.features < 1 || args.step < 1) {
     std::fprintf(stderr, "eval_blur: --features and --step must be >= 1\n");
-    return 2;
+    return std::nullopt;
   }
-  affine_orb::examples::Sequence sequence;
-  try {
-    sequence = affine_orb::examples::read_tum(argv[1]);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "eval_blur: %s\n", e.what());
-    return 1;
-  }
+  return args;
+}
+
+/// The methods of the table (see the top of this file) at `features` keypoints.
+std::vector<Method> make_methods(int features) {
   affine_orb::ExtractorOptions plain;
   plain.features = features;
   plain.views.max_tilt = 1.0;
@@ -125,20 +130,27 @@ int main(int argc, char** argv) {
   low.detector.min_threshold = 4;
   affine_orb::ExtractorOptions views = plain;
   views.views.max_tilt = 2.0 * std::sqrt(2.0);
-  std::vector<Method> methods = {
-      ours("ours " + std::to_string(features), plain),
-      ours("ours " + std::to_string(2 * features), twice),
-      ours("ours " + std::to_string(features) + ", FAST 10/4", low),
-      ours("ours " + std::to_string(features) + " + views " + std::to_string(features), views),
-      {"cv::ORB " + std::to_string(features), [orb = cv::ORB::create(features)](const cv::Mat& image) {
-         Extracted e;
-         orb->detectAndCompute(image, cv::noArray(), e.keypoints, e.descriptors);
-         return e;
-       }}};
-  struct Row {
-    double sharpness;
-    std::vector<double> keypoints, spread, matched, explained;
-  };
+  const std::string n = std::to_string(features);
+  return {ours("ours " + n, plain),
+          ours("ours " + std::to_string(2 * features), twice),
+          ours("ours " + n + ", FAST 10/4", low),
+          ours("ours " + n + " + views " + n, views),
+          {"cv::ORB " + n, [orb = cv::ORB::create(features)](const cv::Mat& image) {
+             Extracted e;
+             orb->detectAndCompute(image, cv::noArray(), e.keypoints, e.descriptors);
+             return e;
+           }}};
+}
+
+/// One frame pair: the second frame's sharpness and, per method, its figures.
+struct Row {
+  double sharpness;
+  std::vector<double> keypoints, spread, matched, explained;
+};
+
+/// Every method on frames 0, step, 2 step, ... of `sequence`, each frame matched with the one
+/// before it; one row per pair.
+std::vector<Row> measure(const affine_orb::examples::Sequence& sequence, const std::vector<Method>& methods, int step) {
   std::vector<Row> rows;
   std::vector<Extracted> previous(methods.size());
   for (std::size_t f = 0; f < sequence.frames.size(); f += static_cast<std::size_t>(step)) {
@@ -155,9 +167,14 @@ int main(int argc, char** argv) {
     }
     if (f > 0) rows.push_back(row);
   }
-  std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.sharpness < b.sharpness; });
-  std::printf("# %s: %zu frame pairs (step %d), medians per third by sharpness of the second frame\n\n", argv[1],
-              rows.size(), step);
+  return rows;
+}
+
+/// Prints the table: per method and third of the rows by sharpness (`rows` sorted by it), the
+/// medians of every figure.
+void print_thirds(const std::vector<Row>& rows, const std::vector<Method>& methods, const Args& args) {
+  std::printf("# %s: %zu frame pairs (step %d), medians per third by sharpness of the second frame\n\n",
+              args.dir.c_str(), rows.size(), args.step);
   std::printf("| method | third (variance of Laplacian) | keypoints | spread | matches | explained by F |\n");
   std::printf("|---|---|---:|---:|---:|---:|\n");
   const std::size_t third = std::max<std::size_t>(rows.size() / 3, 1);
@@ -178,6 +195,23 @@ int main(int argc, char** argv) {
                   rows[begin].sharpness, rows[end - 1].sharpness, affine_orb::bench::median(k),
                   affine_orb::bench::median(s), affine_orb::bench::median(a), affine_orb::bench::median(e));
     }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::optional<Args> args = parse_args(argc, argv);
+  if (!args) return 2;
+  try {
+    const affine_orb::examples::Sequence sequence = affine_orb::examples::read_tum(args->dir);
+    const std::vector<Method> methods = make_methods(args->features);
+    std::vector<Row> rows = measure(sequence, methods, args->step);
+    std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.sharpness < b.sharpness; });
+    print_thirds(rows, methods, *args);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "eval_blur: %s\n", e.what());
+    return 1;
   }
   return 0;
 }

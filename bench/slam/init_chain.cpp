@@ -29,6 +29,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -138,6 +139,83 @@ Chain chain(const std::vector<Frame>& frames, std::size_t r) {
   return result;
 }
 
+/// The frames of the TUM-layout `folder`, each extracted with the monocular initialisation budget of
+/// its camera.yaml; `octave0` gets the mean octave-0 keypoints per frame. Nothing when a file is
+/// missing or an image cannot be read (the reason printed).
+std::optional<std::vector<Frame>> extract_frames(const std::string& folder, double& octave0) {
+  cv::FileStorage settings(folder + "/camera.yaml", cv::FileStorage::READ);
+  std::ifstream list(folder + "/rgb.txt");
+  if (!settings.isOpened() || !list) {
+    std::fprintf(stderr, "%s: no camera.yaml or rgb.txt\n", folder.c_str());
+    return std::nullopt;
+  }
+  const int features = static_cast<int>(settings["ORBextractor.nFeatures"]);
+  const float scale = static_cast<float>(settings["ORBextractor.scaleFactor"]);
+  const int levels = static_cast<int>(settings["ORBextractor.nLevels"]);
+  const int fast_initial = static_cast<int>(settings["ORBextractor.iniThFAST"]);
+  const int fast_minimum = static_cast<int>(settings["ORBextractor.minThFAST"]);
+  const bool rgb_order = static_cast<int>(settings["Camera.RGB"]) != 0;
+  orb_fork::ORBextractor extractor(orb_fork::kInitialBudgetFactor * features, scale, levels, fast_initial,
+                                   fast_minimum);
+  std::vector<Frame> frames;
+  std::string line;
+  double octave0_sum = 0.0;
+  while (std::getline(list, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    double time = 0.0;
+    std::string file;
+    fields >> time >> file;
+    const cv::Mat colour = cv::imread(folder + "/" + file, cv::IMREAD_COLOR);
+    if (colour.empty()) {
+      std::fprintf(stderr, "%s/%s: not an image\n", folder.c_str(), file.c_str());
+      return std::nullopt;
+    }
+    cv::Mat grey;
+    cv::cvtColor(colour, grey, rgb_order ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
+    Frame f = orb_fork::extract<Frame>(extractor, grey);
+    octave0_sum += static_cast<double>(
+        std::count_if(f.keypoints.begin(), f.keypoints.end(), [](const cv::KeyPoint& k) { return k.octave == 0; }));
+    frames.push_back(std::move(f));
+  }
+  octave0 = frames.empty() ? 0.0 : octave0_sum / static_cast<double>(frames.size());
+  return frames;
+}
+
+/// The table row's figures of one sequence (see the top of this file).
+struct Summary {
+  double first_matches = 0.0, age = 0.0;  ///< means over every frame as the reference
+  int long_chains = 0, taken = 0, taken_long = 0;
+};
+
+/// Every frame as the reference, then ORB-SLAM's own chain from frame 0: a reference is given up
+/// on the frame after its last kept one, and the frame after that is the next reference (frames of
+/// too few keypoints are skipped).
+Summary summarise(const std::vector<Frame>& frames) {
+  Summary s;
+  std::vector<int> ages(frames.size());
+  for (std::size_t r = 0; r + 1 < frames.size(); ++r) {
+    const Chain c = chain(frames, r);
+    ages[r] = c.age;
+    s.first_matches += c.first_matches;
+    s.age += c.age;
+    s.long_chains += ages[r] >= kLongChain;
+  }
+  const double references = static_cast<double>(frames.size() - 1);
+  s.first_matches /= references;
+  s.age /= references;
+  for (std::size_t r = 0; r + 1 < frames.size();) {
+    if (frames[r].keypoints.size() <= kMinKeypoints) {
+      ++r;
+      continue;
+    }
+    ++s.taken;
+    s.taken_long += ages[r] >= kLongChain;
+    r += static_cast<std::size_t>(ages[r]) + 2;
+  }
+  return s;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -145,78 +223,21 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: %s NAME SEQUENCE...\n", argv[0]);
     return 2;
   }
-  for (int s = 2; s < argc; ++s) {
-    const std::string folder = argv[s];
-    cv::FileStorage settings(folder + "/camera.yaml", cv::FileStorage::READ);
-    std::ifstream list(folder + "/rgb.txt");
-    if (!settings.isOpened() || !list) {
-      std::fprintf(stderr, "%s: no camera.yaml or rgb.txt\n", folder.c_str());
-      return 2;
-    }
-    const int features = static_cast<int>(settings["ORBextractor.nFeatures"]);
-    const float scale = static_cast<float>(settings["ORBextractor.scaleFactor"]);
-    const int levels = static_cast<int>(settings["ORBextractor.nLevels"]);
-    const int fast_initial = static_cast<int>(settings["ORBextractor.iniThFAST"]);
-    const int fast_minimum = static_cast<int>(settings["ORBextractor.minThFAST"]);
-    const bool rgb_order = static_cast<int>(settings["Camera.RGB"]) != 0;
-    orb_fork::ORBextractor extractor(orb_fork::kInitialBudgetFactor * features, scale, levels, fast_initial,
-                                     fast_minimum);
-
-    std::vector<Frame> frames;
-    std::string line;
+  for (int arg = 2; arg < argc; ++arg) {
+    const std::string folder = argv[arg];
     double octave0 = 0.0;
-    while (std::getline(list, line)) {
-      if (line.empty() || line[0] == '#') continue;
-      std::istringstream fields(line);
-      double time = 0.0;
-      std::string file;
-      fields >> time >> file;
-      const cv::Mat colour = cv::imread(folder + "/" + file, cv::IMREAD_COLOR);
-      if (colour.empty()) {
-        std::fprintf(stderr, "%s/%s: not an image\n", folder.c_str(), file.c_str());
-        return 2;
-      }
-      cv::Mat grey;
-      cv::cvtColor(colour, grey, rgb_order ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
-      Frame f = orb_fork::extract<Frame>(extractor, grey);
-      octave0 += static_cast<double>(std::count_if(f.keypoints.begin(), f.keypoints.end(),
-                                                   [](const cv::KeyPoint& k) { return k.octave == 0; }));
-      frames.push_back(std::move(f));
-    }
-    if (frames.size() < 2) {
+    const std::optional<std::vector<Frame>> frames = extract_frames(folder, octave0);
+    if (!frames) return 2;
+    if (frames->size() < 2) {
       std::fprintf(stderr, "%s: fewer than two frames\n", folder.c_str());
       return 2;
     }
-
-    std::vector<int> ages(frames.size());
-    double first_matches = 0.0, age_sum = 0.0;
-    int long_chains = 0;
-    for (std::size_t r = 0; r + 1 < frames.size(); ++r) {
-      const Chain c = chain(frames, r);
-      ages[r] = c.age;
-      first_matches += c.first_matches;
-      age_sum += c.age;
-      long_chains += ages[r] >= kLongChain;
-    }
-    // ORB-SLAM's own chain: a reference is given up on the frame after its last kept one, and the
-    // frame after that is the next reference (frames of too few keypoints are skipped).
-    int taken = 0, taken_long = 0;
-    for (std::size_t r = 0; r + 1 < frames.size();) {
-      if (frames[r].keypoints.size() <= kMinKeypoints) {
-        ++r;
-        continue;
-      }
-      ++taken;
-      taken_long += ages[r] >= kLongChain;
-      r += static_cast<std::size_t>(ages[r]) + 2;
-    }
+    const Summary s = summarise(*frames);
     std::string name = folder;
     while (name.size() > 1 && name.back() == '/') name.pop_back();
     name = name.substr(name.find_last_of('/') + 1);
-    const double references = static_cast<double>(frames.size() - 1);
-    std::printf("| %s | %s | %.0f | %.1f | %.2f | %d | %d | %d |\n", argv[1], name.c_str(),
-                octave0 / static_cast<double>(frames.size()), first_matches / references, age_sum / references,
-                long_chains, taken, taken_long);
+    std::printf("| %s | %s | %.0f | %.1f | %.2f | %d | %d | %d |\n", argv[1], name.c_str(), octave0, s.first_matches,
+                s.age, s.long_chains, s.taken, s.taken_long);
   }
   return 0;
 }

@@ -90,8 +90,11 @@ TEST_CASE("duplicate correspondences are removed exactly as defined") {
   }
 }
 
-TEST_CASE("the location-aware ratio test equals a naive reference") {
-  // Descriptors with planted near-duplicates at nearly the same image-2 location.
+namespace {
+
+/// Features with planted near-duplicates: each image-1 descriptor has one to three copies in
+/// image 2, a few more bits off each, at nearly the same image-2 location.
+std::pair<affine_orb::Features<256>, affine_orb::Features<256>> planted_copies() {
   std::mt19937_64 rng(23);
   affine_orb::Features<256> a;
   affine_orb::Features<256> b;
@@ -112,46 +115,56 @@ TEST_CASE("the location-aware ratio test equals a naive reference") {
       b.views.push_back(copy);
     }
   }
+  return {a, b};
+}
+
+/// Index of the descriptor of `set` nearest to `d` (the first on ties) and its distance.
+std::pair<std::size_t, int> nearest(const affine_orb::BinaryDescriptor<256>& d, const affine_orb::Features<256>& set) {
+  int best = 1 << 30;
+  std::size_t at = 0;
+  for (std::size_t j = 0; j < set.size(); ++j) {
+    const int distance = affine_orb::hamming_distance(d, set.descriptors[j]);
+    if (distance < best) {
+      best = distance;
+      at = j;
+    }
+  }
+  return {at, best};
+}
+
+/// The location-aware ratio test by brute force: the nearest descriptor of `b`, against the nearest
+/// farther than `radius` px from it (ratio 0.8), and with `cross` the nearest of `a` back.
+std::vector<affine_orb::Match> naive_ratio_matches(const affine_orb::Features<256>& a,
+                                                   const affine_orb::Features<256>& b, double radius, bool cross) {
+  std::vector<affine_orb::Match> expected;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const auto [j1, best] = nearest(a.descriptors[i], b);
+    int second = 1 << 30;
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      if (j == j1) continue;
+      const auto& p = b.keypoints[j].pt;
+      const auto& q = b.keypoints[j1].pt;
+      if (std::hypot(p.x - q.x, p.y - q.y) <= radius) continue;
+      second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
+    }
+    if (!(best < 0.8 * second)) continue;
+    if (cross && nearest(b.descriptors[j1], a).first != i) continue;
+    expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
+  }
+  return expected;
+}
+
+}  // namespace
+
+TEST_CASE("the location-aware ratio test equals a naive reference") {
+  const auto [a, b] = planted_copies();
   for (const affine_orb::AffineMatchOptions& options : exclusion_and_cross_check()) {
     const double radius = options.ratio_exclusion_radius;
     const bool cross = options.matcher.cross_check;
     CAPTURE(radius);
     CAPTURE(cross);
     const auto got = affine_orb::match_features(a, b, options);
-    std::vector<affine_orb::Match> expected;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      int best = 1 << 30;
-      std::size_t j1 = 0;
-      for (std::size_t j = 0; j < b.size(); ++j) {
-        const int d = affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]);
-        if (d < best) {
-          best = d;
-          j1 = j;
-        }
-      }
-      int second = 1 << 30;
-      for (std::size_t j = 0; j < b.size(); ++j) {
-        if (j == j1) continue;
-        const auto& p = b.keypoints[j].pt;
-        const auto& q = b.keypoints[j1].pt;
-        if (std::hypot(p.x - q.x, p.y - q.y) <= radius) continue;
-        second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
-      }
-      if (!(best < 0.8 * second)) continue;
-      if (cross) {
-        int back = 1 << 30;
-        std::size_t i1 = 0;
-        for (std::size_t k = 0; k < a.size(); ++k) {
-          const int d = affine_orb::hamming_distance(a.descriptors[k], b.descriptors[j1]);
-          if (d < back) {
-            back = d;
-            i1 = k;
-          }
-        }
-        if (i1 != i) continue;
-      }
-      expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
-    }
+    const std::vector<affine_orb::Match> expected = naive_ratio_matches(a, b, radius, cross);
     REQUIRE(got.size() == expected.size());
     for (std::size_t k = 0; k < got.size(); ++k) {
       CHECK(got[k].query == expected[k].query);
@@ -280,13 +293,20 @@ TEST_CASE("matching sets stage by stage equals matching each stage's sets whole"
   }
 }
 
-TEST_CASE("guided matching equals a naive reference over every keypoint of image 2") {
-  // Image-2 partners near each prediction (shifted by up to 3 px, some with near-duplicates one
-  // pixel apart), random distractors all over; some predictions are not finite.
-  std::mt19937_64 rng(31);
-  affine_orb::Features<256> a;
-  affine_orb::Features<256> b;
+namespace {
+
+/// Image 1's keypoints, their predictions in image 2 and image 2's keypoints for the guided
+/// matching test.
+struct GuidedScene {
+  affine_orb::Features<256> a, b;
   std::vector<cv::Point2f> predicted;
+};
+
+/// Image-2 partners near each prediction (shifted by up to 3 px, some with near-duplicates one
+/// pixel apart), random distractors all over; some predictions are not finite.
+GuidedScene guided_scene() {
+  std::mt19937_64 rng(31);
+  GuidedScene s;
   const auto flipped = [&](affine_orb::BinaryDescriptor<256> d, int bits) {
     for (int flip = 0; flip < bits; ++flip) {
       const unsigned bit = static_cast<unsigned>(rng() % 256);
@@ -297,22 +317,69 @@ TEST_CASE("guided matching equals a naive reference over every keypoint of image
   for (int i = 0; i < 120; ++i) {
     const affine_orb::BinaryDescriptor<256> d{rng(), rng(), rng(), rng()};
     const cv::Point2f p(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300));
-    a.descriptors.push_back(d);
-    a.keypoints.emplace_back(p, 31.0f);
-    a.views.push_back(0);
-    predicted.push_back(i % 17 == 0 ? cv::Point2f(std::numeric_limits<float>::quiet_NaN(), 0.0f)
-                                    : p + cv::Point2f(20.0f, -10.0f));
+    s.a.descriptors.push_back(d);
+    s.a.keypoints.emplace_back(p, 31.0f);
+    s.a.views.push_back(0);
+    s.predicted.push_back(i % 17 == 0 ? cv::Point2f(std::numeric_limits<float>::quiet_NaN(), 0.0f)
+                                      : p + cv::Point2f(20.0f, -10.0f));
     const cv::Point2f at =
         p + cv::Point2f(20.0f + static_cast<float>(rng() % 7) - 3.0f, -10.0f + static_cast<float>(rng() % 7) - 3.0f);
     for (int copy = 0; copy < 1 + i % 2; ++copy) {
-      b.descriptors.push_back(flipped(d, 10 + 30 * copy + static_cast<int>(rng() % 60)));
-      b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.0f), 31.0f);
-      b.views.push_back(copy);
+      s.b.descriptors.push_back(flipped(d, 10 + 30 * copy + static_cast<int>(rng() % 60)));
+      s.b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.0f), 31.0f);
+      s.b.views.push_back(copy);
     }
-    b.descriptors.push_back({rng(), rng(), rng(), rng()});
-    b.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 340), static_cast<float>(rng() % 340)), 31.0f);
-    b.views.push_back(0);
+    s.b.descriptors.push_back({rng(), rng(), rng(), rng()});
+    s.b.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 340), static_cast<float>(rng() % 340)), 31.0f);
+    s.b.views.push_back(0);
   }
+  return s;
+}
+
+/// match_guided() by brute force over every keypoint of `train`: the nearest descriptor within the
+/// gate, at most max_distance bits, against the nearest in the gate farther than the exclusion
+/// radius from it (ratio 0.8); duplicates kept.
+std::vector<affine_orb::Match> naive_guided_matches(const affine_orb::Features<256>& a,
+                                                    const affine_orb::Features<256>& train,
+                                                    const std::vector<cv::Point2f>& predicted,
+                                                    const affine_orb::GuidedMatchOptions& options) {
+  const double gate = options.gate_radius, exclusion = options.ratio_exclusion_radius;
+  const auto squared = [](cv::Point2f p, cv::Point2f q) {
+    return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
+  };
+  std::vector<affine_orb::Match> expected;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!std::isfinite(predicted[i].x)) continue;
+    int best = 1 << 30;
+    std::size_t j1 = 0;
+    for (std::size_t j = 0; j < train.size(); ++j) {
+      if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
+      const int d = affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]);
+      if (d < best) {
+        best = d;
+        j1 = j;
+      }
+    }
+    if (best > options.max_distance) continue;
+    int second = 1 << 30;
+    for (std::size_t j = 0; j < train.size(); ++j) {
+      if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
+      if (squared(train.keypoints[j].pt, train.keypoints[j1].pt) <= exclusion * exclusion) continue;
+      second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]));
+    }
+    if (second != 1 << 30 && !(best < 0.8 * second)) continue;
+    expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
+  }
+  return expected;
+}
+
+}  // namespace
+
+TEST_CASE("guided matching equals a naive reference over every keypoint of image 2") {
+  const GuidedScene scene = guided_scene();
+  const affine_orb::Features<256>& a = scene.a;
+  const affine_orb::Features<256>& b = scene.b;
+  const std::vector<cv::Point2f>& predicted = scene.predicted;
   // The same with one more image-2 keypoint 1e30 px away, which widens the search grid's cells.
   affine_orb::Features<256> b_far = b;
   b_far.keypoints.emplace_back(cv::Point2f(1e30f, -1e30f), 31.0f);
@@ -333,32 +400,7 @@ TEST_CASE("guided matching equals a naive reference over every keypoint of image
           options.max_distance = max_distance;
           options.duplicate_radius = 0.0;
           const auto got = affine_orb::match_guided(a, train, predicted, options);
-          std::vector<affine_orb::Match> expected;
-          const auto squared = [](cv::Point2f p, cv::Point2f q) {
-            return static_cast<double>(p.x - q.x) * (p.x - q.x) + static_cast<double>(p.y - q.y) * (p.y - q.y);
-          };
-          for (std::size_t i = 0; i < a.size(); ++i) {
-            if (!std::isfinite(predicted[i].x)) continue;
-            int best = 1 << 30;
-            std::size_t j1 = 0;
-            for (std::size_t j = 0; j < train.size(); ++j) {
-              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
-              const int d = affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]);
-              if (d < best) {
-                best = d;
-                j1 = j;
-              }
-            }
-            if (best > max_distance) continue;
-            int second = 1 << 30;
-            for (std::size_t j = 0; j < train.size(); ++j) {
-              if (squared(predicted[i], train.keypoints[j].pt) > gate * gate) continue;
-              if (squared(train.keypoints[j].pt, train.keypoints[j1].pt) <= exclusion * exclusion) continue;
-              second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]));
-            }
-            if (second != 1 << 30 && !(best < 0.8 * second)) continue;
-            expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
-          }
+          const std::vector<affine_orb::Match> expected = naive_guided_matches(a, train, predicted, options);
           REQUIRE(got.size() == expected.size());
           for (std::size_t k = 0; k < got.size(); ++k) {
             CHECK(got[k].query == expected[k].query);

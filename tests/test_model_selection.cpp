@@ -393,7 +393,7 @@ TEST_CASE("reproducibility: the same seed gives an identical result, another see
   }
 }
 
-TEST_CASE("degenerate input and bad options: success = false or std::invalid_argument, never a crash") {
+TEST_CASE("too few or degenerate correspondences: success = false, never a crash") {
   const PlanarRig rig;
   const Pair pair = rig.make(100, 0.2, 19);
 
@@ -427,6 +427,11 @@ TEST_CASE("degenerate input and bad options: success = false or std::invalid_arg
   CHECK(collinear.model == GeometricModel::kNone);
   CHECK_FALSE(affine_orb::select_model(line1, std::vector<cv::Point2f>(pair.points2.begin(), pair.points2.begin() + 60))
                   .success);
+}
+
+TEST_CASE("unequal lengths, non-finite coordinates and nonsense options: std::invalid_argument") {
+  const PlanarRig rig;
+  const Pair pair = rig.make(100, 0.2, 19);
 
   // Sizes differ, non-finite coordinates.
   std::vector<cv::Point2f> shorter = pair.points2;
@@ -479,80 +484,111 @@ TEST_CASE("degenerate input and bad options: success = false or std::invalid_arg
   CHECK_NOTHROW(ModelSelectionOptions{}.check());
 }
 
-TEST_CASE("image correction: warp a real photo by a known H and correct it back") {
-  const cv::Mat img1 = affine_orb::test::graf(1);
-  Eigen::Matrix3d h;  // x2 ~ h x1: a moderate perspective change of the 800x640 photo
-  h << 0.92, 0.12, 25.0, -0.06, 0.95, 30.0, 1.2e-4, 6.0e-5, 1.0;
+namespace {
+
+/// graf 1 and its image by a moderate perspective change h (x2 ~ h x1) of the 800x640 photo:
+/// img2(h x1) = img1(x1).
+struct WarpedPhoto {
+  cv::Mat img1, img2;
+  Eigen::Matrix3d h;
   cv::Matx33d hm;
+};
+
+WarpedPhoto warped_photo() {
+  WarpedPhoto w;
+  w.img1 = affine_orb::test::graf(1);
+  w.h << 0.92, 0.12, 25.0, -0.06, 0.95, 30.0, 1.2e-4, 6.0e-5, 1.0;
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) hm(r, c) = h(r, c);
+    for (int c = 0; c < 3; ++c) w.hm(r, c) = w.h(r, c);
   }
-  cv::Mat img2;  // image 2 of the same plane: img2(h x1) = img1(x1)
-  cv::warpPerspective(img1, img2, cv::Mat(hm), img1.size(), cv::INTER_LINEAR);
+  cv::warpPerspective(w.img1, w.img2, cv::Mat(w.hm), w.img1.size(), cv::INTER_LINEAR);
+  return w;
+}
 
-  const auto mean_abs_diff = [](const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask) {
-    cv::Mat diff;
-    cv::absdiff(a, b, diff);
-    return cv::mean(diff, mask)[0];
-  };
+double mean_abs_diff(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask) {
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  return cv::mean(diff, mask)[0];
+}
 
-  // Direct warp with the true homography.
-  const affine_orb::CorrectedImage direct = affine_orb::warp_to_first_image(img2, h, img1.size());
+/// The mean grey-level difference of img2 warped back by the true homography from img1 (two
+/// bilinear resamplings of a textured photo: a few grey levels).
+double direct_correction_error(const WarpedPhoto& w) {
+  const affine_orb::CorrectedImage direct = affine_orb::warp_to_first_image(w.img2, w.h, w.img1.size());
+  return mean_abs_diff(direct.image, w.img1, direct.valid);
+}
+
+}  // namespace
+
+TEST_CASE("image correction: warp a real photo by a known H and correct it back") {
+  const WarpedPhoto w = warped_photo();
+  const affine_orb::CorrectedImage direct = affine_orb::warp_to_first_image(w.img2, w.h, w.img1.size());
   REQUIRE(direct.success);
-  CHECK(direct.image.size() == img1.size());
-  CHECK(direct.image.type() == img2.type());
-  CHECK(cv::countNonZero(direct.valid) > 0.7 * img1.total());
+  CHECK(direct.image.size() == w.img1.size());
+  CHECK(direct.image.type() == w.img2.type());
+  CHECK(cv::countNonZero(direct.valid) > 0.7 * w.img1.total());
   // A valid pixel interpolates image-2 pixels only: warping an all-white image gives 255 there.
-  cv::Mat white(img2.size(), CV_8UC1, cv::Scalar(255)), warped_white;
-  cv::warpPerspective(white, warped_white, cv::Mat(hm), img1.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP);
+  cv::Mat white(w.img2.size(), CV_8UC1, cv::Scalar(255)), warped_white;
+  cv::warpPerspective(white, warped_white, cv::Mat(w.hm), w.img1.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP);
   cv::Mat not_white;
   cv::compare(warped_white, 255, not_white, cv::CMP_NE);
   CHECK(cv::countNonZero(not_white & direct.valid) == 0);
   CHECK(cv::countNonZero(direct.valid) >= 0.99 * cv::countNonZero(warped_white == 255));
-  // Two bilinear resamplings of a textured photo: a few grey levels on average. The uncorrected
-  // image and a correction in the wrong direction (H⁻¹) are far off.
-  const double corrected = mean_abs_diff(direct.image, img1, direct.valid);
+  // The uncorrected image and a correction in the wrong direction (H⁻¹) are far off.
+  const double corrected = mean_abs_diff(direct.image, w.img1, direct.valid);
   CHECK(corrected < 6.0);
-  CHECK(mean_abs_diff(img2, img1, direct.valid) > 4.0 * corrected);
-  const affine_orb::CorrectedImage wrong = affine_orb::warp_to_first_image(img2, h.inverse(), img1.size());
-  CHECK(mean_abs_diff(wrong.image, img1, wrong.valid & direct.valid) > 4.0 * corrected);
+  CHECK(mean_abs_diff(w.img2, w.img1, direct.valid) > 4.0 * corrected);
+  const affine_orb::CorrectedImage wrong = affine_orb::warp_to_first_image(w.img2, w.h.inverse(), w.img1.size());
+  CHECK(mean_abs_diff(wrong.image, w.img1, wrong.valid & direct.valid) > 4.0 * corrected);
+}
 
-  // Whole pipeline: matches from h (noise, 30 % outliers) -> select_model -> correct_image.
-  const Pair pair = homography_grid(h, img1.size(), img2.size(), 32, 0.3, 23);
+TEST_CASE("image correction from select_model(): as close as the true homography's, colour too, none for F") {
+  const WarpedPhoto w = warped_photo();
+  // Matches from h (noise, 30 % outliers) -> select_model -> correct_image.
+  const Pair pair = homography_grid(w.h, w.img1.size(), w.img2.size(), 32, 0.3, 23);
   const ModelSelectionResult selection = affine_orb::select_model(pair.points1, pair.points2, options_for_noise());
   REQUIRE(selection.model == GeometricModel::kHomography);
-  const affine_orb::CorrectedImage restored = affine_orb::correct_image(img2, img1.size(), selection);
+  const affine_orb::CorrectedImage restored = affine_orb::correct_image(w.img2, w.img1.size(), selection);
   REQUIRE(restored.success);
-  CHECK(mean_abs_diff(restored.image, img1, restored.valid) < corrected + 1.0);
-
-  // Colour images work too; no correction when F was chosen.
+  CHECK(mean_abs_diff(restored.image, w.img1, restored.valid) < direct_correction_error(w) + 1.0);
   cv::Mat colour;
-  cv::cvtColor(img2, colour, cv::COLOR_GRAY2BGR);
-  CHECK(affine_orb::correct_image(colour, img1.size(), selection).image.type() == CV_8UC3);
+  cv::cvtColor(w.img2, colour, cv::COLOR_GRAY2BGR);
+  CHECK(affine_orb::correct_image(colour, w.img1.size(), selection).image.type() == CV_8UC3);
   ModelSelectionResult f_chosen = selection;
   f_chosen.model = GeometricModel::kFundamental;
-  CHECK_FALSE(affine_orb::correct_image(img2, img1.size(), f_chosen).success);
-  CHECK(affine_orb::correct_image(img2, img1.size(), f_chosen).image.empty());
-  CHECK_FALSE(affine_orb::correct_image(img2, img1.size(), ModelSelectionResult{}).success);
+  CHECK_FALSE(affine_orb::correct_image(w.img2, w.img1.size(), f_chosen).success);
+  CHECK(affine_orb::correct_image(w.img2, w.img1.size(), f_chosen).image.empty());
+  CHECK_FALSE(affine_orb::correct_image(w.img2, w.img1.size(), ModelSelectionResult{}).success);
+}
 
-  // Bad input.
-  CHECK_THROWS_AS(affine_orb::warp_to_first_image(cv::Mat(), h, img1.size()), std::invalid_argument);
+TEST_CASE("image correction: bad images, sizes, homographies and options give std::invalid_argument") {
+  const WarpedPhoto w = warped_photo();
+  const cv::Mat& img2 = w.img2;
+  const cv::Size size1 = w.img1.size();
+  const Eigen::Matrix3d& h = w.h;
+  CHECK_THROWS_AS(affine_orb::warp_to_first_image(cv::Mat(), h, size1), std::invalid_argument);
   CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, h, cv::Size(0, 10)), std::invalid_argument);
   CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, h, cv::Size(10, -1)), std::invalid_argument);
   Eigen::Matrix3d singular = h;
   singular.row(2) = singular.row(0);
-  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, singular, img1.size()), std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, Eigen::Matrix3d::Zero(), img1.size()), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, singular, size1), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, Eigen::Matrix3d::Zero(), size1), std::invalid_argument);
   Eigen::Matrix3d nan_h = h;
   nan_h(1, 1) = std::numeric_limits<double>::quiet_NaN();
-  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, nan_h, img1.size()), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, nan_h, size1), std::invalid_argument);
   affine_orb::ImageCorrectionOptions bad_interpolation;
   bad_interpolation.interpolation = cv::INTER_AREA;
-  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, h, img1.size(), bad_interpolation), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::warp_to_first_image(img2, h, size1, bad_interpolation), std::invalid_argument);
+  ModelSelectionResult selection;
+  selection.success = true;
+  selection.model = GeometricModel::kHomography;
+  selection.homography_found = true;
+  selection.homography = h;
+  REQUIRE(affine_orb::correct_image(img2, size1, selection).success);
   affine_orb::ImageCorrectionOptions bad_border;
   bad_border.border_value = std::numeric_limits<double>::infinity();
-  CHECK_THROWS_AS(affine_orb::correct_image(img2, img1.size(), selection, bad_border), std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::correct_image(cv::Mat(), img1.size(), selection), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::correct_image(img2, size1, selection, bad_border), std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::correct_image(cv::Mat(), size1, selection), std::invalid_argument);
 }
 
 TEST_CASE("GRIC: the formula against hand-computed values, and the rule on a plane, a rotation and a 3-D scene") {

@@ -200,21 +200,29 @@ void check_keyframe_rules(const std::vector<affine_orb::TrackedFrame>& results,
 
 // --- readers ---------------------------------------------------------------------------------
 
-TEST_CASE("KITTI reader: images in name order, times, poses, calibration in three forms") {
-  TempDir dir;
+namespace {
+
+/// Writes a KITTI-layout sequence of three frames into `dir`: tagged images, times, poses (frame
+/// 1 rotated 90° about y, at (1, 2, 3)) and a calib.txt of key=value intrinsics.
+void write_kitti_sequence(const std::filesystem::path& dir) {
   for (int i = 0; i < 3; ++i) {
     char name[32];
     std::snprintf(name, sizeof(name), "image_0/%06d.png", i);
-    write_tagged_image(dir.path() / name, 10 + i);
+    write_tagged_image(dir / name, 10 + i);
   }
-  write_text(dir.path() / "times.txt", "0.0\n1.036e-01\n2.07e-01\n");
-  // Frame 1: rotated 90° about y, at (1, 2, 3).
-  write_text(dir.path() / "poses.txt",
+  write_text(dir / "times.txt", "0.0\n1.036e-01\n2.07e-01\n");
+  write_text(dir / "poses.txt",
              "1 0 0 0 0 1 0 0 0 0 1 0\n"
              "0 0 1 1 0 1 0 2 -1 0 0 3\n"
              "1 0 0 0 0 1 0 0 0 0 1 5\n");
-  write_text(dir.path() / "calib.txt", "# comment\nfx=707.0912 fy=707.0912 cx=601.8873 cy=183.1104\nwidth=1226\n");
+  write_text(dir / "calib.txt", "# comment\nfx=707.0912 fy=707.0912 cx=601.8873 cy=183.1104\nwidth=1226\n");
+}
 
+}  // namespace
+
+TEST_CASE("KITTI reader: images in name order, times, poses, key=value calibration") {
+  TempDir dir;
+  write_kitti_sequence(dir.path());
   const ex::Sequence s = ex::read_sequence(dir.path());
   CHECK(s.format == "kitti");
   REQUIRE(s.frames.size() == 3);
@@ -232,20 +240,6 @@ TEST_CASE("KITTI reader: images in name order, times, poses, calibration in thre
   CHECK(s.camera->fx == 707.0912);
   CHECK(s.camera->cy == 183.1104);
 
-  // The official KITTI calib.txt line, and four plain numbers.
-  write_text(dir.path() / "calib.txt",
-             "P0: 7.188560e+02 0.000000e+00 6.071928e+02 0.000000e+00 0.000000e+00 7.188560e+02 1.852157e+02 "
-             "0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\nP1: 1 2 3\n");
-  const affine_orb::PinholeCamera p0 = ex::read_calibration(dir.path() / "calib.txt");
-  CHECK(p0.fx == 718.856);
-  CHECK(p0.fy == 718.856);
-  CHECK(p0.cx == 607.1928);
-  CHECK(p0.cy == 185.2157);
-  write_text(dir.path() / "calib.txt", "500 510 320 240\n");
-  const affine_orb::PinholeCamera plain = ex::read_calibration(dir.path() / "calib.txt");
-  CHECK(plain.fy == 510.0);
-  CHECK(plain.cx == 320.0);
-
   SUBCASE("poses elsewhere (the official poses/NN.txt)") {
     write_text(dir.path() / "other.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n1 0 0 0 0 1 0 0 0 0 1 2\n");
     const ex::Sequence o = ex::read_kitti(dir.path(), dir.path() / "other.txt");
@@ -258,30 +252,49 @@ TEST_CASE("KITTI reader: images in name order, times, poses, calibration in thre
     CHECK_FALSE(o.frames[0].pose);
     CHECK(o.frames[2].timestamp == 2.0);
   }
-  SUBCASE("errors name the file") {
-    write_text(dir.path() / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
-    CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("poses.txt has 2 lines"), std::runtime_error);
-    write_text(dir.path() / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n1 0 0 0 0 1 0 0 0 0 1 0\n");
-    CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("poses.txt:2: expected 12 numbers"),
-                         std::runtime_error);
-    write_text(dir.path() / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 x\n1 0 0 0 0 1 0 0 0 0 1 0\n");
-    CHECK_THROWS_AS(ex::read_kitti(dir.path()), std::runtime_error);
-    std::filesystem::remove(dir.path() / "poses.txt");
-    write_text(dir.path() / "times.txt", "0\n1\n");
-    CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("times.txt has 2 lines"), std::runtime_error);
-    std::filesystem::remove(dir.path() / "times.txt");
-    write_text(dir.path() / "calib.txt", "fx=1 fy=2\n");
-    CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("no intrinsics"), std::runtime_error);
-    write_text(dir.path() / "calib.txt", "fx=-1 fy=2 cx=3 cy=4\n");
-    CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("positive"), std::runtime_error);
-    write_text(dir.path() / "calib.txt", "fx=abc fy=2 cx=3 cy=4\n");
-    CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("bad value"), std::runtime_error);
-    std::filesystem::remove(dir.path() / "calib.txt");
-    CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path(), dir.path() / "missing.txt"), doctest::Contains("cannot read"),
-                         std::runtime_error);
-    std::filesystem::remove_all(dir.path() / "image_0");
-    CHECK_THROWS_AS(ex::read_kitti(dir.path()), std::runtime_error);
-  }
+}
+
+TEST_CASE("KITTI calibration: the official P0 line and four plain numbers") {
+  TempDir dir;
+  write_text(dir.path() / "calib.txt",
+             "P0: 7.188560e+02 0.000000e+00 6.071928e+02 0.000000e+00 0.000000e+00 7.188560e+02 1.852157e+02 "
+             "0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\nP1: 1 2 3\n");
+  const affine_orb::PinholeCamera p0 = ex::read_calibration(dir.path() / "calib.txt");
+  CHECK(p0.fx == 718.856);
+  CHECK(p0.fy == 718.856);
+  CHECK(p0.cx == 607.1928);
+  CHECK(p0.cy == 185.2157);
+  write_text(dir.path() / "calib.txt", "500 510 320 240\n");
+  const affine_orb::PinholeCamera plain = ex::read_calibration(dir.path() / "calib.txt");
+  CHECK(plain.fy == 510.0);
+  CHECK(plain.cx == 320.0);
+}
+
+TEST_CASE("KITTI reader: errors name the file") {
+  TempDir dir;
+  write_kitti_sequence(dir.path());
+  write_text(dir.path() / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("poses.txt has 2 lines"), std::runtime_error);
+  write_text(dir.path() / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("poses.txt:2: expected 12 numbers"),
+                       std::runtime_error);
+  write_text(dir.path() / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 x\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  CHECK_THROWS_AS(ex::read_kitti(dir.path()), std::runtime_error);
+  std::filesystem::remove(dir.path() / "poses.txt");
+  write_text(dir.path() / "times.txt", "0\n1\n");
+  CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("times.txt has 2 lines"), std::runtime_error);
+  std::filesystem::remove(dir.path() / "times.txt");
+  write_text(dir.path() / "calib.txt", "fx=1 fy=2\n");
+  CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("no intrinsics"), std::runtime_error);
+  write_text(dir.path() / "calib.txt", "fx=-1 fy=2 cx=3 cy=4\n");
+  CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("positive"), std::runtime_error);
+  write_text(dir.path() / "calib.txt", "fx=abc fy=2 cx=3 cy=4\n");
+  CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path()), doctest::Contains("bad value"), std::runtime_error);
+  std::filesystem::remove(dir.path() / "calib.txt");
+  CHECK_THROWS_WITH_AS(ex::read_kitti(dir.path(), dir.path() / "missing.txt"), doctest::Contains("cannot read"),
+                       std::runtime_error);
+  std::filesystem::remove_all(dir.path() / "image_0");
+  CHECK_THROWS_AS(ex::read_kitti(dir.path()), std::runtime_error);
 }
 
 TEST_CASE("homography reader: Oxford numbers and OpenCV XML equal the files; bad files throw") {

@@ -573,6 +573,67 @@ TEST_CASE("the SSE2 canvas sampler and resampler give the scalar references' byt
   }
 }
 
+namespace {
+
+/// Canvas row y, columns [c0, c1], by every sampling path of this build and CPU: how many differ
+/// from the scalar reference.
+int sampler_mismatches(const cv::Mat& image, const affine_orb::detail::CanvasSampler& sampler, int y, int c0, int c1) {
+  std::vector<std::uint8_t> a(static_cast<std::size_t>(c1 - c0) + 1, 0);
+  std::vector<std::uint8_t> b(a.size(), 0);
+  affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, c0, c1, a.data());
+  affine_orb::detail::sample_canvas_row(image, sampler, y, c0, c1, b.data());
+  int mismatches = a != b;
+#if defined(__SSE2__)
+  std::fill(b.begin(), b.end(), 0);
+  affine_orb::detail::sample_canvas_row_sse2(image, sampler, y, c0, c1, b.data());
+  mismatches += a != b;
+#endif
+#if AFFINE_ORB_NEON
+  std::fill(b.begin(), b.end(), 0);
+  affine_orb::detail::sample_canvas_row_neon(image, sampler, y, c0, c1, b.data());
+  mismatches += a != b;
+#endif
+#if AFFINE_ORB_AVX2
+  if (affine_orb::detail::cpu_has_avx2()) {
+    std::fill(b.begin(), b.end(), 0);
+    affine_orb::detail::sample_canvas_row_avx2(image, sampler, y, c0, c1, b.data());
+    mismatches += a != b;
+  }
+#endif
+  return mismatches;
+}
+
+/// View columns [x0, x1) of a canvas row `row` (starting at canvas column `first`) by every
+/// resampling path of this build and CPU: how many differ from the scalar reference.
+int resampler_mismatches(const affine_orb::detail::ViewResampler& resampler, const std::vector<std::uint8_t>& row,
+                         int first, int x0, int x1, int width) {
+  std::vector<std::uint8_t> out_a(static_cast<std::size_t>(width), 0);
+  std::vector<std::uint8_t> out_b(out_a.size(), 0);
+  affine_orb::detail::resample_row_scalar(resampler, row.data(), first, x0, x1, out_a.data());
+  affine_orb::detail::resample_row(resampler, row.data(), first, x0, x1, out_b.data());
+  int mismatches = out_a != out_b;
+#if defined(__SSE2__)
+  std::fill(out_b.begin(), out_b.end(), 0);
+  affine_orb::detail::resample_row_sse2(resampler, row.data(), first, x0, x1, out_b.data());
+  mismatches += out_a != out_b;
+#endif
+#if AFFINE_ORB_NEON
+  std::fill(out_b.begin(), out_b.end(), 0);
+  affine_orb::detail::resample_row_neon(resampler, row.data(), first, x0, x1, out_b.data());
+  mismatches += out_a != out_b;
+#endif
+#if AFFINE_ORB_AVX2
+  if (affine_orb::detail::cpu_has_avx2()) {
+    std::fill(out_b.begin(), out_b.end(), 0);
+    affine_orb::detail::resample_row_avx2(resampler, row.data(), first, x0, x1, out_b.data());
+    mismatches += out_a != out_b;
+  }
+#endif
+  return mismatches;
+}
+
+}  // namespace
+
 TEST_CASE("every canvas sampler and resampler path gives the scalar references' bytes on any column range") {
   MESSAGE(affine_orb::test::avx2_paths_message());
   // The paths of this build and CPU (AVX2 eight at a time, SSE2 or NEON four at a time, clamped or not) against the
@@ -599,53 +660,11 @@ TEST_CASE("every canvas sampler and resampler path gives the scalar references' 
     for (int y = -3; y < view.canvas_size.height + 3; y += 5) {
       const int c0 = -30 + static_cast<int>(rng() % 40);
       const int c1 = c0 + static_cast<int>(rng() % static_cast<unsigned>(view.canvas_size.width + 40));
-      std::vector<std::uint8_t> a(static_cast<std::size_t>(c1 - c0) + 1, 0);
-      std::vector<std::uint8_t> b(a.size(), 0);
-      affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, c0, c1, a.data());
-      affine_orb::detail::sample_canvas_row(image, sampler, y, c0, c1, b.data());
-      mismatches += a != b;
-#if defined(__SSE2__)
-      std::fill(b.begin(), b.end(), 0);
-      affine_orb::detail::sample_canvas_row_sse2(image, sampler, y, c0, c1, b.data());
-      mismatches += a != b;
-#endif
-#if AFFINE_ORB_NEON
-      std::fill(b.begin(), b.end(), 0);
-      affine_orb::detail::sample_canvas_row_neon(image, sampler, y, c0, c1, b.data());
-      mismatches += a != b;
-#endif
-#if AFFINE_ORB_AVX2
-      if (affine_orb::detail::cpu_has_avx2()) {
-        std::fill(b.begin(), b.end(), 0);
-        affine_orb::detail::sample_canvas_row_avx2(image, sampler, y, c0, c1, b.data());
-        mismatches += a != b;
-      }
-#endif
+      mismatches += sampler_mismatches(image, sampler, y, c0, c1);
       affine_orb::detail::sample_canvas_row_scalar(image, sampler, y, first, last + 1, row.data());
       const int x0 = static_cast<int>(rng() % static_cast<unsigned>(view.size.width));
       const int x1 = x0 + 1 + static_cast<int>(rng() % static_cast<unsigned>(view.size.width - x0));
-      std::vector<std::uint8_t> out_a(static_cast<std::size_t>(view.size.width), 0);
-      std::vector<std::uint8_t> out_b(out_a.size(), 0);
-      affine_orb::detail::resample_row_scalar(resampler, row.data(), first, x0, x1, out_a.data());
-      affine_orb::detail::resample_row(resampler, row.data(), first, x0, x1, out_b.data());
-      mismatches += out_a != out_b;
-#if defined(__SSE2__)
-      std::fill(out_b.begin(), out_b.end(), 0);
-      affine_orb::detail::resample_row_sse2(resampler, row.data(), first, x0, x1, out_b.data());
-      mismatches += out_a != out_b;
-#endif
-#if AFFINE_ORB_NEON
-      std::fill(out_b.begin(), out_b.end(), 0);
-      affine_orb::detail::resample_row_neon(resampler, row.data(), first, x0, x1, out_b.data());
-      mismatches += out_a != out_b;
-#endif
-#if AFFINE_ORB_AVX2
-      if (affine_orb::detail::cpu_has_avx2()) {
-        std::fill(out_b.begin(), out_b.end(), 0);
-        affine_orb::detail::resample_row_avx2(resampler, row.data(), first, x0, x1, out_b.data());
-        mismatches += out_a != out_b;
-      }
-#endif
+      mismatches += resampler_mismatches(resampler, row, first, x0, x1, view.size.width);
       ++checked;
     }
     CAPTURE(tilt);

@@ -345,6 +345,52 @@ inline int rbrief_reference_difference(const cv::Mat& smoothed, cv::Point c, flo
   return diff;
 }
 
+// The output of an adapter constructed with `features` while `options` are the defaults, on `image`.
+template <class T>
+Output reference_output(const typename T::Options& options, int features, const cv::Mat& image) {
+  DefaultsGuard<T> guard(options);
+  typename T::Extractor reference(features, kScale, kLevels, kIniFast, kMinFast);
+  return run<T>(reference, image);
+}
+
+// One case of the recovery switch: an adapter with normal fields (descriptor, max_tilt) and
+// recovery fields, and the extraction the recovery fields ask for written as normal fields
+// (want_features, want_tilt, want_view_features).
+struct RecoveryCase {
+  const char* what;
+  affine_orb::adapters::AdapterDescriptor descriptor;
+  double max_tilt;
+  double recovery_image_features;
+  double recovery_max_tilt;
+  double recovery_view_features;
+  int want_features;
+  double want_tilt;
+  double want_view_features;
+
+  // The keypoints an extraction should return, about: its image budget plus the views' share.
+  double budget(bool recovering) const {
+    return recovering ? want_features * (1.0 + (want_tilt > 1.0 ? want_view_features : 0.0))
+                      : kFeatures * (max_tilt > 1.0 ? 2.0 : 1.0);
+  }
+};
+
+inline std::vector<RecoveryCase> recovery_cases() {
+  using affine_orb::adapters::AdapterDescriptor;
+  constexpr int n = kFeatures;
+  constexpr double t = kViewsTilt;
+  return {
+      {"the same plan: ignored", AdapterDescriptor::kRbrief, 1.0, 1.0, 1.0, 1.0, n, 1.0, 1.0},
+      {"the same views: ignored", AdapterDescriptor::kRbrief, t, 1.0, t, 1.0, n, t, 1.0},
+      {"twice the image budget", AdapterDescriptor::kRbrief, 1.0, 2.0, 1.0, 1.0, 2 * n, 1.0, 1.0},
+      {"the views", AdapterDescriptor::kRbrief, 1.0, 1.0, t, 1.0, n, t, 1.0},
+      {"the views, BRISK", AdapterDescriptor::kBrisk, 1.0, 1.0, t, 1.0, n, t, 1.0},
+      {"both: twice the image budget and n from the views", AdapterDescriptor::kRbrief, 1.0, 2.0, t, 1.0, 2 * n, t,
+       0.5},
+      {"views normally, three times the image budget instead", AdapterDescriptor::kRbrief, t, 3.0, 1.0, 1.0, 3 * n, 1.0,
+       1.0},
+  };
+}
+
 }  // namespace conformance
 
 TEST_CASE_TEMPLATE_DEFINE("getters equal ORB-SLAM's scale vectors", T, getters) {
@@ -572,67 +618,29 @@ TEST_CASE_TEMPLATE_DEFINE("the pyramid of a frame stays valid after the next fra
 
 TEST_CASE_TEMPLATE_DEFINE("SetRecovering(true) extracts with the recovery options, false with the normal ones", T,
                           recovery_switch) {
-  using affine_orb::adapters::AdapterDescriptor;
   struct Restore {
     ~Restore() { T::Extractor::SetRecovering(false); }
   } restore;
   CHECK(!T::Extractor::Recovering());
-  constexpr int n = conformance::kFeatures;
-  constexpr double t = conformance::kViewsTilt;
-  // The subject: an adapter with `normal` fields and `recovery` fields. The references, built with
-  // the switch off: an adapter with the normal fields, and one constructed with `want_features`
-  // and `want_tilt`/`want_view_features` as its normal fields (the extraction the recovery fields
-  // ask for, written the other way).
-  struct Row {
-    const char* what;
-    AdapterDescriptor descriptor;
-    double max_tilt;
-    double recovery_image_features;
-    double recovery_max_tilt;
-    double recovery_view_features;
-    int want_features;
-    double want_tilt;
-    double want_view_features;
-  };
-  const Row rows[] = {
-      {"the same plan: ignored", AdapterDescriptor::kRbrief, 1.0, 1.0, 1.0, 1.0, n, 1.0, 1.0},
-      {"the same views: ignored", AdapterDescriptor::kRbrief, t, 1.0, t, 1.0, n, t, 1.0},
-      {"twice the image budget", AdapterDescriptor::kRbrief, 1.0, 2.0, 1.0, 1.0, 2 * n, 1.0, 1.0},
-      {"the views", AdapterDescriptor::kRbrief, 1.0, 1.0, t, 1.0, n, t, 1.0},
-      {"the views, BRISK", AdapterDescriptor::kBrisk, 1.0, 1.0, t, 1.0, n, t, 1.0},
-      {"both: twice the image budget and n from the views", AdapterDescriptor::kRbrief, 1.0, 2.0, t, 1.0, 2 * n, t,
-       0.5},
-      {"views normally, three times the image budget instead", AdapterDescriptor::kRbrief, t, 3.0, 1.0, 1.0, 3 * n,
-       1.0, 1.0},
-  };
+  // The subject: an adapter with a case's normal and recovery fields. The references, built with
+  // the switch off: an adapter with the normal fields, and one with the recovery's extraction
+  // written as its normal fields.
   const cv::Mat image = affine_orb::test::kitti_frame(10);
-  for (const Row& row : rows) {
+  for (const conformance::RecoveryCase& row : conformance::recovery_cases()) {
     const std::string what = row.what;
     CAPTURE(what);
-    typename T::Options normal = conformance::views_options<T>(row.descriptor, row.max_tilt);
-    conformance::Output want_normal;
-    {
-      conformance::DefaultsGuard<T> guard(normal);
-      typename T::Extractor reference(n, conformance::kScale, conformance::kLevels, conformance::kIniFast,
-                                      conformance::kMinFast);
-      want_normal = conformance::run<T>(reference, image);
-    }
-    conformance::Output want_recovering;
-    {
-      typename T::Options o = conformance::views_options<T>(row.descriptor, row.want_tilt);
-      o.view_features = row.want_view_features;
-      conformance::DefaultsGuard<T> guard(o);
-      typename T::Extractor reference(row.want_features, conformance::kScale, conformance::kLevels,
-                                      conformance::kIniFast, conformance::kMinFast);
-      want_recovering = conformance::run<T>(reference, image);
-    }
+    const typename T::Options normal = conformance::views_options<T>(row.descriptor, row.max_tilt);
+    const conformance::Output want_normal = conformance::reference_output<T>(normal, conformance::kFeatures, image);
+    typename T::Options asked = conformance::views_options<T>(row.descriptor, row.want_tilt);
+    asked.view_features = row.want_view_features;
+    const conformance::Output want_recovering = conformance::reference_output<T>(asked, row.want_features, image);
     typename T::Options options = normal;
     options.recovery.image_features = row.recovery_image_features;
     options.recovery.max_tilt = row.recovery_max_tilt;
     options.recovery.view_features = row.recovery_view_features;
     conformance::DefaultsGuard<T> guard(options);
-    typename T::Extractor extractor(n, conformance::kScale, conformance::kLevels, conformance::kIniFast,
-                                    conformance::kMinFast);
+    typename T::Extractor extractor(conformance::kFeatures, conformance::kScale, conformance::kLevels,
+                                    conformance::kIniFast, conformance::kMinFast);
     // Normal, recovering, normal, recovering on the same frame: the switch is read at every call.
     for (const bool recovering : {false, true, false, true}) {
       CAPTURE(recovering);
@@ -647,10 +655,10 @@ TEST_CASE_TEMPLATE_DEFINE("SetRecovering(true) extracts with the recovery option
       }
       // The frame has the corners: each extraction returns about its budget (the views' share
       // loses the keypoints whose stereo window would not fit).
-      const double budget = recovering ? row.want_features * (1.0 + (row.want_tilt > 1.0 ? row.want_view_features : 0.0))
-                                       : n * (row.max_tilt > 1.0 ? 2.0 : 1.0);
+      // The fork's octree may end a little past it.
+      const double budget = row.budget(recovering);
       CHECK(static_cast<double>(out.keypoints.size()) >= 0.8 * budget);
-      CHECK(static_cast<double>(out.keypoints.size()) <= 1.02 * budget);  // the fork's octree may end past it
+      CHECK(static_cast<double>(out.keypoints.size()) <= 1.02 * budget);
     }
     T::Extractor::SetRecovering(false);
   }
@@ -874,8 +882,10 @@ TEST_CASE_TEMPLATE_DEFINE("bad input is rejected with std::invalid_argument", T,
     CHECK_NOTHROW(typename T::Extractor(62500, 1.2f, 8, 20, 7));
     CHECK_THROWS_AS(typename T::Extractor(62501, 1.2f, 8, 20, 7), std::invalid_argument);
   }
+}
 
-  // Environment values: each bad value names its variable.
+TEST_CASE_TEMPLATE_DEFINE("a bad environment value is rejected with std::invalid_argument naming its variable", T,
+                          bad_environment) {
   const std::vector<std::pair<const char*, const char*>> rows = {
       {affine_orb::adapters::kEnvMaxTilt, "abc"},      {affine_orb::adapters::kEnvMaxTilt, "0.5"},
       {affine_orb::adapters::kEnvMaxTilt, "2.8x"},     {affine_orb::adapters::kEnvMaxTilt, ""},

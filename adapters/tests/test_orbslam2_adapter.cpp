@@ -43,4 +43,5 @@ TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(options, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(walk, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(bad_input, Orbslam2);
+TEST_CASE_TEMPLATE_INVOKE(bad_environment, Orbslam2);
 TEST_CASE_TEMPLATE_INVOKE(fork_default, Orbslam2);

@@ -44,6 +44,7 @@ TEST_CASE_TEMPLATE_INVOKE(mask, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(options, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(walk, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(bad_input, Orbslam3);
+TEST_CASE_TEMPLATE_INVOKE(bad_environment, Orbslam3);
 TEST_CASE_TEMPLATE_INVOKE(fork_default, Orbslam3);
 
 TEST_CASE("lapping area: keypoints with x in [a, b] go to the end, last first, with their rows; the rest are counted") {

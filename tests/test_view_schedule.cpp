@@ -85,80 +85,100 @@ TEST_CASE("repeat grids answer exactly as the definition, for every reach") {
   CHECK_THROWS_AS(grids.reset(size, pyramid, 2.0, -1), std::invalid_argument);
 }
 
-TEST_CASE("view budgets share a total in proportion to t^e, levels geometric, shortfalls carried") {
-  const std::vector<double> tilts = {1.0, std::sqrt(2.0), std::sqrt(2.0), 2.0, 2.0, 2.0, 2.0 * std::sqrt(2.0)};
-  const int levels = 8;
-  const double scale = 1.2;
+namespace {
+
+/// The tilts of seven views (one untilted, two pairs and a triple of equal tilt), the levels and
+/// the scale of the view-budget tests.
+const std::vector<double> kBudgetTilts = {1.0, std::sqrt(2.0), std::sqrt(2.0), 2.0, 2.0, 2.0, 2.0 * std::sqrt(2.0)};
+constexpr int kBudgetLevels = 8;
+constexpr double kBudgetScale = 1.2;
+
+/// Checks the shares of views 1 … 6 of `budgets` after share(…, total, exponent): each its exact
+/// share rounded down or up, summing to `total`, equal tilts at most one apart (the earlier the
+/// larger), and each view's level budgets those of level_budgets().
+void check_shares(const affine_orb::detail::ViewBudgets& budgets, int total, double exponent) {
+  const std::vector<double>& tilts = kBudgetTilts;
+  double weight = 0.0;
+  for (std::size_t v = 1; v < tilts.size(); ++v) weight += std::pow(tilts[v], exponent);
+  int sum = 0;
+  for (int v = 1; v < static_cast<int>(tilts.size()); ++v) {
+    const double exact = total * std::pow(tilts[static_cast<std::size_t>(v)], exponent) / weight;
+    // Largest remainders: every share is its exact value rounded down or up.
+    CHECK(budgets.view(v) >= std::floor(exact) - 1e-9);
+    CHECK(budgets.view(v) <= std::ceil(exact) + 1e-9);
+    sum += budgets.view(v);
+    // Views of equal tilt get shares at most one apart, the earlier one the larger.
+    if (tilts[static_cast<std::size_t>(v)] == tilts[static_cast<std::size_t>(v - 1)] && v > 1) {
+      CHECK(budgets.view(v - 1) - budgets.view(v) >= 0);
+      CHECK(budgets.view(v - 1) - budgets.view(v) <= 1);
+    }
+    const std::vector<int> per_level = affine_orb::level_budgets(budgets.view(v), kBudgetScale, kBudgetLevels);
+    for (int l = 0; l < kBudgetLevels; ++l) {
+      CHECK(budgets.group(v * kBudgetLevels + l) == per_level[static_cast<std::size_t>(l)]);
+    }
+  }
+  CHECK(sum == total);
+}
+
+}  // namespace
+
+TEST_CASE("view budgets share a total in proportion to t^e, levels geometric") {
+  const std::vector<double>& tilts = kBudgetTilts;
   for (double exponent : {-1.0, 0.0, 1.0, 2.5}) {
     for (int total : {0, 1, 7, 999, 1000}) {
       CAPTURE(exponent);
       CAPTURE(total);
       affine_orb::detail::ViewBudgets budgets;
-      budgets.resize(tilts.size(), levels);
-      budgets.set_view(0, 123, scale);
-      budgets.share(tilts, 1, static_cast<int>(tilts.size()), total, exponent, scale);
+      budgets.resize(tilts.size(), kBudgetLevels);
+      budgets.set_view(0, 123, kBudgetScale);
+      budgets.share(tilts, 1, static_cast<int>(tilts.size()), total, exponent, kBudgetScale);
       CHECK(budgets.view(0) == 123);  // views outside the range keep theirs
-      double weight = 0.0;
-      for (std::size_t v = 1; v < tilts.size(); ++v) weight += std::pow(tilts[v], exponent);
-      int sum = 0;
-      for (int v = 1; v < static_cast<int>(tilts.size()); ++v) {
-        const double exact = total * std::pow(tilts[static_cast<std::size_t>(v)], exponent) / weight;
-        // Largest remainders: every share is its exact value rounded down or up.
-        CHECK(budgets.view(v) >= std::floor(exact) - 1e-9);
-        CHECK(budgets.view(v) <= std::ceil(exact) + 1e-9);
-        sum += budgets.view(v);
-        // Views of equal tilt get shares at most one apart, the earlier one the larger.
-        if (tilts[static_cast<std::size_t>(v)] == tilts[static_cast<std::size_t>(v - 1)] && v > 1) {
-          CHECK(budgets.view(v - 1) - budgets.view(v) >= 0);
-          CHECK(budgets.view(v - 1) - budgets.view(v) <= 1);
-        }
-        const std::vector<int> per_level = affine_orb::level_budgets(budgets.view(v), scale, levels);
-        for (int l = 0; l < levels; ++l) CHECK(budgets.group(v * levels + l) == per_level[static_cast<std::size_t>(l)]);
-      }
-      CHECK(sum == total);
+      check_shares(budgets, total, exponent);
     }
-  }
-  SUBCASE("allocate carries shortfalls within the range only, as allocate_with_carry defines") {
-    affine_orb::detail::ViewBudgets budgets;
-    budgets.resize(tilts.size(), levels);
-    budgets.share(tilts, 0, static_cast<int>(tilts.size()), 2000, -1.0, scale);
-    std::mt19937 rng(3);
-    std::uniform_int_distribution<int> offered(0, 60);
-    const int begin = 1 * levels;
-    const int end = 5 * levels;
-    std::vector<int> available(static_cast<std::size_t>(end - begin));
-    std::vector<int> range_budgets;
-    for (int& a : available) a = offered(rng);
-    for (int g = begin; g < end; ++g) range_budgets.push_back(budgets.group(g));
-    budgets.allocate(begin, end, available, true);
-    const std::vector<int> expected = affine_orb::allocate_with_carry(range_budgets, available);
-    int carried = 0;
-    for (int g = begin; g < end; ++g) {
-      CHECK(budgets.take(g) == expected[static_cast<std::size_t>(g - begin)]);
-      CHECK(budgets.take(g) <= available[static_cast<std::size_t>(g - begin)]);
-      carried += budgets.take(g) > budgets.group(g);
-    }
-    CHECK(carried > 0);  // some group took a shortfall carried from another
-
-    // Without carrying, every group takes what it can of its own budget and nothing more, and
-    // the groups outside the range keep what the carrying allocation gave them.
-    const int outside = budgets.take(0);
-    budgets.allocate(begin, end, available, false);
-    int short_groups = 0;
-    for (int g = begin; g < end; ++g) {
-      const int offered_here = available[static_cast<std::size_t>(g - begin)];
-      CHECK(budgets.take(g) == std::min(budgets.group(g), offered_here));
-      short_groups += offered_here < budgets.group(g);
-    }
-    CHECK(short_groups > 0);  // the shortfalls the carrying allocation passed on are lost here
-    CHECK(budgets.take(0) == outside);
-    CHECK_THROWS_AS(budgets.allocate(begin, end + 1, available, false), std::invalid_argument);
   }
   affine_orb::detail::ViewBudgets budgets;
-  budgets.resize(tilts.size(), levels);
-  CHECK_THROWS_AS(budgets.share(tilts, 3, 2, 10, 1.0, scale), std::invalid_argument);
-  CHECK_THROWS_AS(budgets.share(tilts, 0, 8, 10, 1.0, scale), std::invalid_argument);
-  CHECK_THROWS_AS(budgets.share(tilts, 0, 7, -1, 1.0, scale), std::invalid_argument);
+  budgets.resize(tilts.size(), kBudgetLevels);
+  CHECK_THROWS_AS(budgets.share(tilts, 3, 2, 10, 1.0, kBudgetScale), std::invalid_argument);
+  CHECK_THROWS_AS(budgets.share(tilts, 0, 8, 10, 1.0, kBudgetScale), std::invalid_argument);
+  CHECK_THROWS_AS(budgets.share(tilts, 0, 7, -1, 1.0, kBudgetScale), std::invalid_argument);
+}
+
+TEST_CASE("view budgets: allocate carries shortfalls within the range only, as allocate_with_carry defines") {
+  const int levels = kBudgetLevels;
+  affine_orb::detail::ViewBudgets budgets;
+  budgets.resize(kBudgetTilts.size(), levels);
+  budgets.share(kBudgetTilts, 0, static_cast<int>(kBudgetTilts.size()), 2000, -1.0, kBudgetScale);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> offered(0, 60);
+  const int begin = 1 * levels;
+  const int end = 5 * levels;
+  std::vector<int> available(static_cast<std::size_t>(end - begin));
+  std::vector<int> range_budgets;
+  for (int& a : available) a = offered(rng);
+  for (int g = begin; g < end; ++g) range_budgets.push_back(budgets.group(g));
+  budgets.allocate(begin, end, available, true);
+  const std::vector<int> expected = affine_orb::allocate_with_carry(range_budgets, available);
+  int carried = 0;
+  for (int g = begin; g < end; ++g) {
+    CHECK(budgets.take(g) == expected[static_cast<std::size_t>(g - begin)]);
+    CHECK(budgets.take(g) <= available[static_cast<std::size_t>(g - begin)]);
+    carried += budgets.take(g) > budgets.group(g);
+  }
+  CHECK(carried > 0);  // some group took a shortfall carried from another
+
+  // Without carrying, every group takes what it can of its own budget and nothing more, and
+  // the groups outside the range keep what the carrying allocation gave them.
+  const int outside = budgets.take(0);
+  budgets.allocate(begin, end, available, false);
+  int short_groups = 0;
+  for (int g = begin; g < end; ++g) {
+    const int offered_here = available[static_cast<std::size_t>(g - begin)];
+    CHECK(budgets.take(g) == std::min(budgets.group(g), offered_here));
+    short_groups += offered_here < budgets.group(g);
+  }
+  CHECK(short_groups > 0);  // the shortfalls the carrying allocation passed on are lost here
+  CHECK(budgets.take(0) == outside);
+  CHECK_THROWS_AS(budgets.allocate(begin, end + 1, available, false), std::invalid_argument);
 }
 
 TEST_CASE("a shortlist is ceil(factor x budget), at most the candidates") {

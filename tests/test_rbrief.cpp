@@ -278,6 +278,68 @@ std::vector<cv::Point2f> random_points(cv::Size size, int count, int margin, std
   return points;
 }
 
+/// The squares of side 2 `border` + 1 around `points` (rounded), cut to an image of `size`, the
+/// empty ones left out.
+std::vector<cv::Rect> squares_around(const std::vector<cv::Point2f>& points, int border, cv::Size size) {
+  const int side = 2 * border + 1;
+  std::vector<cv::Rect> squares;
+  for (const cv::Point2f& p : points) {
+    const cv::Rect s =
+        cv::Rect(cvRound(p.x) - border, cvRound(p.y) - border, side, side) & cv::Rect(0, 0, size.width, size.height);
+    if (!s.empty()) squares.push_back(s);
+  }
+  return squares;
+}
+
+/// Pixels where the runs of `work` break their definition: each pixel once, the runs disjoint and
+/// covering the union of `squares` and the gaps of fewer than 8 columns between its pixels in a
+/// row, nothing else.
+int run_coverage_errors(const affine_orb::detail::GaussianQ8Work& work, const std::vector<cv::Rect>& squares,
+                        cv::Size size) {
+  cv::Mat covered(size, CV_8UC1, cv::Scalar(0));
+  for (const affine_orb::detail::RunBand& band : work.out.bands) {
+    for (int i = band.begin; i < band.end; ++i) {
+      const cv::Vec2i run = work.out.runs[static_cast<std::size_t>(i)];
+      covered(cv::Range(band.y0, band.y1), cv::Range(run[0], run[1])) += 1;
+    }
+  }
+  cv::Mat mask(size, CV_8UC1, cv::Scalar(0));
+  for (const cv::Rect& s : squares) mask(s).setTo(1);
+  int bad = 0;
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      const int c = covered.at<uchar>(y, x);
+      if (c > 1 || (c == 0 && mask.at<uchar>(y, x) == 1)) ++bad;
+      if (c == 0 || mask.at<uchar>(y, x) == 1) continue;
+      int left = x;
+      while (left >= 0 && mask.at<uchar>(y, left) == 0) --left;
+      int right = x;
+      while (right < size.width && mask.at<uchar>(y, right) == 0) ++right;
+      if (left < 0 || right == size.width || right - left - 1 >= 8) ++bad;
+    }
+  }
+  return bad;
+}
+
+/// Where the scalar passes' outputs `v` (the y pass of `rows` from column x0) and `h` (the x pass
+/// of `column`) differ from the formulas of detail/gaussian_q8.hpp with kernel `k` of `size` taps.
+int formula_mismatches(const std::vector<const std::uint8_t*>& rows, int x0, int width, const std::uint16_t* k,
+                       int size, const std::vector<std::int16_t>& column, const std::vector<std::int16_t>& v,
+                       const std::vector<std::uint8_t>& h) {
+  int mismatches = 0;
+  for (int x = 0; x < width; ++x) {
+    std::uint32_t sum = 0;
+    for (int j = 0; j < size; ++j) sum += k[j] * static_cast<std::uint32_t>(rows[static_cast<std::size_t>(j)][x0 + x]);
+    mismatches += v[static_cast<std::size_t>(x)] + 32768 != static_cast<int>(sum);
+    std::uint32_t out = 1u << 15;
+    for (int i = 0; i < size; ++i) {
+      out += k[i] * static_cast<std::uint32_t>(column[static_cast<std::size_t>(x + i)] + 32768);
+    }
+    mismatches += h[static_cast<std::size_t>(x)] != (out >> 16);
+  }
+  return mismatches;
+}
+
 }  // namespace
 
 TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on every pixel of the union") {
@@ -288,7 +350,6 @@ TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on e
   wide_kernel.blur_sigma = 2.5;
   for (const affine_orb::Rbrief& rbrief : {affine_orb::Rbrief(), affine_orb::Rbrief(wide_kernel)}) {
     const int border = rbrief.border();
-    const int side = 2 * border + 1;
     const int size = rbrief.options().blur_kernel;
     const double sigma = rbrief.options().blur_sigma;
     // Levels of several sizes, including ones smaller than a square and a ROI of a larger image.
@@ -302,12 +363,7 @@ TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on e
         CAPTURE(roi);
         CAPTURE(count);
         const std::vector<cv::Point2f> points = random_points(level.size(), count, border / 2, rng);
-        std::vector<cv::Rect> squares;
-        for (const cv::Point2f& p : points) {
-          const cv::Rect s = cv::Rect(cvRound(p.x) - border, cvRound(p.y) - border, side, side) &
-                             cv::Rect(0, 0, level.cols, level.rows);
-          if (!s.empty()) squares.push_back(s);
-        }
+        const std::vector<cv::Rect> squares = squares_around(points, border, level.size());
         affine_orb::Rbrief::LevelData data;
         data.smoothed = cv::Mat(level.size(), CV_8UC1, cv::Scalar(0));
         rbrief.prepare(level, points, data);
@@ -318,31 +374,7 @@ TEST_CASE("rBRIEF smoothing of the union of squares equals cv::GaussianBlur on e
         cv::Mat ours(level.size(), CV_8UC1, cv::Scalar(0));
         affine_orb::detail::smooth_squares_q8(level, squares, kernel, work, ours);
         CHECK(union_mismatches(ours, expected, squares) == 0);
-        // Each pixel once: the runs are disjoint and cover the union and gaps of fewer than 8
-        // columns between its pixels in a row, nothing else.
-        cv::Mat covered(level.size(), CV_8UC1, cv::Scalar(0));
-        for (const affine_orb::detail::RunBand& band : work.out.bands) {
-          for (int i = band.begin; i < band.end; ++i) {
-            const cv::Vec2i run = work.out.runs[static_cast<std::size_t>(i)];
-            covered(cv::Range(band.y0, band.y1), cv::Range(run[0], run[1])) += 1;
-          }
-        }
-        cv::Mat mask(level.size(), CV_8UC1, cv::Scalar(0));
-        for (const cv::Rect& s : squares) mask(s).setTo(1);
-        int bad = 0;
-        for (int y = 0; y < level.rows; ++y) {
-          for (int x = 0; x < level.cols; ++x) {
-            const int c = covered.at<uchar>(y, x);
-            if (c > 1 || (c == 0 && mask.at<uchar>(y, x) == 1)) ++bad;
-            if (c == 0 || mask.at<uchar>(y, x) == 1) continue;
-            int left = x;
-            while (left >= 0 && mask.at<uchar>(y, left) == 0) --left;
-            int right = x;
-            while (right < level.cols && mask.at<uchar>(y, right) == 0) ++right;
-            if (left < 0 || right == level.cols || right - left - 1 >= 8) ++bad;
-          }
-        }
-        CHECK(bad == 0);
+        CHECK(run_coverage_errors(work, squares, level.size()) == 0);
       }
     }
   }
@@ -382,18 +414,7 @@ TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar ref
       std::vector<std::uint8_t> h_reference(static_cast<std::size_t>(width));
       d::gaussian_q8_h_scalar<0>(column.data(), width, k, size, h_reference.data());
       // The scalar passes are the formulas of detail/gaussian_q8.hpp.
-      int formula_mismatches = 0;
-      for (int x = 0; x < width; ++x) {
-        std::uint32_t sum = 0;
-        for (int j = 0; j < size; ++j)
-          sum += k[j] * static_cast<std::uint32_t>(rows[static_cast<std::size_t>(j)][x0 + x]);
-        formula_mismatches += v_reference[static_cast<std::size_t>(x)] + 32768 != static_cast<int>(sum);
-        std::uint32_t out = 1u << 15;
-        for (int i = 0; i < size; ++i)
-          out += k[i] * static_cast<std::uint32_t>(column[static_cast<std::size_t>(x + i)] + 32768);
-        formula_mismatches += h_reference[static_cast<std::size_t>(x)] != (out >> 16);
-      }
-      CHECK(formula_mismatches == 0);
+      CHECK(formula_mismatches(rows, x0, width, k, size, column, v_reference, h_reference) == 0);
       std::vector<std::int16_t> v(static_cast<std::size_t>(width));
       std::vector<std::uint8_t> h(static_cast<std::size_t>(width));
       auto check = [&](auto v_pass, auto h_pass) {

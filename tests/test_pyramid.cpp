@@ -73,6 +73,64 @@ TEST_CASE("pyramid resizing equals its per-pixel definition and stays within a g
   }
 }
 
+namespace {
+
+/// Columns [c0, c1) of rows `top` and `bottom` blended with weight b by every row-blend path of
+/// this build and CPU: how many differ from the scalar reference.
+int row_blend_mismatches(const std::vector<std::uint8_t>& top, const std::vector<std::uint8_t>& bottom, int b, int c0,
+                         int c1) {
+  std::vector<std::int16_t> rows_a(top.size() + 1, 0);
+  std::vector<std::int16_t> rows_b(rows_a.size(), 0);
+  affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, c0, c1, rows_a.data());
+  int mismatches = 0;
+#if defined(__SSE2__)
+  affine_orb::detail::blend_rows_sse2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+  mismatches += rows_a != rows_b;
+#endif
+#if AFFINE_ORB_NEON
+  std::fill(rows_b.begin(), rows_b.end(), 0);
+  affine_orb::detail::blend_rows_neon(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+  mismatches += rows_a != rows_b;
+#endif
+#if AFFINE_ORB_AVX2
+  if (affine_orb::detail::cpu_has_avx2()) {
+    std::fill(rows_b.begin(), rows_b.end(), 0);
+    affine_orb::detail::blend_rows_avx2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
+    mismatches += rows_a != rows_b;
+  }
+#endif
+  return mismatches;
+}
+
+/// Output columns [x0, x1) of a row of `to` columns from the blended row `blended` by every
+/// column-blend path of this build and CPU: how many differ from the scalar reference.
+int column_blend_mismatches(const affine_orb::detail::ResizeWork& work, const std::vector<std::int16_t>& blended,
+                            int x0, int x1, int to) {
+  std::vector<std::uint8_t> out_a(static_cast<std::size_t>(to), 0);
+  std::vector<std::uint8_t> out_b(out_a.size(), 0);
+  affine_orb::detail::blend_columns_scalar(work, blended.data(), x0, x1, out_a.data());
+  int mismatches = 0;
+#if defined(__SSE2__)
+  affine_orb::detail::blend_columns_sse2(work, blended.data(), x0, x1, out_b.data());
+  mismatches += out_a != out_b;
+#endif
+#if AFFINE_ORB_NEON
+  std::fill(out_b.begin(), out_b.end(), 0);
+  affine_orb::detail::blend_columns_neon(work, blended.data(), x0, x1, out_b.data());
+  mismatches += out_a != out_b;
+#endif
+#if AFFINE_ORB_AVX2
+  if (affine_orb::detail::cpu_has_avx2()) {
+    std::fill(out_b.begin(), out_b.end(), 0);
+    affine_orb::detail::blend_columns_avx2(work, blended.data(), x0, x1, out_b.data());
+    mismatches += out_a != out_b;
+  }
+#endif
+  return mismatches;
+}
+
+}  // namespace
+
 TEST_CASE("every resize row and column blend path gives the scalar references' values") {
   MESSAGE(affine_orb::test::avx2_paths_message());
   // Random source rows (extremes included) and column tables of several ratios; column ranges of
@@ -96,49 +154,14 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
       const int b = trial % 5 == 0 ? 128 * (trial % 2) : static_cast<int>(rng() % 129);
       const int c0 = static_cast<int>(rng() % static_cast<unsigned>(from));
       const int c1 = c0 + static_cast<int>(rng() % static_cast<unsigned>(from - c0 + 1));
-      std::vector<std::int16_t> rows_a(static_cast<std::size_t>(from) + 1, 0);
-      std::vector<std::int16_t> rows_b(rows_a.size(), 0);
-      affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, c0, c1, rows_a.data());
-#if defined(__SSE2__)
-      affine_orb::detail::blend_rows_sse2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
-      mismatches += rows_a != rows_b;
-#endif
-#if AFFINE_ORB_NEON
-      std::fill(rows_b.begin(), rows_b.end(), 0);
-      affine_orb::detail::blend_rows_neon(top.data(), bottom.data(), b, c0, c1, rows_b.data());
-      mismatches += rows_a != rows_b;
-#endif
-#if AFFINE_ORB_AVX2
-      if (affine_orb::detail::cpu_has_avx2()) {
-        std::fill(rows_b.begin(), rows_b.end(), 0);
-        affine_orb::detail::blend_rows_avx2(top.data(), bottom.data(), b, c0, c1, rows_b.data());
-        mismatches += rows_a != rows_b;
-      }
-#endif
+      mismatches += row_blend_mismatches(top, bottom, b, c0, c1);
       // The column blend reads the whole blended row (plus the repeated last column).
-      affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, 0, from, rows_a.data());
-      rows_a[static_cast<std::size_t>(from)] = rows_a[static_cast<std::size_t>(from) - 1];
+      std::vector<std::int16_t> blended(static_cast<std::size_t>(from) + 1, 0);
+      affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, 0, from, blended.data());
+      blended[static_cast<std::size_t>(from)] = blended[static_cast<std::size_t>(from) - 1];
       const int x0 = static_cast<int>(rng() % static_cast<unsigned>(to));
       const int x1 = x0 + 1 + static_cast<int>(rng() % static_cast<unsigned>(to - x0));
-      std::vector<std::uint8_t> out_a(static_cast<std::size_t>(to), 0);
-      std::vector<std::uint8_t> out_b(out_a.size(), 0);
-      affine_orb::detail::blend_columns_scalar(work, rows_a.data(), x0, x1, out_a.data());
-#if defined(__SSE2__)
-      affine_orb::detail::blend_columns_sse2(work, rows_a.data(), x0, x1, out_b.data());
-      mismatches += out_a != out_b;
-#endif
-#if AFFINE_ORB_NEON
-      std::fill(out_b.begin(), out_b.end(), 0);
-      affine_orb::detail::blend_columns_neon(work, rows_a.data(), x0, x1, out_b.data());
-      mismatches += out_a != out_b;
-#endif
-#if AFFINE_ORB_AVX2
-      if (affine_orb::detail::cpu_has_avx2()) {
-        std::fill(out_b.begin(), out_b.end(), 0);
-        affine_orb::detail::blend_columns_avx2(work, rows_a.data(), x0, x1, out_b.data());
-        mismatches += out_a != out_b;
-      }
-#endif
+      mismatches += column_blend_mismatches(work, blended, x0, x1, to);
     }
     CHECK(mismatches == 0);
   }

@@ -21,7 +21,86 @@
 namespace {
 
 // The quadtree spreading as first written (a vector of members per cell), the reference for the
-// in-place version.
+// in-place version: root_cells(), then split_round() until there are `target` cells or none can be
+// split, then the strongest member of each cell, topped up or cut to `target` by response.
+struct QuadCell {
+  cv::Rect2f box;
+  std::vector<int> members;
+};
+
+// Square-ish root cells across `region`, each point in the one its x falls in; empty ones dropped.
+std::vector<QuadCell> root_cells(const std::vector<cv::Point2f>& points, cv::Rect2f region) {
+  const int roots = std::max(1, static_cast<int>(std::lround(region.width / std::max(region.height, 1.0f))));
+  const float root_width = region.width / static_cast<float>(roots);
+  std::vector<QuadCell> cells(static_cast<std::size_t>(roots));
+  for (int r = 0; r < roots; ++r) {
+    cells[static_cast<std::size_t>(r)].box = {region.x + r * root_width, region.y, root_width, region.height};
+  }
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+    const cv::Point2f& p = points[static_cast<std::size_t>(i)];
+    const int r = std::clamp(static_cast<int>((p.x - region.x) / root_width), 0, roots - 1);
+    cells[static_cast<std::size_t>(r)].members.push_back(i);
+  }
+  cells.erase(std::remove_if(cells.begin(), cells.end(), [](const QuadCell& c) { return c.members.empty(); }),
+              cells.end());
+  return cells;
+}
+
+// Appends the non-empty quarters of `cell` to `children`; returns how many there are.
+int split_cell(const QuadCell& cell, const std::vector<cv::Point2f>& points, std::vector<QuadCell>& children) {
+  const float hw = cell.box.width * 0.5f;
+  const float hh = cell.box.height * 0.5f;
+  const float cx = cell.box.x + hw;
+  const float cy = cell.box.y + hh;
+  QuadCell quad[4] = {{{cell.box.x, cell.box.y, hw, hh}, {}},
+                      {{cx, cell.box.y, hw, hh}, {}},
+                      {{cell.box.x, cy, hw, hh}, {}},
+                      {{cx, cy, hw, hh}, {}}};
+  for (int m : cell.members) {
+    const cv::Point2f& p = points[static_cast<std::size_t>(m)];
+    quad[(p.x >= cx ? 1 : 0) + (p.y >= cy ? 2 : 0)].members.push_back(m);
+  }
+  int nonempty = 0;
+  for (QuadCell& q : quad) {
+    if (!q.members.empty()) {
+      children.push_back(std::move(q));
+      ++nonempty;
+    }
+  }
+  return nonempty;
+}
+
+// One round: the splittable cells, most members first, are split while there are fewer than
+// `target` cells; the unsplit cells come first, then the children. False when none can be split.
+bool split_round(std::vector<QuadCell>& cells, const std::vector<cv::Point2f>& points, int target) {
+  auto splittable = [](const QuadCell& c) {
+    return c.members.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f;
+  };
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (splittable(cells[i])) order.push_back(i);
+  }
+  if (order.empty()) return false;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return cells[a].members.size() > cells[b].members.size(); });
+  std::vector<bool> split(cells.size(), false);
+  int count = static_cast<int>(cells.size());
+  std::vector<QuadCell> children;
+  for (std::size_t idx : order) {
+    if (count >= target) break;
+    count += split_cell(cells[idx], points, children) - 1;
+    split[idx] = true;
+  }
+  std::vector<QuadCell> next;
+  next.reserve(static_cast<std::size_t>(count));
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (!split[i]) next.push_back(std::move(cells[i]));
+  }
+  for (QuadCell& c : children) next.push_back(std::move(c));
+  cells = std::move(next);
+  return true;
+}
+
 std::vector<int> reference_quadtree(const std::vector<cv::Point2f>& points, const std::vector<float>& responses,
                                     cv::Rect2f region, int target) {
   const int n = static_cast<int>(points.size());
@@ -36,74 +115,11 @@ std::vector<int> reference_quadtree(const std::vector<cv::Point2f>& points, cons
     std::iota(kept.begin(), kept.end(), 0);
     return kept;
   }
-
-  struct Cell {
-    cv::Rect2f box;
-    std::vector<int> members;
-  };
-  std::vector<Cell> cells;
-  const int roots = std::max(1, static_cast<int>(std::lround(region.width / std::max(region.height, 1.0f))));
-  const float root_width = region.width / static_cast<float>(roots);
-  cells.resize(static_cast<std::size_t>(roots));
-  for (int r = 0; r < roots; ++r) {
-    cells[static_cast<std::size_t>(r)].box = {region.x + r * root_width, region.y, root_width, region.height};
-  }
-  for (int i = 0; i < n; ++i) {
-    const cv::Point2f& p = points[static_cast<std::size_t>(i)];
-    int r = static_cast<int>((p.x - region.x) / root_width);
-    r = std::clamp(r, 0, roots - 1);
-    cells[static_cast<std::size_t>(r)].members.push_back(i);
-  }
-  cells.erase(std::remove_if(cells.begin(), cells.end(), [](const Cell& c) { return c.members.empty(); }), cells.end());
-
-  auto splittable = [](const Cell& c) { return c.members.size() > 1 && c.box.width >= 1.0f && c.box.height >= 1.0f; };
-  while (static_cast<int>(cells.size()) < target) {
-    std::vector<std::size_t> order;
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-      if (splittable(cells[i])) order.push_back(i);
-    }
-    if (order.empty()) break;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return cells[a].members.size() > cells[b].members.size(); });
-    std::vector<bool> split(cells.size(), false);
-    int count = static_cast<int>(cells.size());
-    std::vector<Cell> children;
-    for (std::size_t idx : order) {
-      if (count >= target) break;
-      const Cell& cell = cells[idx];
-      const float hw = cell.box.width * 0.5f;
-      const float hh = cell.box.height * 0.5f;
-      const float cx = cell.box.x + hw;
-      const float cy = cell.box.y + hh;
-      Cell quad[4] = {{{cell.box.x, cell.box.y, hw, hh}, {}},
-                      {{cx, cell.box.y, hw, hh}, {}},
-                      {{cell.box.x, cy, hw, hh}, {}},
-                      {{cx, cy, hw, hh}, {}}};
-      for (int m : cell.members) {
-        const cv::Point2f& p = points[static_cast<std::size_t>(m)];
-        quad[(p.x >= cx ? 1 : 0) + (p.y >= cy ? 2 : 0)].members.push_back(m);
-      }
-      int nonempty = 0;
-      for (Cell& q : quad) {
-        if (!q.members.empty()) {
-          children.push_back(std::move(q));
-          ++nonempty;
-        }
-      }
-      count += nonempty - 1;
-      split[idx] = true;
-    }
-    std::vector<Cell> next;
-    next.reserve(static_cast<std::size_t>(count));
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-      if (!split[i]) next.push_back(std::move(cells[i]));
-    }
-    for (Cell& c : children) next.push_back(std::move(c));
-    cells = std::move(next);
-  }
-
+  std::vector<QuadCell> cells = root_cells(points, region);
+  bool splittable = true;
+  while (splittable && static_cast<int>(cells.size()) < target) splittable = split_round(cells, points, target);
   std::vector<char> taken(static_cast<std::size_t>(n), 0);
-  for (const Cell& cell : cells) {
+  for (const QuadCell& cell : cells) {
     const int best = *std::min_element(cell.members.begin(), cell.members.end(), stronger);
     kept.push_back(best);
     taken[static_cast<std::size_t>(best)] = 1;

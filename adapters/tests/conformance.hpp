@@ -347,7 +347,7 @@ inline int rbrief_reference_difference(const cv::Mat& smoothed, cv::Point c, flo
 
 // The output of an adapter constructed with `features` while `options` are the defaults, on `image`.
 template <class T>
-Output reference_output(const typename T::Options& options, int features, const cv::Mat& image) {
+Output output_with(const typename T::Options& options, int features, const cv::Mat& image) {
   DefaultsGuard<T> guard(options);
   typename T::Extractor reference(features, kScale, kLevels, kIniFast, kMinFast);
   return run<T>(reference, image);
@@ -497,10 +497,7 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
     typename T::Options no_budget = conformance::views_options<T>(AdapterDescriptor::kRbrief, conformance::kViewsTilt);
     no_budget.view_features = 0.0;
     for (const typename T::Options& options : {below_first_tilt, no_budget}) {
-      conformance::DefaultsGuard<T> guard(options);
-      typename T::Extractor extractor(conformance::kFeatures, conformance::kScale, conformance::kLevels,
-                                      conformance::kIniFast, conformance::kMinFast);
-      conformance::check_same(conformance::run<T>(extractor, image), want);
+      conformance::check_same(conformance::output_with<T>(options, conformance::kFeatures, image), want);
     }
   }
   SUBCASE("views on, BRISK: the first 256 of its 512 bits") {
@@ -630,10 +627,10 @@ TEST_CASE_TEMPLATE_DEFINE("SetRecovering(true) extracts with the recovery option
     const std::string what = row.what;
     CAPTURE(what);
     const typename T::Options normal = conformance::views_options<T>(row.descriptor, row.max_tilt);
-    const conformance::Output want_normal = conformance::reference_output<T>(normal, conformance::kFeatures, image);
+    const conformance::Output want_normal = conformance::output_with<T>(normal, conformance::kFeatures, image);
     typename T::Options asked = conformance::views_options<T>(row.descriptor, row.want_tilt);
     asked.view_features = row.want_view_features;
-    const conformance::Output want_recovering = conformance::reference_output<T>(asked, row.want_features, image);
+    const conformance::Output want_recovering = conformance::output_with<T>(asked, row.want_features, image);
     typename T::Options options = normal;
     options.recovery.image_features = row.recovery_image_features;
     options.recovery.max_tilt = row.recovery_max_tilt;

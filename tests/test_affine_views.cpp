@@ -166,10 +166,7 @@ ViewAgreement agreement(const affine_orb::Features<256>& features, int view_inde
     const double dy = view.to_view(1, 0) * std::cos(a) + view.to_view(1, 1) * std::sin(a);
     angle_errors.push_back(angle_difference_degrees(std::atan2(dy, dx) * 180.0 / CV_PI, truth.keypoints[best_j].angle));
   }
-  if (!angle_errors.empty()) {
-    std::sort(angle_errors.begin(), angle_errors.end());
-    out.median_angle_error = angle_errors[angle_errors.size() / 2];
-  }
+  if (!angle_errors.empty()) out.median_angle_error = affine_orb::test::upper_median(angle_errors);
   return out;
 }
 

@@ -2,6 +2,7 @@
 // Helpers for the tests of extraction with affine views (test_affine_views, test_views_on_demand,
 // test_corner_snapping): the options of an affine extractor, and each keypoint's level in its view.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <map>
@@ -19,6 +20,12 @@
 namespace affine_orb::test {
 
 inline const double kSqrt2 = std::sqrt(2.0);
+
+/// The element at index n / 2 of the sorted `v` (the upper median when n is even); v not empty.
+inline double upper_median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
 
 /// The default options with `features` image keypoints, the merging of duplicates `merge` (nullopt:
 /// keep every view's keypoint) and `threads`.

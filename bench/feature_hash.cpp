@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -208,24 +209,8 @@ void hash_two_view(const std::string& data, const std::string& samples) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  std::string data = affine_orb::bench::data_dir();
-  std::string samples = affine_orb::bench::opencv_samples_dir();
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--data" && i + 1 < argc) {
-      data = argv[++i];
-    } else if (arg == "--samples" && i + 1 < argc) {
-      samples = argv[++i];
-    } else {
-      std::fprintf(stderr, "usage: feature_hash [--data DIR] [--samples DIR]\n");
-      return 2;
-    }
-  }
-  const std::vector<Image> images = load_images(data, samples);
-
+/// Every extraction the hashes cover: plain, affine and each fork's keypoints, rBRIEF and BRISK.
+void hash_extractions(const std::vector<Image>& images) {
   ExtractorOptions plain;
   plain.views.max_tilt = 1.0;
   hash_extraction<Rbrief>("plain 1000, quadtree", plain, images);
@@ -270,7 +255,36 @@ int main(int argc, char** argv) {
   hash_extraction<Rbrief>("stella_vslam 800, rect. + views", stella, images);
   hash_extraction<Brisk>("BRISK plain 1000", plain, images);
   hash_extraction<Brisk>("BRISK affine default", affine, images);
+}
 
+/// The data and samples folders: the defaults, or --data and --samples; nothing on a bad argument.
+std::optional<std::pair<std::string, std::string>> parse_dirs(int argc, char** argv) {
+  std::string data = affine_orb::bench::data_dir();
+  std::string samples = affine_orb::bench::opencv_samples_dir();
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--data" && i + 1 < argc) {
+      data = argv[++i];
+    } else if (arg == "--samples" && i + 1 < argc) {
+      samples = argv[++i];
+    } else {
+      return std::nullopt;
+    }
+  }
+  return std::make_pair(data, samples);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const auto dirs = parse_dirs(argc, argv);
+  if (!dirs) {
+    std::fprintf(stderr, "usage: feature_hash [--data DIR] [--samples DIR]\n");
+    return 2;
+  }
+  const auto& [data, samples] = *dirs;
+  const std::vector<Image> images = load_images(data, samples);
+  hash_extractions(images);
   hash_stages(images);
   hash_two_view(data, samples);
   return 0;

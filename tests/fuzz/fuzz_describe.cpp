@@ -37,21 +37,8 @@ bool same_keypoint(const cv::KeyPoint& a, const cv::KeyPoint& b) {
          std::memcmp(&a.angle, &b.angle, sizeof(a.angle)) == 0;
 }
 
-}  // namespace
-
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  if (size < 4) return 0;
-  Bytes bytes(data, size);
-  const int width = 16 + bytes.next() % 81;
-  const int height = 16 + bytes.next() % 81;
-  const std::uint8_t flags = bytes.next();
-  const bool brisk = flags & 1;
-  cv::Mat image(height, width, CV_8UC1);
-  // A few blocks of the input's grey levels, so that corners and gradients exist.
-  const int block = 1 + (flags >> 1) % 8;
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) image.at<std::uint8_t>(y, x) = data[((y / block) * 7 + (x / block) * 13) % size];
-  }
+/// Up to 24 keypoints read from the input, raw or near the image, then the first one again.
+std::vector<cv::KeyPoint> given_keypoints(Bytes& bytes, int width, int height) {
   std::vector<cv::KeyPoint> given;
   const int count = bytes.next() % 25;
   for (int i = 0; i < count; ++i) {
@@ -69,20 +56,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     given.push_back(kp);
   }
   if (!given.empty()) given.push_back(given.front());  // the same keypoint twice
-  std::vector<cv::KeyPoint> keypoints = given;
-  cv::Mat descriptors;
-  bool finite_angles = true;
-  for (const cv::KeyPoint& kp : given) finite_angles = finite_angles && std::isfinite(kp.angle);
-  try {
-    feature2d(brisk)->compute(image, keypoints, descriptors);
-  } catch (const std::invalid_argument&) {
-    require(!finite_angles);  // the only documented rejection for a valid image
-    return 0;
-  }
-  require(keypoints.size() <= given.size());
-  require(descriptors.rows == static_cast<int>(keypoints.size()));
-  if (!keypoints.empty()) require(descriptors.cols == (brisk ? 64 : 32) && descriptors.type() == CV_8U);
-  // Kept keypoints in the caller's order, each one given (its angle filled in when it was < 0).
+  return given;
+}
+
+/// The kept keypoints are given ones in the caller's order (each angle filled in when it was < 0,
+/// then in [0, 360)), with finite positions and angles.
+void require_kept_in_order(const std::vector<cv::KeyPoint>& given, const std::vector<cv::KeyPoint>& keypoints) {
   std::size_t g = 0;
   for (const cv::KeyPoint& kp : keypoints) {
     bool computed = false;  // its angle was filled in (given < 0)
@@ -97,6 +76,38 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (computed) require(kp.angle >= 0.0f && kp.angle < 360.0f);
     require(std::isfinite(kp.pt.x) && std::isfinite(kp.pt.y));
   }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 4) return 0;
+  Bytes bytes(data, size);
+  const int width = 16 + bytes.next() % 81;
+  const int height = 16 + bytes.next() % 81;
+  const std::uint8_t flags = bytes.next();
+  const bool brisk = flags & 1;
+  cv::Mat image(height, width, CV_8UC1);
+  // A few blocks of the input's grey levels, so that corners and gradients exist.
+  const int block = 1 + (flags >> 1) % 8;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) image.at<std::uint8_t>(y, x) = data[((y / block) * 7 + (x / block) * 13) % size];
+  }
+  const std::vector<cv::KeyPoint> given = given_keypoints(bytes, width, height);
+  std::vector<cv::KeyPoint> keypoints = given;
+  cv::Mat descriptors;
+  bool finite_angles = true;
+  for (const cv::KeyPoint& kp : given) finite_angles = finite_angles && std::isfinite(kp.angle);
+  try {
+    feature2d(brisk)->compute(image, keypoints, descriptors);
+  } catch (const std::invalid_argument&) {
+    require(!finite_angles);  // the only documented rejection for a valid image
+    return 0;
+  }
+  require(keypoints.size() <= given.size());
+  require(descriptors.rows == static_cast<int>(keypoints.size()));
+  if (!keypoints.empty()) require(descriptors.cols == (brisk ? 64 : 32) && descriptors.type() == CV_8U);
+  require_kept_in_order(given, keypoints);
   // The first keypoint and its copy at the end: both kept or both removed, with equal rows.
   if (keypoints.size() >= 2 && same_keypoint(keypoints.front(), given.front()) &&
       same_keypoint(keypoints.back(), given.back())) {

@@ -43,6 +43,40 @@ float coordinate(std::uint8_t hi, std::uint8_t lo) {
 
 bool finite_unit(const Eigen::Matrix3d& m) { return m.allFinite() && std::abs(m.norm() - 1.0) < 1e-6; }
 
+/// The result's inlier flags and counts agree, the models it reports are finite and normalised,
+/// the chosen one was found, and only the chosen rule's fields are set.
+void require_consistent(const affine_orb::ModelSelectionResult& result, const affine_orb::ModelSelectionOptions& options,
+                        std::size_t n) {
+  require(result.homography_inliers.size() == n && result.fundamental_inliers.size() == n);
+  int h = 0, f = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    require(result.homography_inliers[i] <= 1 && result.fundamental_inliers[i] <= 1);
+    h += result.homography_inliers[i];
+    f += result.fundamental_inliers[i];
+  }
+  require(h == result.homography_inlier_count && f == result.fundamental_inlier_count);
+  if (result.homography_found) require(finite_unit(result.homography) && std::isfinite(result.homography_score));
+  if (result.fundamental_found) require(finite_unit(result.fundamental) && std::isfinite(result.fundamental_score));
+  if (!result.success) require(result.model == affine_orb::GeometricModel::kNone);
+  if (result.model == affine_orb::GeometricModel::kHomography) require(result.homography_found);
+  if (result.model == affine_orb::GeometricModel::kFundamental) require(result.fundamental_found);
+  if (options.rule != affine_orb::SelectionRule::kGric) {
+    require(result.homography_gric == 0.0 && result.fundamental_gric == 0.0);
+  }
+  if (options.rule != affine_orb::SelectionRule::kPlaneParallax) {
+    require(result.parallax_inlier_count == 0 && result.parallax_expected_count == 0.0);
+  } else {
+    require(result.parallax_inlier_count >= 0 &&
+            result.parallax_inlier_count <= static_cast<int>(n) - result.homography_inlier_count);
+    require(std::isfinite(result.parallax_expected_count) && result.parallax_expected_count >= 0.0);
+    require(std::isfinite(result.parallax_significance));
+    if (result.success) {
+      require((result.model == affine_orb::GeometricModel::kHomography) ==
+              (result.homography_found && result.parallax_significance <= options.plane_parallax.significance));
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -78,33 +112,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   require(finite);
-  require(result.homography_inliers.size() == n && result.fundamental_inliers.size() == n);
-  int h = 0, f = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    require(result.homography_inliers[i] <= 1 && result.fundamental_inliers[i] <= 1);
-    h += result.homography_inliers[i];
-    f += result.fundamental_inliers[i];
-  }
-  require(h == result.homography_inlier_count && f == result.fundamental_inlier_count);
-  if (result.homography_found) require(finite_unit(result.homography) && std::isfinite(result.homography_score));
-  if (result.fundamental_found) require(finite_unit(result.fundamental) && std::isfinite(result.fundamental_score));
-  if (!result.success) require(result.model == affine_orb::GeometricModel::kNone);
-  if (result.model == affine_orb::GeometricModel::kHomography) require(result.homography_found);
-  if (result.model == affine_orb::GeometricModel::kFundamental) require(result.fundamental_found);
-  if (options.rule != affine_orb::SelectionRule::kGric) {
-    require(result.homography_gric == 0.0 && result.fundamental_gric == 0.0);
-  }
-  if (options.rule != affine_orb::SelectionRule::kPlaneParallax) {
-    require(result.parallax_inlier_count == 0 && result.parallax_expected_count == 0.0);
-  } else {
-    require(result.parallax_inlier_count >= 0 &&
-            result.parallax_inlier_count <= static_cast<int>(n) - result.homography_inlier_count);
-    require(std::isfinite(result.parallax_expected_count) && result.parallax_expected_count >= 0.0);
-    require(std::isfinite(result.parallax_significance));
-    if (result.success) {
-      require((result.model == affine_orb::GeometricModel::kHomography) ==
-              (result.homography_found && result.parallax_significance <= options.plane_parallax.significance));
-    }
-  }
+  require_consistent(result, options, n);
   return 0;
 }

@@ -2,6 +2,7 @@
 // driving ORB_SLAM3::ORBextractor as ORB-SLAM3's Frame does, plus the lapping-area split.
 #include <doctest/doctest.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -27,6 +28,47 @@ struct Orbslam3 {
     return extractor(image, mask, keypoints, descriptors, lapping);
   }
 };
+
+/// The x of the first level-0 keypoint of `all` with an integer x in (lo, hi), −1 when there is none.
+int integer_x_between(const std::vector<cv::KeyPoint>& all, float lo, float hi) {
+  for (const cv::KeyPoint& kp : all) {
+    if (kp.octave == 0 && kp.pt.x > lo && kp.pt.x < hi && kp.pt.x == static_cast<float>(static_cast<int>(kp.pt.x))) {
+      return static_cast<int>(kp.pt.x);
+    }
+  }
+  return -1;
+}
+
+/// Reference order of a lapping-area split: indices of the unsplit output `all`, those with x
+/// outside [area[0], area[1]] in order, then those inside from the last, as ORB-SLAM3's own
+/// extractor fills the end of its outputs backwards; `n_outside` gets the number outside.
+std::vector<std::size_t> lapping_order(const std::vector<cv::KeyPoint>& all, const std::vector<int>& area,
+                                       std::size_t& n_outside) {
+  const auto inside = [&](const cv::KeyPoint& kp) { return kp.pt.x >= area[0] && kp.pt.x <= area[1]; };
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (!inside(all[i])) order.push_back(i);
+  }
+  n_outside = order.size();
+  for (std::size_t i = all.size(); i-- > 0;) {
+    if (inside(all[i])) order.push_back(i);
+  }
+  return order;
+}
+
+/// Keypoints (position, octave, angle) and descriptor rows of the split output that differ from
+/// the unsplit output's in the order `expected`.
+int differences(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& rows, const std::vector<cv::KeyPoint>& all,
+                const cv::Mat& all_rows, const std::vector<std::size_t>& expected) {
+  int count = 0;
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    const cv::KeyPoint& a = keypoints[k];
+    const cv::KeyPoint& b = all[expected[k]];
+    count += a.pt != b.pt || a.octave != b.octave || a.angle != b.angle;
+    count += cv::norm(rows.row(static_cast<int>(k)), all_rows.row(static_cast<int>(expected[k])), cv::NORM_HAMMING) != 0.0;
+  }
+  return count;
+}
 
 }  // namespace
 
@@ -58,14 +100,7 @@ TEST_CASE("lapping area: keypoints with x in [a, b] go to the end, last first, w
   REQUIRE(all.size() >= 1000);
 
   // A level-0 keypoint has an integer x: use it as the lower bound, to check the bound is included.
-  int lower = -1;
-  for (const cv::KeyPoint& kp : all) {
-    if (kp.octave == 0 && kp.pt.x > 300.0f && kp.pt.x < 500.0f &&
-        kp.pt.x == static_cast<float>(static_cast<int>(kp.pt.x))) {
-      lower = static_cast<int>(kp.pt.x);
-      break;
-    }
-  }
+  const int lower = integer_x_between(all, 300.0f, 500.0f);
   REQUIRE(lower > 0);
   for (const std::vector<int>& area : {std::vector<int>{lower, 800}, std::vector<int>{0, 1000},
                                        std::vector<int>{0, 100000}, std::vector<int>{900, 400}}) {
@@ -75,28 +110,12 @@ TEST_CASE("lapping area: keypoints with x in [a, b] go to the end, last first, w
     cv::Mat rows;
     std::vector<int> lapping = area;
     const int outside = extractor(image, cv::Mat(), keypoints, rows, lapping);
-    // Reference: the unsplit output filtered twice, the outside in order, the inside from its last,
-    // as ORB-SLAM3's own extractor fills the end of its outputs backwards.
-    std::vector<std::size_t> expected;
-    for (std::size_t i = 0; i < all.size(); ++i) {
-      if (!(all[i].pt.x >= area[0] && all[i].pt.x <= area[1])) expected.push_back(i);
-    }
-    const std::size_t n_outside = expected.size();
-    for (std::size_t i = all.size(); i-- > 0;) {
-      if (all[i].pt.x >= area[0] && all[i].pt.x <= area[1]) expected.push_back(i);
-    }
+    std::size_t n_outside = 0;
+    const std::vector<std::size_t> expected = lapping_order(all, area, n_outside);
     CHECK(outside == static_cast<int>(n_outside));
     REQUIRE(keypoints.size() == all.size());
     REQUIRE(rows.rows == all_rows.rows);
-    int differences = 0;
-    for (std::size_t k = 0; k < expected.size(); ++k) {
-      const cv::KeyPoint& a = keypoints[k];
-      const cv::KeyPoint& b = all[expected[k]];
-      differences += a.pt != b.pt || a.octave != b.octave || a.angle != b.angle;
-      differences +=
-          cv::norm(rows.row(static_cast<int>(k)), all_rows.row(static_cast<int>(expected[k])), cv::NORM_HAMMING) != 0.0;
-    }
-    CHECK(differences == 0);
+    CHECK(differences(keypoints, rows, all, all_rows, expected) == 0);
     if (area[0] == lower) {
       CHECK(n_outside < all.size());
       CHECK(n_outside > 0);

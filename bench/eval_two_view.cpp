@@ -27,7 +27,7 @@
 // ModelSelectionOptions, so the own homographies come from the same estimator. --peer-cache FILE reads the OpenCV
 // peers' rows from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
 // --sweep adds matcher variants (stages, min_inliers, the support tests, the final fit's Cauchy
-// scale and max_error, the last stage's search), the measurement behind
+// scale and max_error, the last stage's search, the rule choosing between H and F), the measurement behind
 // TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
 // demand, with and without sub-pixel positions, per octave of the keypoint in image 1 and in image
 // 2, the residuals |H·x1 − x2| (ground truth H, pixels of image 2, level-0 coordinates) of the
@@ -771,6 +771,21 @@ void estimation_variants(const Variant& variant) {
   });
 }
 
+/// --sweep's variants of the choice between H and F (ModelSelectionOptions::rule): the other
+/// rules and a laxer plane-and-parallax significance. Every pair here is planar, so these show
+/// only the planar side of the choice; bench_model_selection measures the 3-D side.
+void selection_variants(const Variant& variant) {
+  using affine_orb::SelectionRule;
+  variant("rule: eq. 22, R_H > 0.45", [](auto& o) { o.model.rule = SelectionRule::kScoreRatio; });
+  variant("rule: GRIC, sigma 1 px", [](auto& o) { o.model.rule = SelectionRule::kGric; });
+  variant("rule: inlier ratio 0.8", [](auto& o) { o.model.rule = SelectionRule::kInlierRatio; });
+  for (double z : {6.0, 10.0}) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "rule: plane-and-parallax, z <= %.0f", z);
+    variant(name, [z](auto& o) { o.model.plane_parallax.significance = z; });
+  }
+}
+
 /// --sweep: the matcher with 200 inliers, then every variant of the default, named "sweep: ...".
 void add_sweep(const affine_orb::TwoViewOptions& defaults, std::vector<Method>& methods) {
   affine_orb::TwoViewOptions many = defaults;
@@ -783,6 +798,7 @@ void add_sweep(const affine_orb::TwoViewOptions& defaults, std::vector<Method>& 
   };
   stage_and_support_variants(variant);
   estimation_variants(variant);
+  selection_variants(variant);
 }
 
 /// Keeps the methods that --methods' comma-separated `filter` names: by a substring of the name,

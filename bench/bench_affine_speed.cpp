@@ -70,7 +70,6 @@ namespace {
 constexpr int kAffineFeatures = 2000;
 constexpr int kPlainFeatures = 1000;
 
-
 // Scales the image so that it covers 640x480, then crops the centre.
 cv::Mat to_640x480(const cv::Mat& image) {
   const double scale = std::max(640.0 / image.cols, 480.0 / image.rows);
@@ -111,9 +110,10 @@ cv::Ptr<cv::Feature2D> affine_feature_peer(int views) {
 // Distinct correct matches of two feature sets (see the file comment).
 int distinct_correct(const affine_orb::Features<256>& a, const affine_orb::Features<256>& b, const cv::Matx33d& h) {
   std::vector<std::pair<cv::Point2f, cv::Point2f>> pairs;
-  for (const auto& m :
-       affine_orb::match(affine_orb::descriptors_to_mat(a.descriptors), affine_orb::descriptors_to_mat(b.descriptors))) {
-    pairs.emplace_back(a.keypoints[static_cast<std::size_t>(m.query)].pt, b.keypoints[static_cast<std::size_t>(m.train)].pt);
+  for (const auto& m : affine_orb::match(affine_orb::descriptors_to_mat(a.descriptors),
+                                         affine_orb::descriptors_to_mat(b.descriptors))) {
+    pairs.emplace_back(a.keypoints[static_cast<std::size_t>(m.query)].pt,
+                       b.keypoints[static_cast<std::size_t>(m.train)].pt);
   }
   return static_cast<int>(affine_orb::bench::correct_matches(pairs, h).distinct);
 }
@@ -188,13 +188,12 @@ double peak_memory_mb(const std::string& mode, cv::Size size) {
 
 /// The peak memory table: one process per method and image size.
 void memory_table() {
-  const std::vector<std::pair<std::string, std::string>> modes = {
-      {"baseline", "image loaded, nothing extracted"},
-      {"affine", "ours affine, 1 thread"},
-      {"affine2", "ours affine, 2 threads"},
-      {"affine_feature", "cv::AffineFeature(ORB)"},
-      {"plain", "ours plain (1000)"},
-      {"orb", "cv::ORB (1000)"}};
+  const std::vector<std::pair<std::string, std::string>> modes = {{"baseline", "image loaded, nothing extracted"},
+                                                                  {"affine", "ours affine, 1 thread"},
+                                                                  {"affine2", "ours affine, 2 threads"},
+                                                                  {"affine_feature", "cv::AffineFeature(ORB)"},
+                                                                  {"plain", "ours plain (1000)"},
+                                                                  {"orb", "cv::ORB (1000)"}};
   std::printf("Peak resident memory of one process (MB, VmHWM after three frames of graf1 resized):\n\n");
   std::printf("| method | 640x480 | 2560x1920 |\n|---|---:|---:|\n");
   for (const auto& [mode, label] : modes) {
@@ -285,13 +284,13 @@ void bench_image(const char* name, const std::string& image_name, const cv::Mat&
   };
   // Indices in entries(): 0 affine, 1 AffineFeature, 2 affine 2 threads, 3 plain, 4 ORB.
   std::printf("\n| ratio | wall | CPU | instructions |\n|---|---:|---:|---:|\n");
-  std::printf("| ours affine / cv::AffineFeature(ORB) | %.3f | %.3f | %s |\n", med(0) / med(1),
-              med_cpu(0) / med_cpu(1), ratio(0, 1).c_str());
+  std::printf("| ours affine / cv::AffineFeature(ORB) | %.3f | %.3f | %s |\n", med(0) / med(1), med_cpu(0) / med_cpu(1),
+              ratio(0, 1).c_str());
   std::printf("| ours affine / cv::ORB(1000) | %.2f | %.2f | %s |\n", med(0) / med(4), med_cpu(0) / med_cpu(4),
               ratio(0, 4).c_str());
   std::printf("| ours affine, 2 threads (wall) / cv::ORB(1000) | %.2f | | |\n", med(2) / med(4));
-  std::printf("| ours plain / cv::ORB(1000) | %.3f | %.3f | %s |\n\n", med(3) / med(4),
-              med_cpu(3) / med_cpu(4), ratio(3, 4).c_str());
+  std::printf("| ours plain / cv::ORB(1000) | %.3f | %.3f | %s |\n\n", med(3) / med(4), med_cpu(3) / med_cpu(4),
+              ratio(3, 4).c_str());
 }
 
 /// The command line (see the top of this file).

@@ -62,7 +62,8 @@ std::vector<cv::Mat> kitti00() {
 std::vector<cv::Mat> oxford() {
   std::vector<cv::Mat> frames;
   for (const char* sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
-    frames.push_back(affine_orb::bench::read_gray_or_exit(affine_orb::bench::data_dir() + "/oxford/" + sequence + "/img1.png"));
+    frames.push_back(
+        affine_orb::bench::read_gray_or_exit(affine_orb::bench::data_dir() + "/oxford/" + sequence + "/img1.png"));
   }
   return frames;
 }
@@ -168,8 +169,8 @@ void run(Fork fork, const Workload& w, int rounds) {
     common += shared(keys(system1.keypoints, system1.descriptors), mine);
     self += shared(keys(system1.keypoints, system1.descriptors), keys(system2.keypoints, system2.descriptors));
   }
-  const auto ms = time_interleaved(w.frames, rounds, [&](const cv::Mat& f) { stock.extract(f); },
-                                   [&](const cv::Mat& f) { ours.extract(f); });
+  const auto ms = time_interleaved(
+      w.frames, rounds, [&](const cv::Mat& f) { stock.extract(f); }, [&](const cv::Mat& f) { ours.extract(f); });
   print_row(fork == Fork::kOrbSlam2 ? "ORB-SLAM2" : "ORB-SLAM3", w, ms, total, same, common, self);
 }
 
@@ -189,8 +190,8 @@ void run_stella(const Workload& w, int rounds) {
     common += shared(keys(first.keypoints, first.descriptors), keys(f.keypoints, rows));
     self += shared(keys(first.keypoints, first.descriptors), keys(second.keypoints, second.descriptors));
   }
-  const auto ms = time_interleaved(w.frames, rounds, [&](const cv::Mat& f) { stock.extract(f); },
-                                   [&](const cv::Mat& f) { ours.extract(f); });
+  const auto ms = time_interleaved(
+      w.frames, rounds, [&](const cv::Mat& f) { stock.extract(f); }, [&](const cv::Mat& f) { ours.extract(f); });
   print_row("stella_vslam", w, ms, total, same, common, self);
 }
 #endif
@@ -249,7 +250,9 @@ int main(int argc, char** argv) {
   if (!profiled.empty()) return profile(profiled, features, profile_rounds, kitti);
   const std::vector<Workload> workloads = {
       {"KITTI 00", kitti, 2000}, {"KITTI 00", kitti, 4000}, {"KITTI 00", kitti, 10000}, {"Oxford", oxford(), 1000}};
-  std::printf("| fork | frames, nfeatures (stella: min_size) | fork ms | affine_orb ms | ratio | identical %% | shared %% | stock vs itself %% |\n");
+  std::printf(
+      "| fork | frames, nfeatures (stella: min_size) | fork ms | affine_orb ms | ratio | identical %% | shared %% | "
+      "stock vs itself %% |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const Fork fork : {Fork::kOrbSlam2, Fork::kOrbSlam3}) {
     for (const Workload& w : workloads) run(fork, w, rounds);

@@ -52,12 +52,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "sequence_io.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
+#include "sequence_io.hpp"
 
 namespace {
 

@@ -63,13 +63,13 @@ cv::Mat load_640x480(const std::string& name) {
 
 /// The inputs every stage reads, built once.
 struct Inputs {
-  cv::Mat image;                          ///< graf1, 640x480
-  cv::Mat image3;                         ///< graf3, 640x480
-  std::vector<cv::KeyPoint> level0;       ///< the plain extraction's octave-0 keypoints
-  std::vector<cv::Point2f> level0_points; ///< their positions (level-0 pixels)
-  std::vector<cv::Point2f> corners;       ///< FAST corners of the image (threshold 20, non-max)
+  cv::Mat image;                           ///< graf1, 640x480
+  cv::Mat image3;                          ///< graf3, 640x480
+  std::vector<cv::KeyPoint> level0;        ///< the plain extraction's octave-0 keypoints
+  std::vector<cv::Point2f> level0_points;  ///< their positions (level-0 pixels)
+  std::vector<cv::Point2f> corners;        ///< FAST corners of the image (threshold 20, non-max)
   std::vector<float> corner_scores;
-  cv::Mat orb1, orb3;                     ///< cv::ORB descriptors (2000) of graf1 and graf3
+  cv::Mat orb1, orb3;                         ///< cv::ORB descriptors (2000) of graf1 and graf3
   std::vector<cv::Point2f> points1, points3;  ///< ratio-tested matches of our 2000 features
 
   Inputs() : image(load_640x480("img1.png")), image3(load_640x480("img3.png")) {
@@ -384,8 +384,8 @@ void fork_cells_ours(benchmark::State& state) {
   const affine_orb::detail::ForkCells cells(image.size(), 30);
   affine_orb::detail::ForkImageWork work;
   for (auto _ : state) {
-    affine_orb::detail::detect_in_fork_cells(image, cells, kThreshold, 7, work.score_storage, work.maxima,
-                                             work.points, work.responses);
+    affine_orb::detail::detect_in_fork_cells(image, cells, kThreshold, 7, work.score_storage, work.maxima, work.points,
+                                             work.responses);
     benchmark::DoNotOptimize(work.points.data());
   }
   set_items(state, image.total());

@@ -25,9 +25,9 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "sequence_io.hpp"
 #include "affine_orb/affine_orb.hpp"
 #include "bench_common.hpp"
+#include "sequence_io.hpp"
 
 namespace {
 

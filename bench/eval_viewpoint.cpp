@@ -47,8 +47,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/affine_orb.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 #include "bench_common.hpp"
 #include "viewpoint_pairs.hpp"
 

@@ -126,8 +126,8 @@ void hash_stages(const std::vector<Image>& images) {
     add_features(hash, all);
     std::size_t count = all.size();
     for (const affine_orb::ViewStage& stage : two_view.stages) {
-      const auto more =
-          session.extend(stage.max_tilt, static_cast<int>(std::lround(stage.view_features * two_view.extractor.features)));
+      const auto more = session.extend(
+          stage.max_tilt, static_cast<int>(std::lround(stage.view_features * two_view.extractor.features)));
       add_features(hash, more);
       count += more.size();
     }

@@ -31,8 +31,9 @@ std::string usage() {
                 "                      --view-features x N more: %d keypoints in all by default\n"
                 "  --view-features F   tilted views' keypoints as a multiple of --features (default %g, 0 = none)\n"
                 "  --max-tilt T        largest simulated tilt (1 = no tilted views; default %.3f = %d tilted views)\n",
-                defaults.features, affine_orb::examples::keypoint_budget(defaults), defaults.additive_budget()->view_features,
-                defaults.views.max_tilt, affine_orb::examples::tilted_views(defaults.views));
+                defaults.features, affine_orb::examples::keypoint_budget(defaults),
+                defaults.additive_budget()->view_features, defaults.views.max_tilt,
+                affine_orb::examples::tilted_views(defaults.views));
   return std::string(
              "usage: affine_orb_extract IMAGE [--features N] [--view-features F] [--descriptor rbrief|brisk]\n"
              "                          [--max-tilt T] [--threads K] [--spreading quadtree|strongest]\n"

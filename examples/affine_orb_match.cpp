@@ -83,7 +83,8 @@ std::string usage() {
          std::to_string(one_shot.features) +
          "\n"
          "                     and the 17 tilted views add as many again: " +
-         std::to_string(one_shot.features + static_cast<int>(std::lround(one_shot.additive_budget()->view_features * one_shot.features))) +
+         std::to_string(one_shot.features +
+                        static_cast<int>(std::lround(one_shot.additive_budget()->view_features * one_shot.features))) +
          " keypoints per image in all\n"
          "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
          "  --spreading S      strongest (default: most repeatable) or quadtree (spread over the image, for SLAM)\n"

@@ -17,8 +17,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/views/affine_views.hpp"
 #include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/views/affine_views.hpp"
 
 namespace affine_orb::examples {
 

@@ -75,7 +75,7 @@ inline CorrectedImage warp_to_first_image(const cv::Mat& image2, const Eigen::Ma
                       cv::BORDER_CONSTANT, cv::Scalar::all(options.border_value));
 
   out.valid.create(size1, CV_8UC1);
-  const double margin = options.interpolation == cv::INTER_CUBIC     ? 1.0
+  const double margin = options.interpolation == cv::INTER_CUBIC      ? 1.0
                         : options.interpolation == cv::INTER_LANCZOS4 ? 3.0
                                                                       : 0.0;
   const double max_x = image2.cols - 1 - margin, max_y = image2.rows - 1 - margin;

@@ -218,7 +218,8 @@ inline PinholeCamera read_calibration(const std::filesystem::path& path) {
 /// KITTI times.txt: one time stamp (seconds) per line.
 inline std::vector<double> parse_times(const std::string& text, const std::string& name) {
   std::vector<double> times;
-  for (const auto& [number, line] : detail::content_lines(text)) times.push_back(detail::numbers(line, 1, name, number)[0]);
+  for (const auto& [number, line] : detail::content_lines(text))
+    times.push_back(detail::numbers(line, 1, name, number)[0]);
   return times;
 }
 

@@ -226,8 +226,7 @@ TEST_CASE("keypoints from a tilted view map back onto the true original position
 TEST_CASE("affine extraction: exact budget, view records, identical output for every thread count") {
   const cv::Mat image = affine_orb::test::panning_frame(2, cv::Size(1226, 370));
   const auto one =
-      affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::MergeOptions{}, 1))
-          .extract(image);
+      affine_orb::Extractor<affine_orb::Rbrief>(affine_options(2000, affine_orb::MergeOptions{}, 1)).extract(image);
   // The additive budget: 2000 of the image, view_features (1) x 2000 from the tilted views.
   REQUIRE(one.size() == 4000);
   CHECK(std::count(one.views.begin(), one.views.end(), 0) == 2000);

@@ -118,8 +118,8 @@ TEST_CASE("flat patches, patches leaving an image and far moves keep their point
   SUBCASE("a flat image pair has nothing to align") {
     const cv::Mat flat(200, 200, CV_8UC1, cv::Scalar(90));
     const std::vector<cv::Point2f> points = {{100.0f, 100.0f}, {50.0f, 60.0f}};
-    const affine_orb::AlignedCorrespondences r = affine_orb::align_correspondences(
-        flat, flat, points, points, {1.0f, 1.0f}, Eigen::Matrix3d::Identity());
+    const affine_orb::AlignedCorrespondences r =
+        affine_orb::align_correspondences(flat, flat, points, points, {1.0f, 1.0f}, Eigen::Matrix3d::Identity());
     CHECK(r.aligned_count == 0);
     CHECK(r.points2 == points);
   }
@@ -155,8 +155,7 @@ TEST_CASE("align_correspondences refuses bad input") {
                   std::invalid_argument);
   CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, {}, {1.0f}, identity), std::invalid_argument);
   CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, one, {}, identity), std::invalid_argument);
-  CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, one, {0.5f}, identity),
-                  std::invalid_argument);
+  CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, one, one, {0.5f}, identity), std::invalid_argument);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   CHECK_THROWS_AS(affine_orb::align_correspondences(image, image, {{nan, 1.0f}}, one, {1.0f}, identity),
                   std::invalid_argument);

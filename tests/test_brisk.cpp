@@ -157,7 +157,8 @@ std::bitset<512> naive_describe(const NaivePattern& pattern, const cv::Mat& imag
 
 std::bitset<512> to_bits(const Descriptor& d) {
   std::bitset<512> bits;
-  for (int b = 0; b < 512; ++b) bits[static_cast<std::size_t>(b)] = (d[static_cast<std::size_t>(b / 64)] >> (b % 64)) & 1u;
+  for (int b = 0; b < 512; ++b)
+    bits[static_cast<std::size_t>(b)] = (d[static_cast<std::size_t>(b / 64)] >> (b % 64)) & 1u;
   return bits;
 }
 
@@ -280,8 +281,8 @@ TEST_CASE("orientation and descriptor equal a naive implementation on graf img1"
       bits_compared += 512;
     }
   }
-  MESSAGE("worst orientation difference to the naive reference: " << worst_angle_error << " rad over "
-                                                                  << points.size() << " keypoints");
+  MESSAGE("worst orientation difference to the naive reference: " << worst_angle_error << " rad over " << points.size()
+                                                                  << " keypoints");
   CHECK(worst_angle_error < 1e-4);
   CHECK(bits_compared >= 100 * 4 * 512);
 }
@@ -357,12 +358,11 @@ TEST_CASE("a keypoint exactly border() from the edges reads only pixels of the i
   cv::randu(image, 0, 256);
   cv::Mat wide(2 * b + 9, 2 * b + 15, CV_8UC1);
   cv::randu(wide, 0, 256);
-  const std::vector<std::pair<cv::Mat, cv::Point>> cases = {
-      {image, {b, b}},
-      {wide, {b, b}},
-      {wide, {wide.cols - 1 - b, b}},
-      {wide, {b, wide.rows - 1 - b}},
-      {wide, {wide.cols - 1 - b, wide.rows - 1 - b}}};
+  const std::vector<std::pair<cv::Mat, cv::Point>> cases = {{image, {b, b}},
+                                                            {wide, {b, b}},
+                                                            {wide, {wide.cols - 1 - b, b}},
+                                                            {wide, {b, wide.rows - 1 - b}},
+                                                            {wide, {wide.cols - 1 - b, wide.rows - 1 - b}}};
   for (const auto& [level, p] : cases) {
     Brisk::LevelData data;
     brisk.prepare(level, data);
@@ -447,8 +447,8 @@ TEST_CASE("prepare() rejects images that are not CV_8UC1 and reuses its buffer")
 
 TEST_CASE("BriskOptions::check() rejects nonsense values and patterns without 512 short pairs") {
   const double bad[] = {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()};
-  double BriskOptions::*fields[] = {&BriskOptions::pattern_scale,    &BriskOptions::sigma_factor,
-                                    &BriskOptions::centre_sigma,     &BriskOptions::pair_scale,
+  double BriskOptions::*fields[] = {&BriskOptions::pattern_scale,     &BriskOptions::sigma_factor,
+                                    &BriskOptions::centre_sigma,      &BriskOptions::pair_scale,
                                     &BriskOptions::short_pair_factor, &BriskOptions::long_pair_factor};
   for (auto field : fields) {
     for (const double value : bad) {

@@ -11,11 +11,11 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
-#include "affine_orb/descriptors/brisk.hpp"
 #include "affine_orb/core/detail/worker_pool.hpp"
-#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -46,8 +46,7 @@ affine_orb::ExtractorOptions options_for(int index) {
 TEST_CASE("extractor instances in several threads at once equal the serial results") {
   // Small crops of real frames keep the run short, also under ThreadSanitizer.
   std::vector<cv::Mat> images;
-  for (int i = 0; i < 4; ++i)
-    images.push_back(affine_orb::test::panning_frame(i * 10, cv::Size(400, 300)));
+  for (int i = 0; i < 4; ++i) images.push_back(affine_orb::test::panning_frame(i * 10, cv::Size(400, 300)));
   const int workers = 4;
   const int rounds = 3;
   std::vector<std::vector<affine_orb::Features<256>>> serial(workers);

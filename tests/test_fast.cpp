@@ -331,15 +331,16 @@ TEST_CASE("every compiled path of the cells' maxima rows equals the scalar refer
                        std::uint64_t*, std::uint64_t*);
   std::vector<std::pair<const char*, Row>> paths = {{"dispatch", &affine_orb::detail::mark_row}};
 #if AFFINE_ORB_SIMD128
-  paths.emplace_back("128-bit (SSE2 or NEON)", &affine_orb::detail::maxima128::mark_row_run<affine_orb::detail::Lanes128>);
+  paths.emplace_back("128-bit (SSE2 or NEON)",
+                     &affine_orb::detail::maxima128::mark_row_run<affine_orb::detail::Lanes128>);
 #endif
 #if AFFINE_ORB_AVX2
   if (affine_orb::detail::cpu_has_avx2()) paths.emplace_back("avx2", &affine_orb::detail::mark_row_avx2);
 #endif
   // Cells of 99, 35 and 29, 1 and 34, one column, 33, 16 and 16 pixels: runs that end inside a chunk
   // and cells narrower than the lanes.
-  const std::vector<std::vector<int>> tilings = {
-      {1, 100}, {1, 36, 71, 100}, {5, 6, 40, 41, 80}, {2, 3, 4, 50}, {10, 43}, {1, 17}, {3, 19, 35, 51, 67, 83, 99}};
+  const std::vector<std::vector<int>> tilings = {{1, 100}, {1, 36, 71, 100}, {5, 6, 40, 41, 80},         {2, 3, 4, 50},
+                                                 {10, 43}, {1, 17},          {3, 19, 35, 51, 67, 83, 99}};
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     // Score maps with few distinct values (many ties, which no maximum may win) and mostly zeros; the
     // padding past the map is random too, so a lane that reads it and is not cleared shows.
@@ -358,8 +359,8 @@ TEST_CASE("every compiled path of the cells' maxima rows equals the scalar refer
             const bool bottom = (edge_rows & 2) != 0;
             std::vector<std::uint64_t> strong(words, 0), weak(words, 0);
             affine_orb::detail::mark_row_scalar(scores, y, top, bottom, edges.front(), edges.back(),
-                                                work.drop_left.data(), work.drop_right.data(), strong_floor,
-                                                weak_floor, strong.data(), weak.data());
+                                                work.drop_left.data(), work.drop_right.data(), strong_floor, weak_floor,
+                                                strong.data(), weak.data());
             for (const auto& path : paths) {
               const auto& name = path.first;  // not a structured binding: CAPTURE's lambda captures it
               CAPTURE(name);
@@ -387,7 +388,8 @@ void fast_in_cell(const cv::Mat& level, const cv::Rect& image, cv::Point origin,
   cv::FAST(level(image), found, initial, true);
   if (found.empty()) cv::FAST(level(image), found, minimum, true);
   for (const cv::KeyPoint& k : found) {
-    points.emplace_back(k.pt.x + static_cast<float>(image.x - origin.x), k.pt.y + static_cast<float>(image.y - origin.y));
+    points.emplace_back(k.pt.x + static_cast<float>(image.x - origin.x),
+                        k.pt.y + static_cast<float>(image.y - origin.y));
     responses.push_back(k.response);
   }
 }

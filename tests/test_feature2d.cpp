@@ -154,7 +154,8 @@ TEST_CASE("bad input through the interface gives the library's errors") {
       std::vector<cv::KeyPoint> given{cv::KeyPoint(60.0f, 60.0f, 31.0f, angle, 0.0f, 0)};
       CHECK_THROWS_AS(f->compute(image, given, descriptors), std::invalid_argument);
     }
-    std::vector<cv::KeyPoint> given{cv::KeyPoint(60.0f, 60.0f, 31.0f, -std::numeric_limits<float>::infinity(), 0.0f, 0)};
+    std::vector<cv::KeyPoint> given{
+        cv::KeyPoint(60.0f, 60.0f, 31.0f, -std::numeric_limits<float>::infinity(), 0.0f, 0)};
     f->compute(image, given, descriptors);
     REQUIRE(given.size() == 1);
     CHECK(given[0].angle >= 0.0f);

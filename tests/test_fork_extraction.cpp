@@ -3,11 +3,11 @@
 // response), in the same order, with the same descriptor rows, on real frames at ORB-SLAM's budgets.
 #include <doctest/doctest.h>
 
-#include <cstdio>
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
-#include <tuple>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -50,7 +50,8 @@ std::size_t shared(const affine_orb::stock::StockFrame& stock, const affine_orb:
   std::size_t n = 0;
   for (std::size_t i = 0; i < stock.keypoints.size(); ++i) {
     const cv::KeyPoint& k = stock.keypoints[i];
-    const auto key = std::make_tuple(k.octave, k.pt.x, k.pt.y, std::string(stock.descriptors.ptr<char>(static_cast<int>(i)), 32));
+    const auto key =
+        std::make_tuple(k.octave, k.pt.x, k.pt.y, std::string(stock.descriptors.ptr<char>(static_cast<int>(i)), 32));
     n += std::binary_search(mine.begin(), mine.end(), key);
   }
   return n;

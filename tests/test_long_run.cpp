@@ -14,8 +14,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -98,7 +98,8 @@ TEST_CASE("after one pass over the frames, extract() allocates only the three ve
   affine_orb::StellaVslamKeypoints masked_stella;
   masked_stella.mask_rectangles = {{0.0f, 1.0f, 0.8f, 1.0f}};
   for (const affine_orb::ImageKeypoints& fork :
-       {affine_orb::ImageKeypoints{affine_orb::OrbSlam2Keypoints{}}, affine_orb::ImageKeypoints{affine_orb::OrbSlam3Keypoints{}},
+       {affine_orb::ImageKeypoints{affine_orb::OrbSlam2Keypoints{}},
+        affine_orb::ImageKeypoints{affine_orb::OrbSlam3Keypoints{}},
         affine_orb::ImageKeypoints{affine_orb::StellaVslamKeypoints{}}, affine_orb::ImageKeypoints{masked_stella}}) {
     affine_orb::ExtractorOptions options;
     options.features = 1000;

@@ -93,8 +93,8 @@ std::vector<Match> naive_match(const Descriptors<Bits>& query, const Descriptors
     const int j1 = all[0].second;
     if (d1 > options.max_distance) continue;
     if (all.size() >= 2 && !(static_cast<double>(d1) < static_cast<double>(options.ratio) * all[1].first)) continue;
-    if (options.cross_check && sorted_distances<Bits>(train[static_cast<std::size_t>(j1)], query)[0].second !=
-                                   static_cast<int>(i)) {
+    if (options.cross_check &&
+        sorted_distances<Bits>(train[static_cast<std::size_t>(j1)], query)[0].second != static_cast<int>(i)) {
       continue;
     }
     matches.push_back({static_cast<int>(i), j1, d1});
@@ -156,8 +156,8 @@ Descriptors<Bits> sparse_descriptors(std::size_t n, std::mt19937_64& rng) {
 // The (query size, train size) pairs every check runs on: empty, tiny, uneven, and sizes around the
 // 64/128/256-lane blocks of the bit-sliced search.
 const std::vector<std::pair<std::size_t, std::size_t>> kSizes = {
-    {0, 0}, {0, 5}, {5, 0}, {1, 1}, {1, 2}, {2, 1}, {2, 2}, {3, 1}, {37, 53}, {53, 37}, {20, 63},
-    {20, 64}, {20, 65}, {17, 127}, {17, 128}, {17, 129}, {9, 255}, {9, 256}, {9, 257}, {11, 300}};
+    {0, 0},   {0, 5},   {5, 0},   {1, 1},    {1, 2},    {2, 1},    {2, 2},   {3, 1},   {37, 53}, {53, 37},
+    {20, 63}, {20, 64}, {20, 65}, {17, 127}, {17, 128}, {17, 129}, {9, 255}, {9, 256}, {9, 257}, {11, 300}};
 
 template <int Bits>
 std::vector<std::pair<Descriptors<Bits>, Descriptors<Bits>>> test_sets() {
@@ -218,8 +218,8 @@ void check_knn2() {
     CAPTURE(query.size());
     CAPTURE(train.size());
     check_knn_equals_naive<Bits>(affine_orb::knn2(query, train), query, train);
-    check_knn_equals_naive<Bits>(affine_orb::detail::bitsliced128::knn2_bitsliced<std::uint64_t>(query, train),
-                                 query, train);
+    check_knn_equals_naive<Bits>(affine_orb::detail::bitsliced128::knn2_bitsliced<std::uint64_t>(query, train), query,
+                                 train);
     check_knn_equals_naive<Bits>(
         affine_orb::detail::bitsliced128::knn2_bitsliced<affine_orb::detail::LaneVector128>(query, train), query,
         train);
@@ -312,13 +312,9 @@ TEST_CASE("knn2 on other descriptor widths (64 and 192 bits)") {
   check_knn_equals_naive<192>(affine_orb::knn2(q192, t192), q192, t192);
 }
 
-TEST_CASE("match equals the naive reference for every option combination, 256 bits") {
-  check_match_all_options<256>();
-}
+TEST_CASE("match equals the naive reference for every option combination, 256 bits") { check_match_all_options<256>(); }
 
-TEST_CASE("match equals the naive reference for every option combination, 512 bits") {
-  check_match_all_options<512>();
-}
+TEST_CASE("match equals the naive reference for every option combination, 512 bits") { check_match_all_options<512>(); }
 
 TEST_CASE("passes_ratio_test follows the documented definition") {
   KnnMatch m;
@@ -333,7 +329,7 @@ TEST_CASE("passes_ratio_test follows the documented definition") {
   CHECK(affine_orb::passes_ratio_test(m, 0.76f));
   m.second.distance = 30;
   CHECK_FALSE(affine_orb::passes_ratio_test(m, 1.0f));  // a tie is not strictly closer
-  CHECK(affine_orb::passes_ratio_test(m, 1.5f));         // ratio > 1 accepts ties
+  CHECK(affine_orb::passes_ratio_test(m, 1.5f));        // ratio > 1 accepts ties
   m.best.distance = 0;
   m.second.distance = 0;
   CHECK_FALSE(affine_orb::passes_ratio_test(m, 1.5f));  // 0 < 0 never holds
@@ -390,8 +386,8 @@ TEST_CASE("the cv::Mat overload equals the typed one and rejects bad matrices") 
 
 TEST_CASE("MatcherOptions::check rejects nonsense") {
   CHECK_NOTHROW(MatcherOptions{}.check());
-  for (const float ratio : {std::numeric_limits<float>::quiet_NaN(), -0.5f, 0.0f,
-                            std::numeric_limits<float>::infinity()}) {
+  for (const float ratio :
+       {std::numeric_limits<float>::quiet_NaN(), -0.5f, 0.0f, std::numeric_limits<float>::infinity()}) {
     MatcherOptions options;
     options.ratio = ratio;
     CAPTURE(ratio);

@@ -172,8 +172,16 @@ TEST_CASE("cv::resize's row pass: the SSE2 and AVX2 kernels give the scalar refe
   // window), upscales, equal sizes, rows shorter than a window; random rows with extremes.
   std::mt19937 rng(55);
   int windows = 0;
-  for (const auto& widths : {std::pair<int, int>(1241, 1034), {1034, 862}, {640, 533}, {600, 400}, {190, 100},
-                             {100, 190}, {77, 77}, {15, 12}, {9, 20}, {31, 26}}) {
+  for (const auto& widths : {std::pair<int, int>(1241, 1034),
+                             {1034, 862},
+                             {640, 533},
+                             {600, 400},
+                             {190, 100},
+                             {100, 190},
+                             {77, 77},
+                             {15, 12},
+                             {9, 20},
+                             {31, 26}}) {
     const int from = widths.first;  // not a structured binding: CAPTURE's lambda captures it
     const int to = widths.second;
     CAPTURE(from);

@@ -1,6 +1,7 @@
 // Generic RANSAC (ransac.hpp), the minimal/least-squares geometric estimators (homography.hpp,
-// fundamental.hpp) and the final homography fit (homography_refinement.hpp), against independent references: a toy line model whose truth is known, exact
-// correspondences generated from known cameras, and naive re-implementations of the scores.
+// fundamental.hpp) and the final homography fit (homography_refinement.hpp), against independent references: a toy line
+// model whose truth is known, exact correspondences generated from known cameras, and naive re-implementations of the
+// scores.
 
 #include <doctest/doctest.h>
 
@@ -811,7 +812,8 @@ TEST_CASE("refine_homography: as precise as the maximum-likelihood estimate, mor
     // The matcher's model before the final fit: LO-RANSAC at σ = 1 px.
     const auto optimised = affine_orb::ransac(affine_orb::HomographyEstimator(to_cv(x1), to_cv(x2)));
     REQUIRE(optimised.success);
-    const affine_orb::RefinedHomography refined = affine_orb::refine_homography(to_cv(x1), to_cv(x2), optimised.model.h);
+    const affine_orb::RefinedHomography refined =
+        affine_orb::refine_homography(to_cv(x1), to_cv(x2), optimised.model.h);
     REQUIRE(refined.success);
     const Eigen::Matrix3d ml = symmetric_transfer_minimum(truth, inlier1, inlier2);
     refined_to_ml += corner_distance(refined.homography, ml) / trials;
@@ -820,10 +822,9 @@ TEST_CASE("refine_homography: as precise as the maximum-likelihood estimate, mor
     optimised_error += corner_distance(optimised.model.h, truth) / trials;
     ml_error += corner_distance(ml, truth) / trials;
   }
-  MESSAGE("corner distance to the ML estimate: refined " << refined_to_ml << " px, LO-RANSAC " << optimised_to_ml
-                                                         << " px; to the truth: refined " << refined_error
-                                                         << " px, LO-RANSAC " << optimised_error << " px, ML "
-                                                         << ml_error << " px");
+  MESSAGE("corner distance to the ML estimate: refined "
+          << refined_to_ml << " px, LO-RANSAC " << optimised_to_ml << " px; to the truth: refined " << refined_error
+          << " px, LO-RANSAC " << optimised_error << " px, ML " << ml_error << " px");
   // LO-RANSAC's hard inlier set at 2.4 px leaves out a fifth of the inliers; the refinement takes
   // them back, weighted.
   CHECK(refined_to_ml < 0.7 * optimised_to_ml);

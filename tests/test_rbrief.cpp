@@ -385,8 +385,7 @@ TEST_CASE("rBRIEF smoothing: the SSE2, AVX2 and NEON passes equal the scalar ref
   namespace d = affine_orb::detail;
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> byte(0, 255);
-  for (const auto& kernel_shape :
-       {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}, {31, 8.0}}) {
+  for (const auto& kernel_shape : {std::pair<int, double>(7, 2.0), {5, 1.2}, {9, 3.0}, {3, 0.5}, {1, 1.0}, {31, 8.0}}) {
     const int size = kernel_shape.first;  // not a structured binding: the lambdas below capture it
     const double sigma = kernel_shape.second;
     CAPTURE(size);
@@ -556,7 +555,7 @@ TEST_CASE("the intensity-test kernels give the scalar reference's bits") {
 #endif
     }
     CHECK(mismatches == 0);
-    if (image.data == flat.data) CHECK(ones == 0);                 // ties give 0
+    if (image.data == flat.data) CHECK(ones == 0);              // ties give 0
     if (image.data == noise.data) CHECK(ones > 100 * 256 / 3);  // about half the bits set
   }
 }

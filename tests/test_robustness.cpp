@@ -9,12 +9,12 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/descriptors/brisk.hpp"
-#include "affine_orb/extraction/extractor.hpp"
-#include "affine_orb/matching/matcher.hpp"
-#include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/geometry/model_selection.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
+#include "affine_orb/matching/matcher.hpp"
 #include "test_data.hpp"
 
 namespace {

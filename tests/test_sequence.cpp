@@ -25,12 +25,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "homography_io.hpp"
-#include "sequence_io.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
 #include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
+#include "homography_io.hpp"
 #include "keyframe_tracker.hpp"
+#include "sequence_io.hpp"
 #include "test_data.hpp"
 
 namespace {

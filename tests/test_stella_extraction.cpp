@@ -21,9 +21,9 @@ namespace {
 
 using affine_orb::Extractor;
 using affine_orb::ExtractorOptions;
-using affine_orb::StellaVslamKeypoints;
 using affine_orb::MaskRectangle;
 using affine_orb::Rbrief;
+using affine_orb::StellaVslamKeypoints;
 using affine_orb::stock::StockFrame;
 using affine_orb::stock::StockStellaExtractor;
 
@@ -119,7 +119,8 @@ void check_cases(const std::vector<cv::Mat>& images) {
 
 }  // namespace
 
-TEST_CASE("stella_vslam's image keypoints equal its own extractor's, in order and bit for bit, on opencv-doc's photos") {
+TEST_CASE(
+    "stella_vslam's image keypoints equal its own extractor's, in order and bit for bit, on opencv-doc's photos") {
   check_cases(affine_orb::test::conformance_sample_frames());
 }
 

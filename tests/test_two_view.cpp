@@ -598,7 +598,8 @@ TEST_CASE("stages_up_to follows the view set: the default stages, cut at max_til
     views.max_tilt = max_tilt;
     views.tilt_ratio = ratio;
     std::vector<std::pair<double, double>> out;
-    for (const affine_orb::ViewStage& s : affine_orb::stages_up_to(views)) out.emplace_back(s.max_tilt, s.view_features);
+    for (const affine_orb::ViewStage& s : affine_orb::stages_up_to(views))
+      out.emplace_back(s.max_tilt, s.view_features);
     return out;
   };
   const auto same = [](const std::vector<std::pair<double, double>>& got,
@@ -618,8 +619,8 @@ TEST_CASE("stages_up_to follows the view set: the default stages, cut at max_til
     CHECK(by_default[i].view_features == defaults.stages[i].view_features);
   }
   same(tilts_and_budgets(1.0, r2), {});
-  same(tilts_and_budgets(r2, r2), {{r2, 0.25}});               // the first stage, cut at √2
-  same(tilts_and_budgets(2.5, r2), {{2.0, 0.25}});             // no view in (2, 2.5]
+  same(tilts_and_budgets(r2, r2), {{r2, 0.25}});    // the first stage, cut at √2
+  same(tilts_and_budgets(2.5, r2), {{2.0, 0.25}});  // no view in (2, 2.5]
   same(tilts_and_budgets(4.0 * r2, r2), {{2.0, 0.25}, {2.0 * r2, 0.5}, {4.0, 0.5}, {4.0 * r2, 0.5}});
   same(tilts_and_budgets(16.0, r2),
        {{2.0, 0.25}, {2.0 * r2, 0.5}, {4.0, 0.5}, {4.0 * r2, 0.5}, {8.0, 0.5}, {8.0 * r2, 0.5}, {16.0, 0.5}});
@@ -643,9 +644,8 @@ TEST_CASE("stages_up_to follows the view set: the default stages, cut at max_til
         }));
         previous = stage.max_tilt;
       }
-      CHECK(std::all_of(parameters.begin(), parameters.end(), [&](const std::pair<double, double>& p) {
-        return p.first <= previous * (1.0 + 1e-3);
-      }));
+      CHECK(std::all_of(parameters.begin(), parameters.end(),
+                        [&](const std::pair<double, double>& p) { return p.first <= previous * (1.0 + 1e-3); }));
     }
   }
   affine_orb::AffineViewOptions bad;

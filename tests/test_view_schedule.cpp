@@ -13,9 +13,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/extraction/detail/view_schedule.hpp"
 #include "affine_orb/detection/distribution.hpp"
 #include "affine_orb/detection/pyramid.hpp"
+#include "affine_orb/extraction/detail/view_schedule.hpp"
 
 namespace {
 

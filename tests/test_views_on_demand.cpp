@@ -84,7 +84,8 @@ TEST_CASE("views on demand: stage 0 is plain extraction, and the image plus one 
         CHECK(session.extracted_tilt() == 1.0);
         CHECK(differing(image_only, plain) == 0);
         const double view_features = on.additive_budget()->view_features;
-        const auto views = session.extend(on.views.max_tilt, static_cast<int>(std::lround(view_features * on.features)));
+        const auto views =
+            session.extend(on.views.max_tilt, static_cast<int>(std::lround(view_features * on.features)));
         CHECK(session.extracted_tilt() == doctest::Approx(2.0 * kSqrt2));
         CHECK(session.extracted_views() == static_cast<int>(staged.views().size()));
         CHECK(std::count(views.views.begin(), views.views.end(), 0) == 0);

@@ -18,8 +18,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "affine_orb/descriptors/brisk.hpp"
-#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/two_view/two_view.hpp"
 
 namespace {

@@ -33,8 +33,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "affine_orb/descriptors/brisk.hpp"
-#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb_adapter/options.hpp"
 #include "test_data.hpp"
 #include "walk.hpp"
@@ -238,13 +238,12 @@ inline int nearest_octave(int level, double tilt) {
 }
 
 // What the adapter must return, derived from affine_orb::Extractor directly: the extractor with
-// the image's keypoints `keypoints`, the additive view budget (kFeatures image keypoints, about as many from the tilted views, which
-// must not change the image's: checked against max_tilt 1) and no carried shortfalls (each view
-// and level at most its share, as ORB-SLAM's own extractor), each keypoint at its octave, which for
-// a view keypoint must be the nearest level to its scale s^l·√t by brute force (l recovered from
-// its size Descriptor::kPatchSize·s^l·√t); keypoints whose stereo window does not fit dropped;
-// grouped by octave, the image's first; rows cut to the first 32 bytes. `from_views` receives the
-// number of view keypoints in the output.
+// the image's keypoints `keypoints`, the additive view budget (kFeatures image keypoints, about as many from the tilted
+// views, which must not change the image's: checked against max_tilt 1) and no carried shortfalls (each view and level
+// at most its share, as ORB-SLAM's own extractor), each keypoint at its octave, which for a view keypoint must be the
+// nearest level to its scale s^l·√t by brute force (l recovered from its size Descriptor::kPatchSize·s^l·√t); keypoints
+// whose stereo window does not fit dropped; grouped by octave, the image's first; rows cut to the first 32 bytes.
+// `from_views` receives the number of view keypoints in the output.
 template <class Descriptor>
 Output expected_output(const cv::Mat& image, const affine_orb::ImageKeypoints& keypoints, double max_tilt,
                        const std::vector<float>& factors, const std::vector<float>& inverse_factors,
@@ -469,9 +468,8 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
     typename T::Extractor extractor(conformance::kFeatures, conformance::kScale, conformance::kLevels,
                                     conformance::kIniFast, conformance::kMinFast);
     const conformance::Output got = conformance::run<T>(extractor, image);
-    const conformance::Output want =
-        conformance::expected_output<affine_orb::Rbrief>(image, affine_orb::AffineOrbKeypoints{}, 1.0,
-                                                         extractor.GetScaleFactors(), extractor.GetInverseScaleFactors());
+    const conformance::Output want = conformance::expected_output<affine_orb::Rbrief>(
+        image, affine_orb::AffineOrbKeypoints{}, 1.0, extractor.GetScaleFactors(), extractor.GetInverseScaleFactors());
     CHECK(want.keypoints.size() == static_cast<std::size_t>(conformance::kFeatures));  // nothing dropped
     conformance::check_same(got, want);
   }
@@ -482,10 +480,9 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
                                     conformance::kIniFast, conformance::kMinFast);
     const conformance::Output got = conformance::run<T>(extractor, image);
     int from_views = 0;
-    const conformance::Output want =
-        conformance::expected_output<affine_orb::Rbrief>(image, typename T::Fork{}, conformance::kViewsTilt,
-                                                         extractor.GetScaleFactors(), extractor.GetInverseScaleFactors(),
-                                                         &from_views);
+    const conformance::Output want = conformance::expected_output<affine_orb::Rbrief>(
+        image, typename T::Fork{}, conformance::kViewsTilt, extractor.GetScaleFactors(),
+        extractor.GetInverseScaleFactors(), &from_views);
     CHECK(from_views > 500);  // the tilted views add about kFeatures keypoints
     conformance::check_same(got, want);
   }
@@ -506,9 +503,9 @@ TEST_CASE_TEMPLATE_DEFINE("the output is the extractor's, mapped to octaves by t
     typename T::Extractor extractor(conformance::kFeatures, conformance::kScale, conformance::kLevels,
                                     conformance::kIniFast, conformance::kMinFast);
     const conformance::Output got = conformance::run<T>(extractor, image);
-    const conformance::Output want =
-        conformance::expected_output<affine_orb::Brisk>(image, typename T::Fork{}, conformance::kViewsTilt,
-                                                        extractor.GetScaleFactors(), extractor.GetInverseScaleFactors());
+    const conformance::Output want = conformance::expected_output<affine_orb::Brisk>(
+        image, typename T::Fork{}, conformance::kViewsTilt, extractor.GetScaleFactors(),
+        extractor.GetInverseScaleFactors());
     conformance::check_same(got, want);
   }
 }
@@ -884,13 +881,20 @@ TEST_CASE_TEMPLATE_DEFINE("bad input is rejected with std::invalid_argument", T,
 TEST_CASE_TEMPLATE_DEFINE("a bad environment value is rejected with std::invalid_argument naming its variable", T,
                           bad_environment) {
   const std::vector<std::pair<const char*, const char*>> rows = {
-      {affine_orb::adapters::kEnvMaxTilt, "abc"},      {affine_orb::adapters::kEnvMaxTilt, "0.5"},
-      {affine_orb::adapters::kEnvMaxTilt, "2.8x"},     {affine_orb::adapters::kEnvMaxTilt, ""},
-      {affine_orb::adapters::kEnvMaxTilt, "nan"},      {affine_orb::adapters::kEnvDescriptor, "orb"},
-      {affine_orb::adapters::kEnvDescriptor, "BRISK"}, {affine_orb::adapters::kEnvThreads, "0"},
-      {affine_orb::adapters::kEnvThreads, "1.5"},      {affine_orb::adapters::kEnvThreads, "99999999999"},
-      {affine_orb::adapters::kEnvDuplicates, "drop"},  {affine_orb::adapters::kEnvMergeRadius, "0"},
-      {affine_orb::adapters::kEnvMergeRadius, "-1"},   {affine_orb::adapters::kEnvViewFeatures, "-0.5"},
+      {affine_orb::adapters::kEnvMaxTilt, "abc"},
+      {affine_orb::adapters::kEnvMaxTilt, "0.5"},
+      {affine_orb::adapters::kEnvMaxTilt, "2.8x"},
+      {affine_orb::adapters::kEnvMaxTilt, ""},
+      {affine_orb::adapters::kEnvMaxTilt, "nan"},
+      {affine_orb::adapters::kEnvDescriptor, "orb"},
+      {affine_orb::adapters::kEnvDescriptor, "BRISK"},
+      {affine_orb::adapters::kEnvThreads, "0"},
+      {affine_orb::adapters::kEnvThreads, "1.5"},
+      {affine_orb::adapters::kEnvThreads, "99999999999"},
+      {affine_orb::adapters::kEnvDuplicates, "drop"},
+      {affine_orb::adapters::kEnvMergeRadius, "0"},
+      {affine_orb::adapters::kEnvMergeRadius, "-1"},
+      {affine_orb::adapters::kEnvViewFeatures, "-0.5"},
       {affine_orb::adapters::kEnvViewFeatures, "x"},
       {affine_orb::adapters::kEnvRecoveryImageFeatures, "0.5"},
       {affine_orb::adapters::kEnvRecoveryImageFeatures, "two"},
@@ -918,9 +922,8 @@ TEST_CASE_TEMPLATE_DEFINE("a bad environment value is rejected with std::invalid
 // every keypoint (position, octave, angle, size, response) and row equal, in the same order, and
 // the same pyramid bytes. ORB-SLAM2's octree orders nodes of equal size by heap address; the fork
 // runs on a heap that grows (creation order), the order the adapter takes.
-TEST_CASE_TEMPLATE_DEFINE("by default, the fork's own keypoints and bits" *
-                              doctest::skip(!AFFINE_ORB_HAVE_STOCK),
-                          T, fork_default) {
+TEST_CASE_TEMPLATE_DEFINE("by default, the fork's own keypoints and bits" * doctest::skip(!AFFINE_ORB_HAVE_STOCK), T,
+                          fork_default) {
 #if AFFINE_ORB_HAVE_STOCK
   using affine_orb::stock::Fork;
   const Fork fork = std::is_same_v<typename T::Fork, affine_orb::OrbSlam2Keypoints> ? Fork::kOrbSlam2 : Fork::kOrbSlam3;

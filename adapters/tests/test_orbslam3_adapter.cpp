@@ -65,7 +65,8 @@ int differences(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& rows,
     const cv::KeyPoint& a = keypoints[k];
     const cv::KeyPoint& b = all[expected[k]];
     count += a.pt != b.pt || a.octave != b.octave || a.angle != b.angle;
-    count += cv::norm(rows.row(static_cast<int>(k)), all_rows.row(static_cast<int>(expected[k])), cv::NORM_HAMMING) != 0.0;
+    count +=
+        cv::norm(rows.row(static_cast<int>(k)), all_rows.row(static_cast<int>(expected[k])), cv::NORM_HAMMING) != 0.0;
   }
   return count;
 }

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "stella_vslam/feature/orb_extractor.h"
 #include "stella_vslam/feature/orb_params.h"
@@ -94,8 +94,8 @@ Counts run_case(const std::vector<cv::Mat>& images, const Case& c) {
 
 void check_cases(const std::vector<cv::Mat>& images) {
   const Rectangles rectangles = {{0.0f, 1.0f, 0.0f, 0.1f}, {0.313f, 0.547f, 0.61f, 1.0f}};
-  for (const Case& c : {Case{800, {}, false}, Case{200, {}, false}, Case{800, rectangles, false},
-                        Case{800, {}, true}, Case{200, rectangles, true}}) {
+  for (const Case& c : {Case{800, {}, false}, Case{200, {}, false}, Case{800, rectangles, false}, Case{800, {}, true},
+                        Case{200, rectangles, true}}) {
     const Counts counts = run_case(images, c);
     CHECK(counts.keypoints > 100 * images.size());
     CHECK(counts.identical == counts.keypoints);

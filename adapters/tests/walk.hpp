@@ -120,10 +120,10 @@ inline double occupancy(const Features& f) {
 
 /// The walk's measures, each a mean over frames unless said.
 struct Measures {
-  double next = 0.0;       ///< refound() one frame on, frames 0..19 to 1..20
-  double last = 0.0;       ///< refound() from frame 0 to frame 20
-  double border = 0.0;     ///< border_share()
-  double occupied = 0.0;   ///< occupancy()
+  double next = 0.0;      ///< refound() one frame on, frames 0..19 to 1..20
+  double last = 0.0;      ///< refound() from frame 0 to frame 20
+  double border = 0.0;    ///< border_share()
+  double occupied = 0.0;  ///< occupancy()
 };
 
 /// Runs `extract` (cv::Mat -> Features) on every frame of the walk on `wall`.

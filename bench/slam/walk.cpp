@@ -120,8 +120,8 @@ int main(int argc, char** argv) {
       const std::size_t first = parent == std::string::npos ? 0 : parent + 1;
       name = name.substr(first, slash - first);
     }
-    std::printf("| %s | %s | %.0f | %.3f | %.3f | %.3f | %.3f | %s |\n", argv[1], name.c_str(), keypoints, m.next, m.last,
-                m.border, m.occupied, shares.c_str());
+    std::printf("| %s | %s | %.0f | %.3f | %.3f | %.3f | %.3f | %s |\n", argv[1], name.c_str(), keypoints, m.next,
+                m.last, m.border, m.occupied, shares.c_str());
   }
   return 0;
 }

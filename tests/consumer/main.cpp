@@ -7,7 +7,8 @@
 int main() {
   cv::Mat image(240, 320, CV_8UC1, cv::Scalar(128));
   for (int y = 20; y < 220; y += 25) {
-    for (int x = 20; x < 300; x += 25) cv::rectangle(image, {x, y, 10, 10}, cv::Scalar((x * 7 + y * 3) % 256), cv::FILLED);
+    for (int x = 20; x < 300; x += 25)
+      cv::rectangle(image, {x, y, 10, 10}, cv::Scalar((x * 7 + y * 3) % 256), cv::FILLED);
   }
   affine_orb::ExtractorOptions options;
   options.features = 100;

@@ -7,6 +7,7 @@
 #include <affine_orb/descriptor.hpp>
 #include <affine_orb/detector.hpp>
 #include <affine_orb/distribution.hpp>
+#include <affine_orb/extraction/view_cursor.hpp>
 #include <affine_orb/extractor.hpp>
 #include <affine_orb/fast.hpp>
 #include <affine_orb/features.hpp>
@@ -23,7 +24,6 @@
 #include <affine_orb/relative_pose.hpp>
 #include <affine_orb/two_view.hpp>
 #include <affine_orb/two_view/refinement.hpp>
-#include <affine_orb/extraction/view_cursor.hpp>
 
 #include <cstdio>
 

@@ -1,8 +1,8 @@
 // libFuzzer target: the input bytes choose an image size (up to 48x40, so that
 // about a thousand inputs run a second), the pixels and the options, then extraction (rBRIEF or
 // BRISK, affine_orb's or a fork's image keypoints, plain or affine views, with or without a mask)
-// and matching of the result against itself run. Invalid options must end in std::invalid_argument, valid ones in a result that keeps every
-// documented invariant; anything else (a crash, a sanitizer report, another exception, a broken
+// and matching of the result against itself run. Invalid options must end in std::invalid_argument, valid ones in a
+// result that keeps every documented invariant; anything else (a crash, a sanitizer report, another exception, a broken
 // invariant) is a finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
 #include <algorithm>
@@ -14,10 +14,10 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/matching/affine_matching.hpp"
 #include "affine_orb/descriptors/brisk.hpp"
-#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/matching/affine_matching.hpp"
 #include "fuzz_input.hpp"
 
 namespace {
@@ -64,7 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const int height = 1 + bytes.next() % 40;
   const std::uint8_t flags = bytes.next();
   affine_orb::ExtractorOptions options;
-  options.features = static_cast<int>(bytes.next()) * 4 - 8;       // may be <= 0: invalid
+  options.features = static_cast<int>(bytes.next()) * 4 - 8;  // may be <= 0: invalid
   // 0.5 is invalid; 1, √2, 2, 2√2 and 4 give 1, 5, 10, 18 and 28 views (the cost of an input
   // grows with them, so the larger sets come up less often).
   constexpr double kTilts[] = {0.5, 1.0, 1.0, 1.42, 2.01, 2.01, 2.83, 4.01};
@@ -83,9 +83,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.shortlist = 0.5 + (shortlist % 8) * 0.5;  // 0.5 is invalid
   // The image's keypoints: affine_orb's, ORB-SLAM2's or ORB-SLAM3's, the last two less often.
   switch ((shortlist >> 3) & 3) {
-    case 2: options.image_keypoints = affine_orb::OrbSlam2Keypoints{}; break;
-    case 3: options.image_keypoints = affine_orb::OrbSlam3Keypoints{}; break;
-    default: break;
+    case 2:
+      options.image_keypoints = affine_orb::OrbSlam2Keypoints{};
+      break;
+    case 3:
+      options.image_keypoints = affine_orb::OrbSlam3Keypoints{};
+      break;
+    default:
+      break;
   }
   // Two worker threads in one input of 32: glibc frees a finished thread's TLS lazily, so an input
   // that starts threads ends with more mallocs than frees, and libFuzzer then runs its leak check

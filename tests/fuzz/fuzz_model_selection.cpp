@@ -45,8 +45,8 @@ bool finite_unit(const Eigen::Matrix3d& m) { return m.allFinite() && std::abs(m.
 
 /// The result's inlier flags and counts agree, the models it reports are finite and normalised,
 /// the chosen one was found, and only the chosen rule's fields are set.
-void require_consistent(const affine_orb::ModelSelectionResult& result, const affine_orb::ModelSelectionOptions& options,
-                        std::size_t n) {
+void require_consistent(const affine_orb::ModelSelectionResult& result,
+                        const affine_orb::ModelSelectionOptions& options, std::size_t n) {
   require(result.homography_inliers.size() == n && result.fundamental_inliers.size() == n);
   int h = 0, f = 0;
   for (std::size_t i = 0; i < n; ++i) {

@@ -10,9 +10,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "fuzz_input.hpp"
 #include "homography_io.hpp"
 #include "sequence_io.hpp"
-#include "fuzz_input.hpp"
 
 namespace {
 

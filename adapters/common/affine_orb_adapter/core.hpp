@@ -34,12 +34,12 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/views/affine_views.hpp"
-#include "affine_orb/descriptors/brisk.hpp"
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/extraction/extractor.hpp"
 #include "affine_orb/core/features.hpp"
+#include "affine_orb/descriptors/brisk.hpp"
 #include "affine_orb/descriptors/rbrief.hpp"
+#include "affine_orb/extraction/extractor.hpp"
+#include "affine_orb/views/affine_views.hpp"
 #include "affine_orb_adapter/options.hpp"
 
 namespace affine_orb::adapters {
@@ -103,8 +103,8 @@ inline double parse_number(const char* name, const char* text, double lo, double
   in >> value;
   const bool parsed = !in.fail() && (in >> std::ws).eof();
   const bool in_range = parsed && std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
-  require_option(in_range, std::string(name) + " must be a number in " + (lo_open ? "(" : "[") +
-                                            format(lo) + ", " + format(hi) + "], got " + quoted(text));
+  require_option(in_range, std::string(name) + " must be a number in " + (lo_open ? "(" : "[") + format(lo) + ", " +
+                               format(hi) + "], got " + quoted(text));
   return value;
 }
 
@@ -115,8 +115,8 @@ inline int parse_integer(const char* name, const char* text, int lo, int hi) {
   in >> value;
   const bool parsed = !in.fail() && (in >> std::ws).eof();
   require_option(parsed && value >= lo && value <= hi, std::string(name) + " must be an integer in [" +
-                                                                        std::to_string(lo) + ", " + std::to_string(hi) +
-                                                                        "], got " + quoted(text));
+                                                           std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                                                           quoted(text));
   return static_cast<int>(value);
 }
 
@@ -159,7 +159,8 @@ inline const std::vector<Variable>& variables() {
          o.keypoints = parse_choice<AdapterKeypoints>(
              n, v, {{"fork", AdapterKeypoints::kFork}, {"affine_orb", AdapterKeypoints::kAffineOrb}});
        }},
-      {kEnvMaxTilt, [](AdapterOptions& o, const char* n, const char* v) { o.max_tilt = parse_number(n, v, 1.0, 16.0, false); }},
+      {kEnvMaxTilt,
+       [](AdapterOptions& o, const char* n, const char* v) { o.max_tilt = parse_number(n, v, 1.0, 16.0, false); }},
       {kEnvDescriptor,
        [](AdapterOptions& o, const char* n, const char* v) {
          o.descriptor = parse_choice<AdapterDescriptor>(
@@ -179,10 +180,8 @@ inline const std::vector<Variable>& variables() {
        [](AdapterOptions& o, const char* n, const char* v) {
          o.recovery.image_features = parse_number(n, v, 1.0, 16.0, false);
        }},
-      {kEnvRecoveryMaxTilt,
-       [](AdapterOptions& o, const char* n, const char* v) {
-         o.recovery.max_tilt = parse_number(n, v, 1.0, 16.0, false);
-       }},
+      {kEnvRecoveryMaxTilt, [](AdapterOptions& o, const char* n,
+                               const char* v) { o.recovery.max_tilt = parse_number(n, v, 1.0, 16.0, false); }},
       {kEnvRecoveryViewFeatures,
        [](AdapterOptions& o, const char* n, const char* v) {
          o.recovery.view_features = parse_number(n, v, 0.0, 16.0, false);
@@ -217,7 +216,8 @@ inline std::string setting_key(const char* variable) {
 /// carries the options (stella_vslam's YAML `Feature: affine_orb:` map). `where` prefixes a key in
 /// messages ("Feature.affine_orb."). An unknown key or a bad value throws std::invalid_argument
 /// naming it; the environment is not read.
-inline AdapterOptions apply_settings(AdapterOptions base, const std::vector<std::pair<std::string, std::string>>& settings,
+inline AdapterOptions apply_settings(AdapterOptions base,
+                                     const std::vector<std::pair<std::string, std::string>>& settings,
                                      const std::string& where) {
   const std::vector<detail_env::Variable>& table = detail_env::variables();
   for (const auto& [key, value] : settings) {
@@ -376,7 +376,9 @@ class AdapterCore {
  public:
   AdapterCore(const char* who, const ImageKeypoints& fork, const ForkParameters& parameters,
               const AdapterOptions& affine)
-      : who_(who), affine_((affine.check(), affine)), parameters_((parameters.check(who), parameters)),
+      : who_(who),
+        affine_((affine.check(), affine)),
+        parameters_((parameters.check(who), parameters)),
         scales_(make_scale_tables(parameters.scale_factor, parameters.levels)),
         extractors_(make_extractors(who, fork, parameters, affine)) {}
 
@@ -403,8 +405,10 @@ class AdapterCore {
                                     const AdapterOptions& affine) {
     const ExtractionPlan normal = make_plan(p.nfeatures, affine.max_tilt, affine.view_features);
     const double recovery_features = std::round(affine.recovery.image_features * p.nfeatures);
-    require_option(recovery_features <= 1000000.0, who + ": recovery.image_features x nfeatures must be at most "
-                                                         "1000000, got " + detail_env::format(recovery_features));
+    require_option(recovery_features <= 1000000.0, who +
+                                                       ": recovery.image_features x nfeatures must be at most "
+                                                       "1000000, got " +
+                                                       detail_env::format(recovery_features));
     const ExtractionPlan recovery =
         make_plan(static_cast<int>(recovery_features), affine.recovery.max_tilt, affine.recovery.view_features);
     const ExtractorOptions base = base_options(fork, p, affine);

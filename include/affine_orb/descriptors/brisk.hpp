@@ -48,11 +48,11 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "affine_orb/descriptors/descriptor.hpp"
-#include "affine_orb/descriptors/detail/brisk_pattern.hpp"
 #include "affine_orb/core/detail/buffer.hpp"
 #include "affine_orb/core/detail/check.hpp"
 #include "affine_orb/core/features.hpp"
+#include "affine_orb/descriptors/descriptor.hpp"
+#include "affine_orb/descriptors/detail/brisk_pattern.hpp"
 
 namespace affine_orb {
 
@@ -85,9 +85,7 @@ struct BriskOptions {
   double long_pair_factor = 13.67;
 
   /// δ_max in level pixels.
-  double max_short_distance() const {
-    return short_pair_factor * pair_scale * pattern_scale / kReferencePatternScale;
-  }
+  double max_short_distance() const { return short_pair_factor * pair_scale * pattern_scale / kReferencePatternScale; }
   /// δ_min in level pixels.
   double min_long_distance() const { return long_pair_factor * pair_scale * pattern_scale / kReferencePatternScale; }
   /// σ of the centre point in level pixels.
@@ -357,9 +355,9 @@ class Brisk {
 
   static bool is_default(const Options& o) {
     const Options d;
-    return o.pattern_scale == d.pattern_scale && o.sigma_factor == d.sigma_factor &&
-           o.centre_sigma == d.centre_sigma && o.pair_scale == d.pair_scale &&
-           o.short_pair_factor == d.short_pair_factor && o.long_pair_factor == d.long_pair_factor;
+    return o.pattern_scale == d.pattern_scale && o.sigma_factor == d.sigma_factor && o.centre_sigma == d.centre_sigma &&
+           o.pair_scale == d.pair_scale && o.short_pair_factor == d.short_pair_factor &&
+           o.long_pair_factor == d.long_pair_factor;
   }
 
   // The table of the default options (the arguments must be theirs), built at the first call.

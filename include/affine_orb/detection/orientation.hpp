@@ -28,7 +28,8 @@ inline std::vector<int> orb_disc_half_widths(int radius) {
   const int rounded_rows = std::min(static_cast<int>(std::floor(diagonal + 1.0)), radius);
   const int completed_from = static_cast<int>(std::ceil(diagonal));
   for (int v = 0; v <= rounded_rows; ++v)
-    w[static_cast<std::size_t>(v)] = static_cast<int>(std::lround(std::sqrt(static_cast<double>(radius * radius - v * v))));
+    w[static_cast<std::size_t>(v)] =
+        static_cast<int>(std::lround(std::sqrt(static_cast<double>(radius * radius - v * v))));
   // Rows from the top down take the column lengths of the rows from the middle up.
   for (int v = radius, column = 0; v >= completed_from; --v, ++column) {
     while (w[static_cast<std::size_t>(column)] == w[static_cast<std::size_t>(column) + 1]) ++column;

@@ -11,9 +11,9 @@
 
 #include "affine_orb/core/detail/buffer.hpp"
 #include "affine_orb/core/detail/check.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/detection/detail/opencv_resize.hpp"
 #include "affine_orb/detection/detail/resize.hpp"
-#include "affine_orb/core/row_spans.hpp"
 
 namespace affine_orb {
 

@@ -21,9 +21,9 @@
 
 #include "affine_orb/core/detail/buffer.hpp"
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/detail/worker_pool.hpp"
 #include "affine_orb/core/features.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/descriptors/descriptor.hpp"
 #include "affine_orb/detection/detector.hpp"
 #include "affine_orb/detection/distribution.hpp"
@@ -190,7 +190,8 @@ class Extractor {
     detail::require_gray8(image, "Extractor::extract");
     detail::require_mask(mask, image.size(), "Extractor::extract");
     prepare_views(image.size());
-    if (merging()) repeats_.reset(image.size(), options_.pyramid, options_.merge_duplicates->radius,
+    if (merging())
+      repeats_.reset(image.size(), options_.pyramid, options_.merge_duplicates->radius,
                      options_.merge_duplicates->repeat_levels);
   }
 

@@ -89,7 +89,7 @@ inline std::vector<std::uint8_t> transfer_inliers(const NormalizedCorrespondence
 inline Matrix9d sampson_normal_matrix(const NormalizedCorrespondences& data, const HomographyModel& model,
                                       const HomographyRefinementOptions& options, std::size_t& used) {
   const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> hn = data.t2 * model.h * data.t1_inverse;
-  const Eigen::Map<const Vector9d> h(hn.data());  // row-major, as the DLT equations order it
+  const Eigen::Map<const Vector9d> h(hn.data());                    // row-major, as the DLT equations order it
   const double s1 = 1.0 / data.t1(0, 0), s2 = 1.0 / data.t2(0, 0);  // normalised units → pixels
   const double inverse_c2 = 1.0 / (options.cauchy_scale * options.cauchy_scale);
   Matrix9d normal = Matrix9d::Zero();
@@ -167,7 +167,8 @@ inline std::vector<std::uint8_t> transfer_inliers(const std::vector<cv::Point2f>
                                                   const std::vector<cv::Point2f>& points2,
                                                   const Eigen::Matrix3d& homography, double max_error) {
   detail::require_range(max_error, detail::kPositive, "transfer_inliers: max_error");
-  const detail::NormalizedCorrespondences data = detail::normalize_correspondences(points1, points2, "transfer_inliers");
+  const detail::NormalizedCorrespondences data =
+      detail::normalize_correspondences(points1, points2, "transfer_inliers");
   const std::optional<HomographyModel> model = HomographyModel::from_pixels(homography);
   detail::require(model.has_value(), "transfer_inliers: the homography must be finite and invertible");
   return detail::transfer_inliers(data, *model, max_error);

@@ -345,8 +345,8 @@ RansacResult<typename Estimator::Model> search(const Estimator& estimator, const
       if (found && !(candidate.score > result.score)) continue;
       found = true;
       adopt_candidate(candidate, result);
-      needed = needed_iterations(options, kSampleSize,
-                                 static_cast<double>(result.inlier_count) / static_cast<double>(n));
+      needed =
+          needed_iterations(options, kSampleSize, static_cast<double>(result.inlier_count) / static_cast<double>(n));
     }
   }
   result.iterations = iteration;

@@ -78,11 +78,11 @@ struct AlignedCorrespondences {
 /// or empty, lists of different lengths, a non-finite point or scale, a scale below 1, a
 /// homography that is not finite, or invalid options.
 inline AlignedCorrespondences align_correspondences(const cv::Mat& image1, const cv::Mat& image2,
-                                                     const std::vector<cv::Point2f>& points1,
-                                                     const std::vector<cv::Point2f>& points2,
-                                                     const std::vector<float>& scales1,
-                                                     const Eigen::Matrix3d& homography,
-                                                     const CorrespondenceAlignmentOptions& options = {}) {
+                                                    const std::vector<cv::Point2f>& points1,
+                                                    const std::vector<cv::Point2f>& points2,
+                                                    const std::vector<float>& scales1,
+                                                    const Eigen::Matrix3d& homography,
+                                                    const CorrespondenceAlignmentOptions& options = {}) {
   options.check();
   detail::require(!image1.empty() && image1.type() == CV_8UC1 && !image2.empty() && image2.type() == CV_8UC1,
                   "align_correspondences: both images must be non-empty CV_8UC1");
@@ -112,8 +112,8 @@ inline AlignedCorrespondences align_correspondences(const cv::Mat& image1, const
         std::lround(std::min(2.0 * options.patch_radius, options.patch_radius * static_cast<double>(scales1[i]))));
     const Eigen::Vector2d start(q.x, q.y);
     const std::optional<detail::PatchAlignment> patch =
-        detail::align_patch(image1, image2, Eigen::Vector2d(p.x, p.y), start, jacobian, radius,
-                            options.iterations, options.min_texture, work);
+        detail::align_patch(image1, image2, Eigen::Vector2d(p.x, p.y), start, jacobian, radius, options.iterations,
+                            options.min_texture, work);
     if (!patch || patch->correlation < options.min_correlation ||
         !((patch->point2 - start).norm() <= options.max_shift)) {
       continue;

@@ -239,8 +239,8 @@ class TwoViewMatcher {
   /// homography accepts, and its inliers become the matches it accepts
   /// (HomographyRefinementOptions::max_error), so that the returned matches are never looser than
   /// the unguided ones.
-  void fit_final(const Features<kBits>& features1, const Features<kBits>& features2,
-                 const std::vector<Match>& unguided, StageModel& stage, bool fit) const {
+  void fit_final(const Features<kBits>& features1, const Features<kBits>& features2, const std::vector<Match>& unguided,
+                 StageModel& stage, bool fit) const {
     const auto key = [](const Match& m) { return std::make_pair(m.query, m.train); };
     std::set<std::pair<int, int>> own, present;
     for (const Match& m : unguided) own.insert(key(m));
@@ -260,7 +260,8 @@ class TwoViewMatcher {
       if (!fitted.success) return;
     } else {
       fitted.homography = stage.model.homography;
-      fitted.inliers = transfer_inliers(points.points1, points.points2, fitted.homography, options_.final_fit->max_error);
+      fitted.inliers =
+          transfer_inliers(points.points1, points.points2, fitted.homography, options_.final_fit->max_error);
       fitted.inlier_count = static_cast<int>(std::count(fitted.inliers.begin(), fitted.inliers.end(), 1));
     }
     stage.matches.clear();
@@ -311,9 +312,9 @@ class TwoViewMatcher {
       const cv::KeyPoint& k = features1.keypoints[static_cast<std::size_t>(stage.matches[i].query)];
       scales[i] = std::max(1.0f, k.size / Descriptor::kPatchSize);
     }
-    AlignedCorrespondences aligned = align_correspondences(image1, image2, stage.points.points1, stage.points.points2,
-                                                           scales, stage.model.homography,
-                                                           *options_.align_correspondences);
+    AlignedCorrespondences aligned =
+        align_correspondences(image1, image2, stage.points.points1, stage.points.points2, scales,
+                              stage.model.homography, *options_.align_correspondences);
     stage.aligned_count = aligned.aligned_count;
     stage.points.points2 = std::move(aligned.points2);
     const std::optional<HomographyModel> current = HomographyModel::from_pixels(stage.model.homography);

@@ -54,7 +54,7 @@
 // GCC checks the ABI of a 256-bit argument or result (-Wpsabi) of a lambda or template in the
 // region where it instantiates it, after the region, and would warn of a change that cannot happen:
 // such functions are called only from the region.
-#define AFFINE_ORB_TARGET_AVX2_BEGIN                                                 \
+#define AFFINE_ORB_TARGET_AVX2_BEGIN                                                                \
   _Pragma("GCC push_options") _Pragma("GCC target(\"avx2,popcnt\")") _Pragma("GCC diagnostic push") \
       _Pragma("GCC diagnostic ignored \"-Wpsabi\"")
 #define AFFINE_ORB_TARGET_AVX2_END _Pragma("GCC diagnostic pop") _Pragma("GCC pop_options")

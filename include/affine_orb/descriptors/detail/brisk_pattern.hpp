@@ -70,8 +70,8 @@ inline int brisk_box_side(double sigma) {
 /// - centre_sigma: σ of the centre point, level pixels;
 /// - max_short, min_long: δ_max and δ_min in level pixels; a pair is short when its length is
 ///   < max_short and long when its length is > min_long.
-inline BriskPattern make_brisk_pattern(double pattern_scale, double sigma_factor, double centre_sigma,
-                                       double max_short, double min_long) {
+inline BriskPattern make_brisk_pattern(double pattern_scale, double sigma_factor, double centre_sigma, double max_short,
+                                       double min_long) {
   BriskPattern pattern;
   for (std::size_t k = 0; k < kBriskRingRadii.size(); ++k) {
     const double radius = pattern_scale * kBriskRingRadii[k];

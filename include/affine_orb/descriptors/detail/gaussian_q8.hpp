@@ -175,8 +175,8 @@ struct Q8Lanes {
 /// on SSE2 or NEON (Q8Lanes). The kernel is symmetric, so rows j and n − 1 − j are added before
 /// multiplying; 16-bit products and sums wrap, and the total is below 2^16, so it is exact.
 template <int kTaps>
-inline void gaussian_q8_v_128(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k,
-                              int n_runtime, std::int16_t* v) {
+inline void gaussian_q8_v_128(const std::uint8_t* const* rows, int x0, int width, const std::uint16_t* k, int n_runtime,
+                              std::int16_t* v) {
   using L = Q8Lanes;
   const int n = kTaps > 0 ? kTaps : n_runtime;
   if (width < 8) {

@@ -183,8 +183,7 @@ inline CentroidMoments centroid_moments_avx2(const std::uint8_t* center, std::si
     for (int v = 1; v <= d.radius; ++v) {
       for (std::size_t j = 0; j < chunks; ++j) {
         const std::size_t k = static_cast<std::size_t>(v) * chunks + j;
-        add_row_pair_avx2(center + v * row + d.x[j], center - v * row + d.x[j], d.u[k].data(), d.v[k].data(), m10,
-                          m01);
+        add_row_pair_avx2(center + v * row + d.x[j], center - v * row + d.x[j], d.u[k].data(), d.v[k].data(), m10, m01);
       }
     }
   }

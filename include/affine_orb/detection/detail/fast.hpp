@@ -13,8 +13,8 @@
 #include <opencv2/core.hpp>
 
 #include "affine_orb/core/detail/check.hpp"
-#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/detail/simd.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/detection/corner.hpp"
 
 namespace affine_orb {

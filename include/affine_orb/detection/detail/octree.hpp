@@ -61,8 +61,8 @@ struct OctreeNode {
 /// Buffers of distribute_octree(), reused across calls. Nodes are numbered in creation order.
 struct OctreeWorkspace {
   std::vector<OctreeNode> nodes;
-  std::vector<int> keys;     ///< candidate indices, each node's contiguous and in input order
-  std::vector<int> scratch;  ///< the partition buffer of a division
+  std::vector<int> keys;                      ///< candidate indices, each node's contiguous and in input order
+  std::vector<int> scratch;                   ///< the partition buffer of a division
   std::vector<std::pair<int, int>> created;   ///< (count, node) of the last pass's nodes to divide
   std::vector<std::pair<int, int>> dividing;  ///< step 3's sorted copy of `created`
   std::vector<int> column_start;              ///< step 1: first key of each column, then its fill
@@ -96,10 +96,14 @@ inline void octree_push_front(OctreeWorkspace& w, int n) {
 /// Removes node n from the list and returns the node after it (-1 at the end).
 inline int octree_erase(OctreeWorkspace& w, int n) {
   const OctreeNode node = w.nodes[static_cast<std::size_t>(n)];
-  if (node.prev >= 0) w.nodes[static_cast<std::size_t>(node.prev)].next = node.next;
-  else w.head = node.next;
-  if (node.next >= 0) w.nodes[static_cast<std::size_t>(node.next)].prev = node.prev;
-  else w.tail = node.prev;
+  if (node.prev >= 0)
+    w.nodes[static_cast<std::size_t>(node.prev)].next = node.next;
+  else
+    w.head = node.next;
+  if (node.next >= 0)
+    w.nodes[static_cast<std::size_t>(node.next)].prev = node.prev;
+  else
+    w.tail = node.prev;
   --w.size;
   return node.next;
 }
@@ -199,10 +203,11 @@ inline void octree_divide_largest(OctreeWorkspace& w, const std::vector<cv::Poin
       std::sort(w.dividing.begin(), w.dividing.end());
     } else {
       const std::vector<OctreeNode>& nodes = w.nodes;
-      std::sort(w.dividing.begin(), w.dividing.end(), [&nodes](const std::pair<int, int>& a, const std::pair<int, int>& b) {
-        if (a.first != b.first) return a.first < b.first;
-        return nodes[static_cast<std::size_t>(a.second)].x0 < nodes[static_cast<std::size_t>(b.second)].x0;
-      });
+      std::sort(w.dividing.begin(), w.dividing.end(),
+                [&nodes](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+                  if (a.first != b.first) return a.first < b.first;
+                  return nodes[static_cast<std::size_t>(a.second)].x0 < nodes[static_cast<std::size_t>(b.second)].x0;
+                });
     }
     for (std::size_t j = w.dividing.size(); j-- > 0;) {
       const int n = w.dividing[j].second;

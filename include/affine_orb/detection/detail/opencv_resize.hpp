@@ -133,7 +133,9 @@ inline void resize_row_x_sse2(const std::uint8_t* row, const CvResizeAxis& x, in
   const int* second = x.second.data();
   const std::int16_t* pairs = x.pairs.data();
   for (; d + 4 <= m; d += 4) {
-    const auto pair = [&](int k) { return static_cast<int>(row[first[d + k]]) | (static_cast<int>(row[second[d + k]]) << 16); };
+    const auto pair = [&](int k) {
+      return static_cast<int>(row[first[d + k]]) | (static_cast<int>(row[second[d + k]]) << 16);
+    };
     const __m128i pixels = _mm_set_epi32(pair(3), pair(2), pair(1), pair(0));
     const __m128i weights = _mm_loadu_si128(reinterpret_cast<const __m128i*>(pairs + 2 * d));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + d), _mm_madd_epi16(pixels, weights));
@@ -159,7 +161,8 @@ inline void resize_row_x_avx2(const std::uint8_t* row, const CvResizeAxis& x, in
     }
     const __m256i bytes =
         _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x.window[b])));
-    const __m256i lanes = _mm256_shuffle_epi8(bytes, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x.spread[b].data())));
+    const __m256i lanes =
+        _mm256_shuffle_epi8(bytes, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x.spread[b].data())));
     const __m256i weights = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x.pairs.data() + 2 * d0));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d0), _mm256_madd_epi16(lanes, weights));
   }

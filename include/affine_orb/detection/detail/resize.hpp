@@ -20,8 +20,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/detail/simd.hpp"
+#include "affine_orb/core/row_spans.hpp"
 
 namespace affine_orb::detail {
 

@@ -124,9 +124,9 @@ AFFINE_ORB_TARGET_AVX2_END
 /// mark_row_scalar() with the widest lanes the CPU runs: 32 with AVX2, 16 with SSE2 or NEON. The
 /// lanes read up to 32 columns past x1 of the score map and of the drop masks
 /// (kCellMaximaPadding).
-inline void mark_row(const cv::Mat& scores, int y, bool top, bool bottom, int x0, int x1,
-                     const std::uint8_t* drop_left, const std::uint8_t* drop_right, int strong_floor, int weak_floor,
-                     std::uint64_t* strong, std::uint64_t* weak) {
+inline void mark_row(const cv::Mat& scores, int y, bool top, bool bottom, int x0, int x1, const std::uint8_t* drop_left,
+                     const std::uint8_t* drop_right, int strong_floor, int weak_floor, std::uint64_t* strong,
+                     std::uint64_t* weak) {
 #if AFFINE_ORB_AVX2
   if (cpu_has_avx2()) {
     mark_row_avx2(scores, y, top, bottom, x0, x1, drop_left, drop_right, strong_floor, weak_floor, strong, weak);

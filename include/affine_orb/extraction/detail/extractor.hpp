@@ -13,8 +13,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/core/features.hpp"
+#include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/descriptors/descriptor.hpp"
 #include "affine_orb/detection/detector.hpp"
 #include "affine_orb/detection/distribution.hpp"
@@ -208,7 +208,7 @@ inline cv::Size largest_tilted(const std::vector<AffineView>& views) {
 /// least `min_threshold` and lies where the mask allows (ties: the nearer pixel, then raster
 /// order).
 inline std::optional<cv::Point2f> snap_to_corner(const Pyramid& original, cv::Point2f point, int o, int radius,
-                                                   int min_threshold, const cv::Mat& mask) {
+                                                 int min_threshold, const cv::Mat& mask) {
   const cv::Mat& level = original.level(o);
   const cv::Size base = original.level(0).size();
   const double rx = static_cast<double>(base.width) / level.cols;
@@ -300,9 +300,8 @@ void describe_level(const Descriptor& descriptor, const AffineView& view, const 
       position = cv::Point2f(static_cast<float>(q.x), static_cast<float>(q.y));
     }
     if (!identity && options.snap_to_corners) {
-      if (const std::optional<cv::Point2f> snapped = snap_to_corner(original, position, octave,
-                                                                    options.snap_to_corners->radius,
-                                                                    options.detector.min_threshold, mask)) {
+      if (const std::optional<cv::Point2f> snapped = snap_to_corner(
+              original, position, octave, options.snap_to_corners->radius, options.detector.min_threshold, mask)) {
         position = *snapped;
       }
     }

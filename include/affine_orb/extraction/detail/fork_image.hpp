@@ -134,14 +134,14 @@ struct ForkCells {
 /// The FAST candidates of one level as the fork finds them (file comment), in the fork's order:
 /// cells row by row, raster order within a cell. `storage` holds the score map and `maxima` the
 /// local maxima of a row of cells, both reused across calls.
-inline void detect_in_fork_cells(const cv::Mat& level, const ForkCells& cells, int initial_threshold,
-                                 int min_threshold, cv::Mat& storage, CellMaximaWork& maxima,
-                                 std::vector<cv::Point2f>& points, std::vector<float>& responses) {
+inline void detect_in_fork_cells(const cv::Mat& level, const ForkCells& cells, int initial_threshold, int min_threshold,
+                                 cv::Mat& storage, CellMaximaWork& maxima, std::vector<cv::Point2f>& points,
+                                 std::vector<float>& responses) {
   points.clear();
   responses.clear();
   if (cells.empty()) return;
-  const cv::Rect region(kForkRegionBorder + kFastRadius, kForkRegionBorder + kFastRadius,
-                        cells.width - 2 * kFastRadius, cells.height - 2 * kFastRadius);
+  const cv::Rect region(kForkRegionBorder + kFastRadius, kForkRegionBorder + kFastRadius, cells.width - 2 * kFastRadius,
+                        cells.height - 2 * kFastRadius);
   if (region.width <= 0 || region.height <= 0) return;
   cv::Mat scores = padded_score_map(storage, level.size());
   score_rect(level, region, min_threshold, scores);
@@ -183,11 +183,11 @@ struct ForkImageWork {
 template <class D, class = void>
 struct HasOrientationDegrees : std::false_type {};
 template <class D>
-struct HasOrientationDegrees<
-    D, std::void_t<decltype(std::declval<const D&>().orientation_degrees(std::declval<const typename D::LevelData&>(),
-                                                                         cv::Point2f())),
-                   decltype(std::declval<const D&>().describe_rotated(std::declval<const typename D::LevelData&>(),
-                                                                      cv::Point2f(), 0.0f, 0.0f))>>
+struct HasOrientationDegrees<D,
+                             std::void_t<decltype(std::declval<const D&>().orientation_degrees(
+                                             std::declval<const typename D::LevelData&>(), cv::Point2f())),
+                                         decltype(std::declval<const D&>().describe_rotated(
+                                             std::declval<const typename D::LevelData&>(), cv::Point2f(), 0.0f, 0.0f))>>
     : std::true_type {};
 
 /// Drops the candidates of level l whose level-0 position p·s^l the mask pixel nearest to it masks.

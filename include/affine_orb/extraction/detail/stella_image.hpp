@@ -232,8 +232,7 @@ inline const cv::Mat& stella_rectangle_mask(const std::vector<MaskRectangle>& re
   };
   for (const MaskRectangle& r : rectangles) {
     cv::rectangle(mask, cv::Point(at(size.width, r.x_min), at(size.height, r.y_min)),
-                  cv::Point(at(size.width, r.x_max), at(size.height, r.y_max)), cv::Scalar(0), cv::FILLED,
-                  cv::LINE_AA);
+                  cv::Point(at(size.width, r.x_max), at(size.height, r.y_max)), cv::Scalar(0), cv::FILLED, cv::LINE_AA);
   }
   return mask;
 }
@@ -241,8 +240,8 @@ inline const cv::Mat& stella_rectangle_mask(const std::vector<MaskRectangle>& re
 /// Buffers of stella's extraction of an image beyond the forks' (ForkImageWork), reused across
 /// frames.
 struct StellaImageWork {
-  std::vector<int> best;     ///< per grid cell, its strongest candidate
-  cv::Mat rectangle_mask;    ///< StellaVslamKeypoints::mask_rectangles at the last image size
+  std::vector<int> best;   ///< per grid cell, its strongest candidate
+  cv::Mat rectangle_mask;  ///< StellaVslamKeypoints::mask_rectangles at the last image size
 };
 
 /// stella's keypoints of pyramid level l (`level`) into `out`, in its order (file comment); `mask`
@@ -256,13 +255,13 @@ void extract_stella_level(const Descriptor& descriptor, const cv::Mat& level, in
   const StellaCells cells(level.size());
   detect_in_stella_cells(level, cells, factor, options.detector, mask, work.score_storage, work.maxima, work.points,
                          work.responses);
-  const int side =
-      static_cast<int>(std::sqrt(static_cast<double>(std::get<StellaVslamKeypoints>(options.image_keypoints).min_size)));
+  const int side = static_cast<int>(
+      std::sqrt(static_cast<double>(std::get<StellaVslamKeypoints>(options.image_keypoints).min_size)));
   select_stella_grid(work.points, work.responses, cells.width, cells.height, side, factor, stella.best, work.kept);
   if (work.kept.empty()) return;
   const cv::Point2f corner(static_cast<float>(kStellaRegionBorder), static_cast<float>(kStellaRegionBorder));
-  append_fork_keypoints(descriptor, level, l, factor, corner, work.kept, work.points, work.responses,
-                        StellaRotation{}, describe_points, data, out);
+  append_fork_keypoints(descriptor, level, l, factor, corner, work.kept, work.points, work.responses, StellaRotation{},
+                        describe_points, data, out);
 }
 
 /// stella's keypoints of `image` into `levels`, one record per pyramid level, on `pyramid`, which
@@ -286,9 +285,9 @@ void extract_stella_image(const Descriptor& descriptor, const cv::Mat& image, co
 /// system does.
 template <class Descriptor, int Bits>
 void extract_slam_image(const Descriptor& descriptor, const cv::Mat& image, const cv::Mat& mask,
-                        const ExtractorOptions& options, Pyramid& pyramid, ForkImageWork& work,
-                        StellaImageWork& stella, std::vector<cv::Point2f>& describe_points,
-                        typename Descriptor::LevelData& data, std::vector<LevelWork<Bits>>& levels) {
+                        const ExtractorOptions& options, Pyramid& pyramid, ForkImageWork& work, StellaImageWork& stella,
+                        std::vector<cv::Point2f>& describe_points, typename Descriptor::LevelData& data,
+                        std::vector<LevelWork<Bits>>& levels) {
   if (std::holds_alternative<StellaVslamKeypoints>(options.image_keypoints)) {
     extract_stella_image(descriptor, image, mask, options, pyramid, work, stella, describe_points, data, levels);
   } else {

@@ -9,9 +9,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "affine_orb/views/affine_views.hpp"
 #include "affine_orb/core/row_spans.hpp"
 #include "affine_orb/detection/pyramid.hpp"
+#include "affine_orb/views/affine_views.hpp"
 
 namespace affine_orb::detail {
 

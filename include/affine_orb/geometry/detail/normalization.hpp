@@ -23,8 +23,7 @@ inline constexpr double kMinMeanSpreadRelative = 1e-12;
 /// Hartley's normalising similarity T (Hartley, "In defense of the eight-point algorithm", PAMI
 /// 1997, Sec. 5): T x moves the centroid of `points` to the origin and scales them so that their
 /// mean distance to it is √2. Returns nullopt when the points (all `count` of them) coincide.
-inline std::optional<Eigen::Matrix3d> hartley_normalization(const Eigen::Vector2d* points,
-                                                            std::size_t count) {
+inline std::optional<Eigen::Matrix3d> hartley_normalization(const Eigen::Vector2d* points, std::size_t count) {
   if (count == 0) return std::nullopt;
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   for (std::size_t i = 0; i < count; ++i) centroid += points[i];
@@ -74,11 +73,9 @@ struct NormalizedCorrespondences {
 /// coordinate is finite (std::invalid_argument otherwise; `who` names the caller), and normalises
 /// each image's points with its own Hartley similarity.
 inline NormalizedCorrespondences normalize_correspondences(const std::vector<cv::Point2f>& points1,
-                                                           const std::vector<cv::Point2f>& points2,
-                                                           const char* who) {
-  require(points1.size() == points2.size(),
-          std::string(who) + ": points1 has " + std::to_string(points1.size()) + " points but points2 has " +
-              std::to_string(points2.size()));
+                                                           const std::vector<cv::Point2f>& points2, const char* who) {
+  require(points1.size() == points2.size(), std::string(who) + ": points1 has " + std::to_string(points1.size()) +
+                                                " points but points2 has " + std::to_string(points2.size()));
   NormalizedCorrespondences c;
   const std::size_t n = points1.size();
   c.pixels1.resize(n);

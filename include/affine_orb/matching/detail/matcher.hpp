@@ -66,7 +66,7 @@ inline constexpr int kLaneWords = static_cast<int>(sizeof(V) / sizeof(std::uint6
 /// Releases what lane_array() allocates.
 template <class V>
 struct LaneArrayDelete {
-  void operator()(V* p) const noexcept { ::operator delete(p, std::align_val_t{sizeof(V)}); }
+  void operator()(V* p) const noexcept { ::operator delete (p, std::align_val_t{sizeof(V)}); }
 };
 
 /// `n` lane vectors V, uninitialised, aligned to sizeof(V). A std::vector<V> would not do for the
@@ -78,7 +78,7 @@ using LaneArray = std::unique_ptr<V[], LaneArrayDelete<V>>;
 
 template <class V>
 LaneArray<V> lane_array(std::size_t n) {
-  return LaneArray<V>(static_cast<V*>(::operator new(n * sizeof(V), std::align_val_t{sizeof(V)})));
+  return LaneArray<V>(static_cast<V*>(::operator new (n * sizeof(V), std::align_val_t{sizeof(V)})));
 }
 
 /// Transposes a 64x64 bit matrix in place: afterwards bit c of m[r] is what bit r of m[c] was.

@@ -73,8 +73,8 @@ AFFINE_ORB_TARGET_AVX2_BEGIN
 /// hamming_row_generic() with the POPCNT instruction, compiled for it whatever the build flags;
 /// call only where cpu_has_avx2() (which checks POPCNT too).
 template <std::size_t N>
-void hamming_row_popcnt(const std::array<std::uint64_t, N>& q, const std::array<std::uint64_t, N>* train,
-                        std::size_t n, int* out) noexcept {
+void hamming_row_popcnt(const std::array<std::uint64_t, N>& q, const std::array<std::uint64_t, N>* train, std::size_t n,
+                        int* out) noexcept {
   for (std::size_t j = 0; j < n; ++j) {
     int d = 0;
     for (std::size_t w = 0; w < N; ++w) d += __builtin_popcountll(q[w] ^ train[j][w]);

@@ -13,7 +13,6 @@
 // Usage: bench_brisk [image] [runs]   (defaults: <AFFINE_ORB_DATA_DIR>/oxford/graf/img1.png, 51)
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -22,24 +21,15 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "affine_orb/descriptors/brisk.hpp"
+#include "bench_common.hpp"
 
 namespace {
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  return values[values.size() / 2];
-}
-
-template <class F>
-double milliseconds(F&& f) {
-  const auto start = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
+using affine_orb::bench::median;
+using affine_orb::bench::milliseconds;
 
 /// cv::FAST (threshold 20, non-maximum suppression) keypoints of `image` at least `margin` px
 /// from its borders.
@@ -115,13 +105,9 @@ std::string angle_note(const Runs& r) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string path = argc > 1 ? argv[1] : std::string(AFFINE_ORB_DATA_DIR) + "/oxford/graf/img1.png";
+  const std::string path = argc > 1 ? argv[1] : affine_orb::bench::data_dir() + "/oxford/graf/img1.png";
   const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 51;
-  const cv::Mat original = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (original.empty()) {
-    std::fprintf(stderr, "cannot read %s\n", path.c_str());
-    return 1;
-  }
+  const cv::Mat original = affine_orb::bench::read_gray_or_exit(path);
   cv::setNumThreads(1);
   cv::Mat image;
   cv::resize(original, image, cv::Size(640, 480), 0, 0, cv::INTER_AREA);

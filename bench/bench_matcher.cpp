@@ -11,7 +11,6 @@
 // Usage: bench_matcher [runs (default 21)] [data dir (default the configured AFFINE_ORB_DATA_DIR)]
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -21,28 +20,17 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "affine_orb/core/detail/simd.hpp"
 #include "affine_orb/core/features.hpp"
 #include "affine_orb/matching/matcher.hpp"
+#include "bench_common.hpp"
 
 namespace {
 
+using affine_orb::bench::median;
+using affine_orb::bench::milliseconds;
 using Descriptors = std::vector<affine_orb::BinaryDescriptor<256>>;
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-template <class F>
-double milliseconds(F&& f) {
-  const auto start = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 Descriptors from_mat(const cv::Mat& mat) {
   Descriptors d(static_cast<std::size_t>(mat.rows));
@@ -89,7 +77,7 @@ void run(const char* name, const cv::Mat& query_mat, const cv::Mat& train_mat, i
 
 int main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 21;
-  const std::string data_dir = argc > 2 ? argv[2] : AFFINE_ORB_DATA_DIR;
+  const std::string data_dir = argc > 2 ? argv[2] : affine_orb::bench::data_dir();
   const std::string search = std::string("bit-sliced search, ") +
                              (AFFINE_ORB_KNN2_LANES256 && affine_orb::detail::cpu_has_avx2() ? "256" : "128") +
                              "-bit lanes";
@@ -114,12 +102,8 @@ int main(int argc, char** argv) {
   run("random 256-bit", random_query, random_train, runs);
 
   const std::string graf = data_dir + "/oxford/graf/";
-  const cv::Mat img1 = cv::imread(graf + "img1.png", cv::IMREAD_GRAYSCALE);
-  const cv::Mat img3 = cv::imread(graf + "img3.png", cv::IMREAD_GRAYSCALE);
-  if (img1.empty() || img3.empty()) {
-    std::fprintf(stderr, "cannot read %simg1.png / img3.png\n", graf.c_str());
-    return 1;
-  }
+  const cv::Mat img1 = affine_orb::bench::read_gray_or_exit(graf + "img1.png");
+  const cv::Mat img3 = affine_orb::bench::read_gray_or_exit(graf + "img3.png");
   const cv::Ptr<cv::ORB> orb = cv::ORB::create(2000);
   std::vector<cv::KeyPoint> keypoints1;
   std::vector<cv::KeyPoint> keypoints3;

@@ -35,11 +35,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <random>
-#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -57,9 +55,16 @@
 #include "affine_orb/geometry/model_selection.hpp"
 #include "affine_orb/geometry/relative_pose.hpp"
 #include "affine_orb/matching/affine_matching.hpp"
+#include "bench_common.hpp"
+#include "cli.hpp"
+#include "homography_io.hpp"
 #include "sequence_io.hpp"
 
 namespace {
+
+using affine_orb::bench::median;
+using affine_orb::bench::read_gray_or_exit;
+using affine_orb::examples::read_homography;
 
 constexpr int kWidth = 640;
 constexpr int kHeight = 480;
@@ -161,12 +166,6 @@ Eigen::Matrix3d to_eigen(const cv::Mat& m) {
   return out;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 // "87 %": share of non-zero entries.
 std::string percent(const std::vector<double>& flags) {
   double sum = 0.0;
@@ -177,10 +176,6 @@ std::string percent(const std::vector<double>& flags) {
 struct Figures {
   std::vector<double> time_ms, h_corner, h_recall, f_distance, f_recall, homography_chosen;
 };
-
-double milliseconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 /// A pair with its label and what is known of its geometry.
 struct LabelledPair {
@@ -229,59 +224,43 @@ void match_into(LabelledPair& p, affine_orb::Extractor<affine_orb::Rbrief>& extr
   }
 }
 
-cv::Mat read_gray(const std::string& path) {
-  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) throw std::runtime_error("cannot read " + path);
-  return image;
-}
-
-Eigen::Matrix3d read_oxford_homography(const std::string& path) {
-  std::ifstream in(path);
-  Eigen::Matrix3d h;
-  for (int i = 0; i < 9; ++i) {
-    if (!(in >> h(i / 3, i % 3))) throw std::runtime_error("cannot read " + path);
-  }
-  return h;
-}
-
 using PairExtractor = affine_orb::Extractor<affine_orb::Rbrief>;
 
 /// Every Oxford pair 1->2 ... 1->6 with its ground-truth homography, then opencv-doc's graf1->graf3
 /// (with its homography) and box->box_in_scene; all planar.
 void add_planar_pairs(PairExtractor& extractor, std::vector<LabelledPair>& pairs) {
-  const std::string data = AFFINE_ORB_DATA_DIR;
-  const std::string doc = AFFINE_ORB_OPENCV_SAMPLES_DIR;
+  const std::string data = affine_orb::bench::data_dir();
+  const std::string doc = affine_orb::bench::opencv_samples_dir();
   for (const std::string sequence : {"graf", "boat", "bark", "bikes", "trees", "leuven"}) {
-    const cv::Mat a = read_gray(data + "/oxford/" + sequence + "/img1.png");
+    const cv::Mat a = read_gray_or_exit(data + "/oxford/" + sequence + "/img1.png");
     for (int n = 2; n <= 6; ++n) {
       LabelledPair p = labelled(sequence + " 1->" + std::to_string(n), "planar", a);
-      match_into(p, extractor, a, read_gray(data + "/oxford/" + sequence + "/img" + std::to_string(n) + ".png"));
-      p.homography = read_oxford_homography(data + "/oxford/" + sequence + "/H1to" + std::to_string(n) + "p");
+      match_into(p, extractor, a,
+                 read_gray_or_exit(data + "/oxford/" + sequence + "/img" + std::to_string(n) + ".png"));
+      p.homography =
+          to_eigen(cv::Mat(read_homography(data + "/oxford/" + sequence + "/H1to" + std::to_string(n) + "p")));
       pairs.push_back(p);
     }
   }
-  const cv::Mat a = read_gray(doc + "/graf1.png");
+  const cv::Mat a = read_gray_or_exit(doc + "/graf1.png");
   LabelledPair p = labelled("opencv-doc graf1->graf3", "planar", a);
-  match_into(p, extractor, a, read_gray(doc + "/graf3.png"));
-  cv::FileStorage fs(doc + "/H1to3p.xml", cv::FileStorage::READ);
-  cv::Mat h;
-  fs.getFirstTopLevelNode() >> h;
-  if (h.rows == 3 && h.cols == 3) p.homography = to_eigen(h);
+  match_into(p, extractor, a, read_gray_or_exit(doc + "/graf3.png"));
+  p.homography = to_eigen(cv::Mat(read_homography(doc + "/H1to3p.xml")));
   pairs.push_back(p);
-  const cv::Mat box = read_gray(doc + "/box.png");
+  const cv::Mat box = read_gray_or_exit(doc + "/box.png");
   LabelledPair q = labelled("opencv-doc box->box_in_scene", "planar", box);
-  match_into(q, extractor, box, read_gray(doc + "/box_in_scene.png"));
+  match_into(q, extractor, box, read_gray_or_exit(doc + "/box_in_scene.png"));
   pairs.push_back(q);
 }
 
 /// Pure rotations: a photo and its image by a camera turned by R about its centre, x2 ~ K R K^-1 x1.
 void add_rotation_pairs(PairExtractor& extractor, std::vector<LabelledPair>& pairs) {
-  const std::string data = AFFINE_ORB_DATA_DIR;
+  const std::string data = affine_orb::bench::data_dir();
   const std::array<std::pair<std::string, double>, 4> rotated = {
       std::make_pair("graf", 6.0), std::make_pair("boat", 8.0), std::make_pair("bikes", 10.0),
       std::make_pair("leuven", 12.0)};
   for (const auto& [sequence, degrees] : rotated) {
-    const cv::Mat a = read_gray(data + "/oxford/" + sequence + "/img1.png");
+    const cv::Mat a = read_gray_or_exit(data + "/oxford/" + sequence + "/img1.png");
     affine_orb::PinholeCamera camera{0.9 * a.cols, 0.9 * a.cols, (a.cols - 1) / 2.0, (a.rows - 1) / 2.0};
     Eigen::Matrix3d k;
     k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
@@ -322,7 +301,7 @@ LabelledPair kitti_pair(PairExtractor& extractor, const affine_orb::examples::Se
 /// forward motion parallax grows with the baseline, and 2 m makes the scene clearly 3-D for the
 /// near half of the image (road, parked cars, walls).
 void add_kitti_pairs(PairExtractor& extractor, std::vector<LabelledPair>& pairs) {
-  const std::string data = AFFINE_ORB_DATA_DIR;
+  const std::string data = affine_orb::bench::data_dir();
   const affine_orb::examples::Sequence kitti = affine_orb::examples::read_kitti(data + "/kitti06");
   for (const int gap : {1, 2, 4, 8}) {
     for (int i = 0; i + gap < static_cast<int>(kitti.frames.size()); i += 10) {
@@ -491,10 +470,10 @@ void run_opencv(const Data& data, bool is_planar, SyntheticFigures& out) {
   cv::Mat h_mask, f_mask;
   const auto start_h = std::chrono::steady_clock::now();
   const cv::Mat h = cv::findHomography(data.points1, data.points2, cv::RANSAC, kOpenCvThreshold, h_mask);
-  const double h_ms = milliseconds_since(start_h);
+  const double h_ms = affine_orb::examples::ms_since(start_h);
   const auto start_f = std::chrono::steady_clock::now();
   const cv::Mat f = cv::findFundamentalMat(data.points1, data.points2, cv::FM_RANSAC, kOpenCvThreshold, 0.99, f_mask);
-  const double f_ms = milliseconds_since(start_f);
+  const double f_ms = affine_orb::examples::ms_since(start_f);
   (is_planar ? out.cv_h_planar : out.cv_h_general).push_back(h_ms);
   (is_planar ? out.cv_f_planar : out.cv_f_general).push_back(f_ms);
   Figures& peer = (is_planar ? out.planar : out.general)[2];
@@ -520,7 +499,7 @@ SyntheticFigures run_synthetic(int runs) {
         const auto start = std::chrono::steady_clock::now();
         const affine_orb::ModelSelectionResult r = affine_orb::select_model(data.points1, data.points2, ours[which]);
         Figures& f = figures[which];
-        f.time_ms.push_back(milliseconds_since(start));
+        f.time_ms.push_back(affine_orb::examples::ms_since(start));
         f.homography_chosen.push_back(r.model == affine_orb::GeometricModel::kHomography ? 1.0 : 0.0);
         if (is_planar) {
           f.h_corner.push_back(r.homography_found ? corner_error(r.homography, data.h) : std::nan(""));

@@ -93,20 +93,22 @@ TEST_CASE("duplicate correspondences are removed exactly as defined") {
 namespace {
 
 /// Features with planted near-duplicates: each image-1 descriptor has one to three copies in
-/// image 2, a few more bits off each, at nearly the same image-2 location.
+/// image 2, more bits off each, at nearly the same image-2 location, and every fourth a confuser
+/// elsewhere; image 2 holds about 450, more than the rescans of the location-aware ratio
+/// test read at a time (256).
 std::pair<affine_orb::Features<256>, affine_orb::Features<256>> planted_copies() {
   std::mt19937_64 rng(23);
   affine_orb::Features<256> a;
   affine_orb::Features<256> b;
-  for (int i = 0; i < 80; ++i) {
+  for (int i = 0; i < 200; ++i) {
     affine_orb::BinaryDescriptor<256> d{rng(), rng(), rng(), rng()};
     a.descriptors.push_back(d);
-    a.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300)), 31.0f);
+    a.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 1000), static_cast<float>(rng() % 1000)), 31.0f);
     a.views.push_back(0);
-    const cv::Point2f at(static_cast<float>(rng() % 300), static_cast<float>(rng() % 300));
+    const cv::Point2f at(static_cast<float>(rng() % 1000), static_cast<float>(rng() % 1000));
     for (int copy = 0; copy < 1 + i % 3; ++copy) {
       affine_orb::BinaryDescriptor<256> e = d;
-      for (int flip = 0; flip < 20 + 15 * copy; ++flip) {
+      for (int flip = 0; flip < 20 + (i % 4 == 0 ? 1 : 15) * copy; ++flip) {
         const unsigned bit = static_cast<unsigned>(rng() % 256);
         e[bit / 64] ^= 1ull << (bit % 64);
       }
@@ -114,6 +116,19 @@ std::pair<affine_orb::Features<256>, affine_orb::Features<256>> planted_copies()
       b.keypoints.emplace_back(at + cv::Point2f(static_cast<float>(copy), 0.5f * copy), 31.0f);
       b.views.push_back(copy);
     }
+  }
+  // After all of them, for every fourth image-1 descriptor (whose copies are one bit apart) a
+  // confuser elsewhere in image 2, a little farther than its copies: the runner-up outside the
+  // radius that decides the ratio test, last in the train set.
+  for (std::size_t i = 0; i < a.size(); i += 4) {
+    affine_orb::BinaryDescriptor<256> e = a.descriptors[i];
+    for (int flip = 0; flip < 22 + static_cast<int>(i % 3); ++flip) {
+      const unsigned bit = static_cast<unsigned>(rng() % 256);
+      e[bit / 64] ^= 1ull << (bit % 64);
+    }
+    b.descriptors.push_back(e);
+    b.keypoints.emplace_back(cv::Point2f(static_cast<float>(rng() % 1000), static_cast<float>(rng() % 1000)), 31.0f);
+    b.views.push_back(0);
   }
   return {a, b};
 }
@@ -147,7 +162,7 @@ std::vector<affine_orb::Match> naive_ratio_matches(const affine_orb::Features<25
       if (std::hypot(p.x - q.x, p.y - q.y) <= radius) continue;
       second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], b.descriptors[j]));
     }
-    if (!(best < 0.8 * second)) continue;
+    if (!(best < static_cast<double>(0.8f) * second)) continue;  // the ratio as MatcherOptions holds it
     if (cross && nearest(b.descriptors[j1], a).first != i) continue;
     expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
   }

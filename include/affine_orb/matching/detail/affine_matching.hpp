@@ -163,6 +163,30 @@ struct KnnSearches {
   std::vector<KnnMatch> backward;  ///< b against a[0, forward.size()) (with MatcherOptions::cross_check)
 };
 
+/// The rescan of match_excluding_duplicates() for a query whose two nearest train descriptors are
+/// duplicates of one point: whether `best` passes the ratio test against the nearest descriptor of
+/// b whose keypoint is not near() best's. The scan stops at the first such descriptor that fails
+/// it (a nearer one would fail it too), so the answer is that of a whole scan.
+template <int Bits, class Near>
+bool rescan_passes(const BinaryDescriptor<Bits>& query, const Features<Bits>& b, const Neighbour& best, float ratio,
+                   const Near& near, std::vector<int>& distances) {
+  constexpr std::size_t kChunk = 256;
+  distances.resize(kChunk);
+  for (std::size_t start = 0; start < b.size(); start += kChunk) {
+    const std::size_t n = std::min(kChunk, b.size() - start);
+    hamming_row(query, b.descriptors.data() + start, n, distances.data());
+    for (std::size_t j = 0; j < n; ++j) {
+      // The distance first: it rules out most j, and costs less than the radius test.
+      const int d = distances[j];
+      if (static_cast<double>(best.distance) >= static_cast<double>(ratio) * d &&
+          !near(best.train, static_cast<int>(start + j))) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 /// Global matching with the location-aware ratio test of AffineMatchOptions::ratio_exclusion_radius
 /// (`exclusion_radius`, pixels of image b).
 /// knn2() gives the best neighbour j1 and the runner-up; when the runner-up lies within the radius
@@ -194,15 +218,8 @@ std::vector<Match> match_excluding_duplicates(const Features<Bits>& a, const Fea
     if (k.count == 2 && near(k.best.train, k.second.train)) {
       test.count = 1;
       test.second = Neighbour{};
-      distances.resize(b.size());
-      hamming_row(a.descriptors[static_cast<std::size_t>(k.query)], b.descriptors.data(), b.size(), distances.data());
-      for (std::size_t j = 0; j < b.size(); ++j) {
-        // The distance first: it rules out most j, and costs less than the radius test.
-        const int d = distances[j];
-        if (d < test.second.distance && !near(k.best.train, static_cast<int>(j))) {
-          test.second = {static_cast<int>(j), d};
-          test.count = 2;
-        }
+      if (!rescan_passes(a.descriptors[static_cast<std::size_t>(k.query)], b, k.best, m.ratio, near, distances)) {
+        continue;
       }
     }
     if (!passes_ratio_test(test, m.ratio)) continue;

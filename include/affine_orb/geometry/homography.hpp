@@ -140,22 +140,19 @@ class HomographyEstimator {
     for (const std::uint8_t inlier : inliers) count += inlier != 0 ? 1 : 0;
     if (count < static_cast<std::size_t>(kSampleSize)) return std::nullopt;
     const Eigen::Matrix3d hn = data_.t2 * model.h * data_.t1_inverse;
-    Eigen::Matrix<double, Eigen::Dynamic, 9> a(2 * static_cast<Eigen::Index>(count), 9);
-    Eigen::Index r = 0;
+    // The normal matrix AᵀA accumulated equation by equation: no matrix of all the equations, so
+    // no allocation per call.
+    detail::Matrix9d normal = detail::Matrix9d::Zero();
     for (std::size_t i = 0; i < inliers.size(); ++i) {
       if (inliers[i] == 0) continue;
       const Eigen::Vector2d& x1 = data_.normalized1[i];
       const Eigen::Vector2d& x2 = data_.normalized2[i];
       const double w = std::abs(hn(2, 0) * x1.x() + hn(2, 1) * x1.y() + hn(2, 2));
-      double row1[9], row2[9];
-      detail::homography_equations(x1, x2, w > 0.0 && std::isfinite(w) ? 1.0 / w : 1.0, row1, row2);
-      for (int c = 0; c < 9; ++c) {
-        a(r, c) = row1[c];
-        a(r + 1, c) = row2[c];
-      }
-      r += 2;
+      Eigen::Matrix<double, 2, 9, Eigen::RowMajor> rows;
+      detail::homography_equations(x1, x2, w > 0.0 && std::isfinite(w) ? 1.0 / w : 1.0, rows.row(0).data(),
+                                   rows.row(1).data());
+      normal.noalias() += rows.transpose().lazyProduct(rows);
     }
-    const detail::Matrix9d normal = a.transpose() * a;
     const std::optional<detail::Vector9d> h = detail::smallest_eigenvector(normal);
     if (!h) return std::nullopt;
     return HomographyModel::from_pixels(data_.t2_inverse * detail::reshape_row_major(*h) * data_.t1);

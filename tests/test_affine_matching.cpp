@@ -382,7 +382,7 @@ std::vector<affine_orb::Match> naive_guided_matches(const affine_orb::Features<2
       if (squared(train.keypoints[j].pt, train.keypoints[j1].pt) <= exclusion * exclusion) continue;
       second = std::min(second, affine_orb::hamming_distance(a.descriptors[i], train.descriptors[j]));
     }
-    if (second != 1 << 30 && !(best < 0.8 * second)) continue;
+    if (second != 1 << 30 && !(best < static_cast<double>(0.8f) * second)) continue;
     expected.push_back({static_cast<int>(i), static_cast<int>(j1), best});
   }
   return expected;

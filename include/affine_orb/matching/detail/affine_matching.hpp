@@ -214,15 +214,13 @@ std::vector<Match> match_excluding_duplicates(const Features<Bits>& a, const Fea
   std::vector<int> distances;
   for (const KnnMatch& k : forward) {
     if (k.count == 0 || k.best.distance > m.max_distance) continue;
-    KnnMatch test = k;
     if (k.count == 2 && near(k.best.train, k.second.train)) {
-      test.count = 1;
-      test.second = Neighbour{};
       if (!rescan_passes(a.descriptors[static_cast<std::size_t>(k.query)], b, k.best, m.ratio, near, distances)) {
         continue;
       }
+    } else if (!passes_ratio_test(k, m.ratio)) {
+      continue;
     }
-    if (!passes_ratio_test(test, m.ratio)) continue;
     if (m.cross_check && backward[static_cast<std::size_t>(k.best.train)].best.train != k.query) continue;
     matches.push_back({k.query, k.best.train, k.best.distance});
   }

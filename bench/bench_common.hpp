@@ -55,9 +55,7 @@ inline void time_interleaved(std::vector<Method>& methods, int rounds) {
   for (Method& m : methods) m.run();
   for (int r = 0; r < rounds; ++r) {
     for (Method& m : methods) {
-      const auto start = std::chrono::steady_clock::now();
-      m.run();
-      m.ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      m.ms.push_back(milliseconds(m.run));
     }
   }
 }

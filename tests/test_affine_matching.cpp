@@ -38,6 +38,41 @@ std::vector<affine_orb::AffineMatchOptions> exclusion_and_cross_check() {
 
 }  // namespace
 
+TEST_CASE("the point grid visits every point within the radius, each once, cell by cell") {
+  // Clustered points (cells widen to one point per cell on average) and a point 1e30 px away (the
+  // cell count per side is bounded); queries inside, on cell borders and outside the points' box.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> wide(-20.0f, 120.0f), near(40.0f, 44.0f);
+  for (const bool far : {false, true}) {
+    CAPTURE(far);
+    std::vector<cv::Point2f> points(400);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      points[i] = i % 2 == 0 ? cv::Point2f(wide(rng), wide(rng)) : cv::Point2f(near(rng), near(rng));
+    }
+    points[7] = {std::numeric_limits<float>::quiet_NaN(), 3.0f};
+    if (far) points[9] = {1e30f, 1e30f};
+    for (const double side : {2.0, 7.5, 40.0}) {
+      affine_orb::detail::PointGrid grid;
+      grid.build(points, side);
+      for (int q = 0; q < 300; ++q) {
+        const cv::Point2f p = q % 3 == 0 ? points[static_cast<std::size_t>(q)] : cv::Point2f(wide(rng), wide(rng));
+        const double radius = side * (q % 4 + 1) / 4.0;
+        std::vector<int> visited;
+        grid.for_each_near(p, radius, [&](int i) { visited.push_back(i); });
+        std::vector<int> sorted = visited;
+        std::sort(sorted.begin(), sorted.end());
+        CHECK(std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end());
+        for (std::size_t i = 0; i < points.size(); ++i) {
+          const double dx = points[i].x - p.x, dy = points[i].y - p.y;
+          if (!(dx * dx + dy * dy <= radius * radius)) continue;
+          CAPTURE(i);
+          CHECK(std::binary_search(sorted.begin(), sorted.end(), static_cast<int>(i)));
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("duplicate correspondences are removed exactly as defined") {
   // Points in a 40 px square (many duplicates), then the same spread over 4e6 px with a few points
   // at ±1e30 and NaN (the grid's cells widen; a NaN point is never within the radius).

@@ -109,7 +109,7 @@ inline std::vector<Match> remove_duplicate_matches(std::vector<Match> matches, c
       const cv::Point2f& p = first[i];
       const cv::Point2f& q = points2[static_cast<std::size_t>(matches[i].train)];
       bool duplicate = false;
-      grid.for_each_near(p, [&](int k) {
+      grid.for_each_near(p, radius, [&](int k) {
         if (duplicate || !is_kept[static_cast<std::size_t>(k)]) return;
         const cv::Point2f& kp = first[static_cast<std::size_t>(k)];
         const cv::Point2f& kq = points2[static_cast<std::size_t>(matches[static_cast<std::size_t>(k)].train)];

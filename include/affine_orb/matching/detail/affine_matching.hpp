@@ -20,8 +20,9 @@ namespace affine_orb {
 namespace detail {
 
 /// Points bucketed into square cells over their bounding box (a counting sort: one index array,
-/// no allocation per cell), to visit the points near a position. Every point within `side` of a
-/// position lies in the 3 x 3 cells around it. Non-finite points are left out.
+/// no allocation per cell), to visit the points near a position: those within a radius up to
+/// `side` lie in the cells that meet the square of that half side around it. Non-finite points are
+/// left out.
 class PointGrid {
  public:
   /// Buckets `points` into cells of side `side` (> 0), widened to one point per cell on average
@@ -59,18 +60,23 @@ class PointGrid {
     }
   }
 
-  /// Calls fn(i) for every point i in the 3 x 3 cells around `p` (rows, then columns, then
-  /// increasing i within a cell); nothing for a non-finite `p`.
+  /// Calls fn(i) for every point i in the cells that meet the square of half side `radius` around
+  /// `p` (rows, then columns, then increasing i within a cell), which holds every point within
+  /// `radius` of `p`; nothing for a non-finite `p`. `radius` is at most the side build() was given,
+  /// so the square meets at most 3 x 3 cells, and mostly one: a point's duplicates lie in its own
+  /// cell unless it is near the cell's border.
   template <class Fn>
-  void for_each_near(const cv::Point2f& p, Fn fn) const {
+  void for_each_near(const cv::Point2f& p, double radius, Fn fn) const {
     if (columns_ == 0 || !finite(p)) return;
-    const double fx = std::floor((p.x - x0_) / side_);
-    const double fy = std::floor((p.y - y0_) / side_);
-    if (fx < -1.0 || fy < -1.0 || fx > columns_ || fy > rows_) return;
-    const int cx = static_cast<int>(fx);
-    const int cy = static_cast<int>(fy);
-    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, rows_ - 1); ++y) {
-      for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, columns_ - 1); ++x) {
+    const double x_low = std::floor((p.x - radius - x0_) / side_), x_high = std::floor((p.x + radius - x0_) / side_);
+    const double y_low = std::floor((p.y - radius - y0_) / side_), y_high = std::floor((p.y + radius - y0_) / side_);
+    if (x_high < 0.0 || y_high < 0.0 || x_low > columns_ - 1 || y_low > rows_ - 1) return;
+    const int x_first = static_cast<int>(std::max(x_low, 0.0));
+    const int x_last = static_cast<int>(std::min(x_high, columns_ - 1.0));
+    const int y_first = static_cast<int>(std::max(y_low, 0.0));
+    const int y_last = static_cast<int>(std::min(y_high, rows_ - 1.0));
+    for (int y = y_first; y <= y_last; ++y) {
+      for (int x = x_first; x <= x_last; ++x) {
         const int c = cell(x, y);
         for (int k = start_[static_cast<std::size_t>(c)]; k < start_[static_cast<std::size_t>(c) + 1]; ++k) {
           fn(index_[static_cast<std::size_t>(k)]);
@@ -249,7 +255,7 @@ std::vector<Match> match_gated(const Features<Bits>& a, const Features<Bits>& b,
     const cv::Point2f& p = predicted[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || std::abs(p.x) > 1e7f || std::abs(p.y) > 1e7f) continue;
     candidates.clear();
-    grid.for_each_near(p, [&](int j) {
+    grid.for_each_near(p, gate_radius, [&](int j) {
       if (squared(p, b.keypoints[static_cast<std::size_t>(j)].pt) > gate2) return;
       candidates.push_back({j, hamming_distance(a.descriptors[i], b.descriptors[static_cast<std::size_t>(j)])});
     });

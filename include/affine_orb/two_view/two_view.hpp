@@ -13,7 +13,6 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
-#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -242,13 +241,20 @@ class TwoViewMatcher {
   void fit_final(const Features<kBits>& features1, const Features<kBits>& features2, const std::vector<Match>& unguided,
                  StageModel& stage, bool fit) const {
     const auto key = [](const Match& m) { return std::make_pair(m.query, m.train); };
-    std::set<std::pair<int, int>> own, present;
-    for (const Match& m : unguided) own.insert(key(m));
+    const auto sorted_keys = [&](const std::vector<Match>& matches) {
+      std::vector<std::pair<int, int>> keys(matches.size());
+      std::transform(matches.begin(), matches.end(), keys.begin(), key);
+      std::sort(keys.begin(), keys.end());
+      return keys;
+    };
+    const std::vector<std::pair<int, int>> own = sorted_keys(unguided), present = sorted_keys(stage.matches);
+    const auto holds = [&](const std::vector<std::pair<int, int>>& keys, const Match& m) {
+      return std::binary_search(keys.begin(), keys.end(), key(m));
+    };
     std::vector<Match> candidates = stage.matches;
     MatchedPoints points = stage.points;
-    for (const Match& m : candidates) present.insert(key(m));
     for (const Match& m : unguided) {
-      if (present.count(key(m)) != 0) continue;
+      if (holds(present, m)) continue;
       candidates.push_back(m);
       points.points1.push_back(features1.keypoints[static_cast<std::size_t>(m.query)].pt);
       points.points2.push_back(features2.keypoints[static_cast<std::size_t>(m.train)].pt);
@@ -268,7 +274,7 @@ class TwoViewMatcher {
     stage.points = MatchedPoints{};
     stage.inliers.clear();
     for (std::size_t i = 0; i < candidates.size(); ++i) {
-      if (fitted.inliers[i] == 0 && own.count(key(candidates[i])) == 0) continue;
+      if (fitted.inliers[i] == 0 && !holds(own, candidates[i])) continue;
       stage.matches.push_back(candidates[i]);
       stage.points.points1.push_back(points.points1[i]);
       stage.points.points2.push_back(points.points2[i]);

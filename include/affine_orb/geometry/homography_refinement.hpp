@@ -85,11 +85,12 @@ inline std::vector<std::uint8_t> transfer_inliers(const NormalizedCorrespondence
 /// coordinates): Aᵢ the two DLT equations of correspondence i, Mᵢ the inverse of the covariance of
 /// their residual under isotropic pixel noise in both images (Sampson), wᵢ the Cauchy weight of
 /// its Sampson distance under Hn; correspondences outside max_error are left out. `used` counts
-/// the ones taken.
+/// the ones taken. The equations of x1 = (x, y) ↔ x2 = (u, v) are A = R ⊗ pᵀ with p = (x, y, 1)
+/// and R = [0 −1 v; 1 0 −u] (homography_equations()), so Aᵀ (w M) A = (Rᵀ w M R) ⊗ p pᵀ: a 3 x 3
+/// matrix times the 3 x 3 blocks of p pᵀ, accumulated on the upper blocks and mirrored at the end.
 inline Matrix9d sampson_normal_matrix(const NormalizedCorrespondences& data, const HomographyModel& model,
                                       const HomographyRefinementOptions& options, std::size_t& used) {
-  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> hn = data.t2 * model.h * data.t1_inverse;
-  const Eigen::Map<const Vector9d> h(hn.data());                    // row-major, as the DLT equations order it
+  const Eigen::Matrix3d hn = data.t2 * model.h * data.t1_inverse;
   const double s1 = 1.0 / data.t1(0, 0), s2 = 1.0 / data.t2(0, 0);  // normalised units → pixels
   const double inverse_c2 = 1.0 / (options.cauchy_scale * options.cauchy_scale);
   Matrix9d normal = Matrix9d::Zero();
@@ -98,10 +99,10 @@ inline Matrix9d sampson_normal_matrix(const NormalizedCorrespondences& data, con
     if (!within_transfer(data, i, model, options.max_error)) continue;
     const Eigen::Vector2d& a = data.normalized1[i];
     const Eigen::Vector2d& b = data.normalized2[i];
-    Eigen::Matrix<double, 2, 9, Eigen::RowMajor> rows;
-    homography_equations(a, b, 1.0, rows.row(0).data(), rows.row(1).data());
-    const Eigen::Vector2d residual = rows * h;
-    const double w3 = hn.row(2).dot(a.homogeneous());
+    const Eigen::Vector3d p = a.homogeneous();
+    const Eigen::Vector3d mapped = hn * p;
+    const Eigen::Vector2d residual(-mapped.y() + b.y() * mapped.z(), mapped.x() - b.x() * mapped.z());
+    const double w3 = mapped.z();
     // Jacobian of the residual with respect to (x1, y1, x2, y2) in pixels.
     Eigen::Matrix<double, 2, 4> j;
     j << (-hn(1, 0) + b.y() * hn(2, 0)) / s1, (-hn(1, 1) + b.y() * hn(2, 1)) / s1, 0.0, w3 / s2,
@@ -114,11 +115,19 @@ inline Matrix9d sampson_normal_matrix(const NormalizedCorrespondences& data, con
     if (!invertible || !m.allFinite()) continue;
     const double sampson_squared = residual.dot(m * residual);
     const double weight = 1.0 / (1.0 + sampson_squared * inverse_c2);
-    // Coefficient-wise products: at these sizes Eigen's default product takes its blocked
-    // matrix-matrix path, which costs several times more.
-    const Eigen::Matrix<double, 2, 9> weighted = (weight * m).lazyProduct(rows);
-    normal.noalias() += rows.transpose().lazyProduct(weighted);
+    Eigen::Matrix<double, 2, 3> r;
+    r << 0.0, -1.0, b.y(), 1.0, 0.0, -b.x();
+    const Eigen::Matrix3d c = r.transpose().lazyProduct((weight * m).lazyProduct(r));
+    const Eigen::Matrix3d outer = p.lazyProduct(p.transpose());
+    for (int row = 0; row < 3; ++row) {
+      for (int col = row; col < 3; ++col) normal.block<3, 3>(3 * row, 3 * col) += c(row, col) * outer;
+    }
     ++used;
+  }
+  for (int row = 1; row < 3; ++row) {
+    for (int col = 0; col < row; ++col) {
+      normal.block<3, 3>(3 * row, 3 * col) = normal.block<3, 3>(3 * col, 3 * row).transpose();
+    }
   }
   return normal;
 }

@@ -831,3 +831,90 @@ TEST_CASE("refine_homography: as precise as the maximum-likelihood estimate, mor
   CHECK(refined_error < 1.1 * ml_error);
   CHECK(optimised_error > 1.1 * ml_error);  // the test tells the two apart
 }
+
+namespace {
+
+/// The normal matrix of one reweighting step written out (sampson_normal_matrix()'s reference):
+/// each correspondence's two equations as rows, the Jacobian of their residual by central
+/// differences in pixels (exact: the residual is affine in each coordinate), the Sampson distance,
+/// the Cauchy weight and the product Aᵀ (w M) A, for the correspondences within max_error both
+/// ways of the homography `h_pixels` (a HomographyModel's h: M scales with the homography's
+/// norm); `used` counts them.
+Eigen::Matrix<double, 9, 9> naive_normal_matrix(const std::vector<cv::Point2f>& x1, const std::vector<cv::Point2f>& x2,
+                                                const affine_orb::detail::NormalizedCorrespondences& data,
+                                                const Eigen::Matrix3d& h_pixels,
+                                                const affine_orb::HomographyRefinementOptions& options,
+                                                std::size_t& used) {
+  const Eigen::Matrix3d hn = data.t2 * h_pixels * data.t1_inverse;
+  Eigen::Matrix<double, 9, 1> h;
+  h << hn(0, 0), hn(0, 1), hn(0, 2), hn(1, 0), hn(1, 1), hn(1, 2), hn(2, 0), hn(2, 1), hn(2, 2);
+  // The two equations of pixel points a ↔ b, in the normalised coordinates.
+  const auto equations = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d n1 = (data.t1 * a.homogeneous()).hnormalized(),
+                          n2 = (data.t2 * b.homogeneous()).hnormalized();
+    const double x = n1.x(), y = n1.y(), u = n2.x(), v = n2.y();
+    Eigen::Matrix<double, 2, 9> rows;
+    rows << 0, 0, 0, -x, -y, -1, v * x, v * y, v, x, y, 1, 0, 0, 0, -u * x, -u * y, -u;
+    return rows;
+  };
+  Eigen::Matrix<double, 9, 9> normal = Eigen::Matrix<double, 9, 9>::Zero();
+  used = 0;
+  for (std::size_t i = 0; i < x1.size(); ++i) {
+    const Eigen::Vector2d a(x1[i].x, x1[i].y), b(x2[i].x, x2[i].y);
+    const double forward = ((h_pixels * a.homogeneous()).hnormalized() - b).norm();
+    const double backward = ((h_pixels.inverse() * b.homogeneous()).hnormalized() - a).norm();
+    if (!(forward <= options.max_error && backward <= options.max_error)) continue;
+    const Eigen::Matrix<double, 2, 9> rows = equations(a, b);
+    const Eigen::Vector2d residual = rows * h;
+    Eigen::Matrix<double, 2, 4> jacobian;
+    for (int c = 0; c < 4; ++c) {
+      Eigen::Vector4d plus(a.x(), a.y(), b.x(), b.y()), minus = plus;
+      plus(c) += 0.5;
+      minus(c) -= 0.5;
+      jacobian.col(c) = equations(plus.head<2>(), plus.tail<2>()) * h - equations(minus.head<2>(), minus.tail<2>()) * h;
+    }
+    const Eigen::Matrix2d m = (jacobian * jacobian.transpose()).inverse();
+    const double sampson_squared = residual.dot(m * residual);
+    const double weight = 1.0 / (1.0 + sampson_squared / (options.cauchy_scale * options.cauchy_scale));
+    normal += rows.transpose() * (weight * m) * rows;
+    ++used;
+  }
+  return normal;
+}
+
+}  // namespace
+
+TEST_CASE("refine_homography's normal matrix is Σ w Aᵀ M A of the DLT equations written out") {
+  // Noise, outliers and a perturbed model, so that the weights vary and some correspondences are
+  // left out.
+  Eigen::Matrix3d truth;
+  truth << 0.9, 0.12, 35.0, -0.06, 1.05, 12.0, 2e-4, 1e-4, 1.0;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> px(0.0, 639.0), py(0.0, 479.0), unit01(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 1.5);
+  std::vector<cv::Point2f> x1, x2;
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector2d p(px(rng), py(rng));
+    const Eigen::Vector2d q = unit01(rng) < 0.2 ? Eigen::Vector2d(px(rng), py(rng))
+                                                : Eigen::Vector2d((truth * p.homogeneous()).hnormalized());
+    x1.emplace_back(static_cast<float>(p.x() + noise(rng)), static_cast<float>(p.y() + noise(rng)));
+    x2.emplace_back(static_cast<float>(q.x() + noise(rng)), static_cast<float>(q.y() + noise(rng)));
+  }
+  Eigen::Matrix3d start = truth;
+  start(0, 2) += 1.5;
+  start(2, 0) += 2e-5;
+  const affine_orb::detail::NormalizedCorrespondences data =
+      affine_orb::detail::normalize_correspondences(x1, x2, "test");
+  REQUIRE(data.normalizable);
+  const std::optional<affine_orb::HomographyModel> model = affine_orb::HomographyModel::from_pixels(start);
+  REQUIRE(model);
+  const affine_orb::HomographyRefinementOptions options;
+  std::size_t expected_used = 0, used = 0;
+  const Eigen::Matrix<double, 9, 9> expected = naive_normal_matrix(x1, x2, data, model->h, options, expected_used);
+  const Eigen::Matrix<double, 9, 9> got = affine_orb::detail::sampson_normal_matrix(data, *model, options, used);
+  CHECK(used == expected_used);
+  CHECK(expected_used > 60);
+  CHECK(expected_used < x1.size());  // the outliers are left out
+  CHECK((got - expected).norm() <= 1e-9 * expected.norm());
+  CHECK((got - got.transpose()).norm() == 0.0);  // mirrored, not summed twice
+}

@@ -63,8 +63,8 @@ class PointGrid {
   /// Calls fn(i) for every point i in the cells that meet the square of half side `radius` around
   /// `p` (rows, then columns, then increasing i within a cell), which holds every point within
   /// `radius` of `p`; nothing for a non-finite `p`. `radius` is at most the side build() was given,
-  /// so the square meets at most 3 x 3 cells, and mostly one: a point's duplicates lie in its own
-  /// cell unless it is near the cell's border.
+  /// so the square meets at most 3 x 3 cells, and fewer the more build() widened them (a 2 px
+  /// duplicate radius mostly meets one).
   template <class Fn>
   void for_each_near(const cv::Point2f& p, double radius, Fn fn) const {
     if (columns_ == 0 || !finite(p)) return;

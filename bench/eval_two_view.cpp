@@ -1,6 +1,6 @@
 // eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b,...]
 //               [--methods SUBSTRING,...] [--asift-sequences a,b,...|all] [--peer-cache FILE] [--sweep]
-//               [--placement] [--origins] [--repeats N] [--judge-spread N]
+//               [--placement] [--origins] [--repeats N] [--judge-spread N] [--seeds N]
 //
 // Two-view matching judged where users feel it: on every Oxford pair 1->2 ... 1->6, opencv-doc's
 // graf 1->3 (subset "oxford") and every pair of ../shared/data/pairs/ (hpatches, homogr, evd), per
@@ -38,7 +38,12 @@
 // correct matches by the stage that extracted them (which stage finds them). --judge-spread N runs,
 // for the matchers, the MAGSAC++ judge on N seeded reorderings of the same returned matches and
 // tables where the own model lies against the range of those estimates (the judge's own run-to-run
-// range: differences inside it are not the estimator's).
+// range: differences inside it are not the estimator's). --seeds N runs our methods N times, the k-th
+// with the seeds of their RANSAC searches offset by k (ModelSelectionOptions::ransac, the last
+// stage's search; k = 0: the options as they are, the run every other table reports), and tables
+// the own model's AUC@5 per group over the seeds, median and range, and each method's difference
+// from "ours views on demand" seed by seed: the matcher's own run-to-run range, which a change of
+// default must clear. The CSV holds every seed's rows (column seed), the per-pair Markdown seed 0's.
 //
 // --methods keeps the methods whose name contains one of the comma-separated substrings, or, for an
 // entry that starts with '=', whose name is the rest of it.
@@ -304,6 +309,7 @@ struct Row {
   std::string subset;
   std::string method;
   std::size_t index = 0;          ///< the pair's place in the run's ordered list (the odd and even halves)
+  int seed = 0;                   ///< --seeds: the offset of the RANSAC seeds the row ran with
   bool solved = false;            ///< by the RANSAC judge
   double corner_error = 0.0;      ///< the RANSAC judge's homography
   double magsac_error = 0.0;      ///< the MAGSAC++ judge's homography
@@ -395,19 +401,27 @@ double auc(const std::vector<double>& e, double k) {
   return e.empty() ? 0.0 : sum / static_cast<double>(e.size());
 }
 
-/// The AUC tables: for the own model, the RANSAC judge and the MAGSAC++ judge, per method and per
-/// subset, over all pairs and over the pairs of odd and even index in the run's list, AUC@3 / @5 /
-/// @10 and, in brackets, the pairs within 5 px (solved).
-void auc_tables(const std::vector<Method>& methods, const std::vector<Row>& rows,
-                const std::vector<std::pair<std::string, std::string>>& subset_names, std::ostringstream& md) {
-  using Select = std::function<bool(const Row&)>;
-  std::vector<std::pair<std::string, Select>> groups;
+/// A titled subset of the rows: a subset of pairs, all of them, or a half of the run's list.
+using Group = std::pair<std::string, std::function<bool(const Row&)>>;
+
+/// The groups of the AUC tables: each subset, all pairs, the pairs of odd and of even index.
+std::vector<Group> auc_groups(const std::vector<std::pair<std::string, std::string>>& subset_names) {
+  std::vector<Group> groups;
   for (const auto& [key, title] : subset_names) {
     groups.emplace_back(title, [key = key](const Row& r) { return r.subset == key; });
   }
   groups.emplace_back("all", [](const Row&) { return true; });
   groups.emplace_back("odd half", [](const Row& r) { return r.index % 2 == 1; });
   groups.emplace_back("even half", [](const Row& r) { return r.index % 2 == 0; });
+  return groups;
+}
+
+/// The AUC tables: for the own model, the RANSAC judge and the MAGSAC++ judge, per method and per
+/// subset, over all pairs and over the pairs of odd and even index in the run's list, AUC@3 / @5 /
+/// @10 and, in brackets, the pairs within 5 px (solved).
+void auc_tables(const std::vector<Method>& methods, const std::vector<Row>& rows,
+                const std::vector<std::pair<std::string, std::string>>& subset_names, std::ostringstream& md) {
+  const std::vector<Group> groups = auc_groups(subset_names);
   const std::vector<std::pair<std::string, std::function<double(const Row&)>>> estimates = {
       {"own model", [](const Row& r) { return r.own_corner_error; }},
       {"RANSAC judge", [](const Row& r) { return r.corner_error; }},
@@ -431,6 +445,68 @@ void auc_tables(const std::vector<Method>& methods, const std::vector<Row>& rows
         std::snprintf(cell, sizeof(cell), e.empty() ? " |" : " %.2f / %.2f / %.2f (%td) |", auc(e, 3.0), auc(e, 5.0),
                       auc(e, 10.0), solved);
         md << cell;
+      }
+      md << "\n";
+    }
+    md << "\n";
+  }
+}
+
+/// AUC@5 of the own model of `method` over the rows `select` keeps, one value per seed 0 … seeds − 1;
+/// empty when it keeps none.
+std::vector<double> own_auc_by_seed(const std::vector<Row>& rows, const std::string& method,
+                                    const std::function<bool(const Row&)>& select, int seeds) {
+  std::vector<std::vector<double>> errors(static_cast<std::size_t>(seeds));
+  bool any = false;
+  for (const Row& r : rows) {
+    if (r.method != method || !select(r)) continue;
+    errors[static_cast<std::size_t>(r.seed)].push_back(r.own_corner_error);
+    any = true;
+  }
+  std::vector<double> out;
+  if (!any) return out;
+  for (const std::vector<double>& e : errors) out.push_back(auc(e, 5.0));
+  return out;
+}
+
+/// " median (min – max) |" of `values`, with `sign` for differences; " |" when there are none.
+std::string median_and_range(std::vector<double> values, bool sign) {
+  if (values.empty()) return " |";
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  const double median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  char cell[96];
+  std::snprintf(cell, sizeof(cell), sign ? " %+.3f (%+.3f – %+.3f) |" : " %.3f (%.3f – %.3f) |", median, values.front(),
+                values.back());
+  return cell;
+}
+
+/// --seeds N: per method run with every seed, AUC@5 of the own model per group, the median over the
+/// N seeds and their range; then, for every other such method, its difference from "ours views on
+/// demand" seed by seed (both ran with the same seeds): the median and range of the differences.
+void seed_tables(const std::vector<Method>& methods, const std::vector<Row>& rows, int seeds,
+                 const std::vector<Group>& groups, std::ostringstream& md) {
+  const std::string reference = "ours views on demand";
+  const bool has_reference =
+      std::any_of(methods.begin(), methods.end(), [&](const Method& m) { return m.name == reference; });
+  for (const bool paired : {false, true}) {
+    if (paired && !has_reference) break;
+    md << "| own model, AUC@5" << (paired ? " minus the default's, same seed" : "") << ": median (range) over " << seeds
+       << " seeds |";
+    for (const Group& group : groups) md << " " << group.first << " |";
+    md << "\n|---|";
+    for (std::size_t i = 0; i < groups.size(); ++i) md << "---|";
+    md << "\n";
+    for (const Method& m : methods) {
+      if (m.peer || (paired && m.name == reference)) continue;
+      md << "| " << m.name << " |";
+      for (const auto& [title, select] : groups) {
+        std::vector<double> values = own_auc_by_seed(rows, m.name, select, seeds);
+        if (paired) {
+          const std::vector<double> base = own_auc_by_seed(rows, reference, select, seeds);
+          for (std::size_t i = 0; i < values.size(); ++i) values[i] -= base[i];
+        }
+        md << median_and_range(values, paired);
       }
       md << "\n";
     }
@@ -565,6 +641,7 @@ struct Arguments {
   bool origins = false;
   int repeats = 1;
   int judge_spread = 0;  ///< orderings of the MAGSAC++ judge; 0: none
+  int seeds = 1;         ///< runs of our methods, each with other RANSAC seeds
 };
 
 /// The arguments of `argv`, or nullopt after the usage line on stderr for an unknown flag or a
@@ -593,6 +670,8 @@ std::optional<Arguments> parse_arguments(int argc, char** argv) {
       a.repeats = std::atoi(argv[++i]);
     } else if (flag == "--judge-spread" && has_count) {
       a.judge_spread = std::atoi(argv[++i]);
+    } else if (flag == "--seeds" && has_count) {
+      a.seeds = std::atoi(argv[++i]);
     } else if (flag == "--peer-cache" && has_value) {
       a.peer_cache = argv[++i];
     } else if (flag == "--asift-sequences" && has_value) {
@@ -602,11 +681,19 @@ std::optional<Arguments> parse_arguments(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: eval_two_view [--out DIR] [--subsets oxford,hpatches,homogr,evd] [--sequences a,b] "
                    "[--methods SUBSTRING,...] [--asift-sequences a,b|all] [--peer-cache FILE] [--sweep] [--placement] "
-                   "[--origins] [--repeats N] [--judge-spread N]\n");
+                   "[--origins] [--repeats N] [--judge-spread N] [--seeds N]\n");
       return std::nullopt;
     }
   }
   return a;
+}
+
+/// `o` with the seeds of its RANSAC searches (model selection's, the last stage's) offset by `seed`;
+/// 0 leaves them as they are.
+affine_orb::TwoViewOptions with_seed(affine_orb::TwoViewOptions o, int seed) {
+  o.model.ransac.seed += static_cast<std::uint64_t>(seed);
+  if (o.last_stage_search) o.last_stage_search->ransac.seed += static_cast<std::uint64_t>(seed);
+  return o;
 }
 
 /// `o` with sub-pixel keypoint positions (ExtractorOptions::subpixel).
@@ -786,15 +873,16 @@ void selection_variants(const Variant& variant) {
   }
 }
 
-/// --sweep: the matcher with 200 inliers, then every variant of the default, named "sweep: ...".
-void add_sweep(const affine_orb::TwoViewOptions& defaults, std::vector<Method>& methods) {
+/// --sweep: the matcher with 200 inliers, then every variant of the default, named "sweep: ...";
+/// their RANSAC seeds offset by `seed` (with_seed()).
+void add_sweep(const affine_orb::TwoViewOptions& defaults, int seed, std::vector<Method>& methods) {
   affine_orb::TwoViewOptions many = defaults;
   many.min_inliers = 200;
-  methods.push_back(two_view("ours views on demand, min_inliers 200", many));
+  methods.push_back(two_view("ours views on demand, min_inliers 200", with_seed(many, seed)));
   const Variant variant = [&](const std::string& name, const std::function<void(affine_orb::TwoViewOptions&)>& change) {
     affine_orb::TwoViewOptions o = defaults;
     change(o);
-    methods.push_back(two_view("sweep: " + name, o));
+    methods.push_back(two_view("sweep: " + name, with_seed(o, seed)));
   };
   stage_and_support_variants(variant);
   estimation_variants(variant);
@@ -815,6 +903,19 @@ void keep_named(const std::string& filter, std::vector<Method>& methods) {
   };
   methods.erase(std::remove_if(methods.begin(), methods.end(), [&](const Method& m) { return !wanted(m); }),
                 methods.end());
+}
+
+/// The methods of the run (--sweep's added, --methods' kept) with their RANSAC seeds offset by
+/// `seed`; the OpenCV peers only at seed 0.
+std::vector<Method> methods_with_seed(const affine_orb::TwoViewOptions& defaults, const Arguments& args, int seed) {
+  std::vector<Method> methods = standard_methods(with_seed(defaults, seed));
+  if (args.sweep) add_sweep(defaults, seed, methods);
+  if (!args.methods.empty()) keep_named(args.methods, methods);
+  if (seed > 0) {
+    methods.erase(std::remove_if(methods.begin(), methods.end(), [](const Method& m) { return m.peer; }),
+                  methods.end());
+  }
+  return methods;
 }
 
 /// The pairs of --subsets and --sequences, Oxford and opencv-doc first, then the data pairs.
@@ -1001,7 +1102,8 @@ void write_rows(const std::vector<Row>& rows, const std::string& csv_path, std::
      << "|---|---|---:|---:|---:|---:|---:|---|---:|---:|\n";
   std::ofstream csv(csv_path);
   csv << "pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,corner_error,own_corner_error,solved,"
-         "stage,verified,ms,magsac_corner_error,pair_index,judge_spread_min,judge_spread_median,judge_spread_max\n";
+         "stage,verified,ms,magsac_corner_error,pair_index,judge_spread_min,judge_spread_median,judge_spread_max,"
+         "seed\n";
   for (const Row& r : rows) {
     char line[512];
     std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f / %.1f | %s | %s | %.0f |\n",
@@ -1009,7 +1111,7 @@ void write_rows(const std::vector<Row>& rows, const std::string& csv_path, std::
                   r.correct.distinct, std::min(r.corner_error, 9999.0), std::min(r.magsac_error, 9999.0),
                   std::min(r.own_corner_error, 9999.0), r.solved ? "yes" : "no",
                   r.outcome.stage >= 0 ? std::to_string(r.outcome.stage).c_str() : "", r.outcome.ms);
-    md << line;
+    if (r.seed == 0) md << line;
     std::snprintf(line, sizeof(line), "%s,\"%s\",%d,%d,%zu,%zu,%zu,%.2f,%.2f,%d,%d,%d,%.2f,%.2f,%zu,", r.pair.c_str(),
                   r.method.c_str(), r.outcome.keypoints1, r.outcome.keypoints2, r.matches, r.correct.correct,
                   r.correct.distinct, std::min(r.corner_error, 1e6), std::min(r.own_corner_error, 1e6), r.solved,
@@ -1022,7 +1124,7 @@ void write_rows(const std::vector<Row>& rows, const std::string& csv_path, std::
     } else {
       csv << ",,";
     }
-    csv << '\n';
+    csv << ',' << r.seed << '\n';
   }
 }
 
@@ -1039,11 +1141,16 @@ int main(int argc, char** argv) {
   }
   cv::setNumThreads(1);
   const affine_orb::TwoViewOptions defaults;
-  std::vector<Method> methods = standard_methods(defaults);
-  if (args->sweep) add_sweep(defaults, methods);
-  if (!args->methods.empty()) keep_named(args->methods, methods);
+  const std::vector<Method> methods = methods_with_seed(defaults, *args, 0);
   const std::vector<affine_orb::bench::ViewpointPair> pairs = selected_pairs(*args);
   const std::vector<Row> rows = run_methods(methods, pairs, *args);
+  std::vector<Row> seeded_rows = rows;
+  for (int seed = 1; seed < args->seeds; ++seed) {
+    for (Row& r : run_methods(methods_with_seed(defaults, *args, seed), pairs, *args)) {
+      r.seed = seed;
+      seeded_rows.push_back(std::move(r));
+    }
+  }
 
   const std::vector<std::pair<std::string, std::string>> subset_names = {
       {"oxford", "Oxford + opencv-doc"}, {"hpatches", "HPatches"}, {"homogr", "Homogr"}, {"evd", "EVD"}};
@@ -1053,6 +1160,7 @@ int main(int argc, char** argv) {
   verification_table(methods, rows, md);
   if (args->origins) origin_table(methods, rows, pairs, subset_names, md);
   if (args->judge_spread > 0) spread_tables(methods, rows, args->judge_spread, md);
+  if (args->seeds > 1) seed_tables(methods, seeded_rows, args->seeds, auc_groups(subset_names), md);
   time_table(methods, rows, md);
   if (args->placement) {
     md << "\n| method | octave | image-1 octave: correct matches | median px | 90th percentile px | "
@@ -1063,7 +1171,7 @@ int main(int argc, char** argv) {
       placement_table(method, rows, pairs, md);
     }
   }
-  write_rows(rows, args->out_dir + "/eval_two_view.csv", md);
+  write_rows(seeded_rows, args->out_dir + "/eval_two_view.csv", md);
   std::ofstream(args->out_dir + "/eval_two_view.md") << md.str();
   std::fputs(md.str().c_str(), stdout);
   return 0;

@@ -470,14 +470,12 @@ std::vector<double> own_auc_by_seed(const std::vector<Row>& rows, const std::str
 }
 
 /// " median (min – max) |" of `values`, with `sign` for differences; " |" when there are none.
-std::string median_and_range(std::vector<double> values, bool sign) {
+std::string median_and_range(const std::vector<double>& values, bool sign) {
   if (values.empty()) return " |";
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  const double median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  const auto [low, high] = std::minmax_element(values.begin(), values.end());
   char cell[96];
-  std::snprintf(cell, sizeof(cell), sign ? " %+.3f (%+.3f – %+.3f) |" : " %.3f (%.3f – %.3f) |", median, values.front(),
-                values.back());
+  std::snprintf(cell, sizeof(cell), sign ? " %+.3f (%+.3f – %+.3f) |" : " %.3f (%.3f – %.3f) |",
+                affine_orb::bench::median(values), *low, *high);
   return cell;
 }
 
@@ -497,15 +495,17 @@ void seed_tables(const std::vector<Method>& methods, const std::vector<Row>& row
     md << "\n|---|";
     for (std::size_t i = 0; i < groups.size(); ++i) md << "---|";
     md << "\n";
+    std::vector<std::vector<double>> base(groups.size());
+    if (paired) {
+      for (std::size_t g = 0; g < groups.size(); ++g)
+        base[g] = own_auc_by_seed(rows, reference, groups[g].second, seeds);
+    }
     for (const Method& m : methods) {
       if (m.peer || (paired && m.name == reference)) continue;
       md << "| " << m.name << " |";
-      for (const auto& [title, select] : groups) {
-        std::vector<double> values = own_auc_by_seed(rows, m.name, select, seeds);
-        if (paired) {
-          const std::vector<double> base = own_auc_by_seed(rows, reference, select, seeds);
-          for (std::size_t i = 0; i < values.size(); ++i) values[i] -= base[i];
-        }
+      for (std::size_t g = 0; g < groups.size(); ++g) {
+        std::vector<double> values = own_auc_by_seed(rows, m.name, groups[g].second, seeds);
+        for (std::size_t i = 0; i < values.size() && i < base[g].size(); ++i) values[i] -= base[g][i];
         md << median_and_range(values, paired);
       }
       md << "\n";

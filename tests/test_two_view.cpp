@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -230,6 +232,55 @@ TEST_CASE("the escalation stops only on enough inliers making up enough of the m
   }
 }
 
+TEST_CASE("each stage names the first verification test its model fails, as its measures show") {
+  // graf 1 and the view of a camera turned by 15°: an easy plane, verified at stage 0 by default, so
+  // that each test made unreachable is the one that fails, and an earlier test in the order wins.
+  using Failure = affine_orb::VerificationFailure;
+  const cv::Mat image = affine_orb::test::graf(1);
+  cv::Mat turned;
+  cv::warpPerspective(image, turned, cv::Mat(turned_camera(15.0, image.size())), image.size());
+  affine_orb::TwoViewOptions options;
+  options.extractor.features = 800;
+  const auto first_failure = [&](const affine_orb::TwoViewOptions& o) {
+    const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(o).match(image, turned);
+    for (const affine_orb::TwoViewStageReport& s : r.stages) {
+      // The failure agrees with the measures the report gives.
+      if (s.failure == Failure::kFewInliers) CHECK(s.inliers < o.min_inliers);
+      if (s.failure == Failure::kInlierRatio) CHECK(s.inliers < s.matches);
+      if (s.failure == Failure::kImprecise) CHECK(*s.half_disagreement > *o.max_half_disagreement);
+      if (!s.failure) CHECK((s.inliers >= o.min_inliers && *s.half_disagreement <= *o.max_half_disagreement));
+    }
+    CHECK(r.verified == !r.stages.back().failure);
+    return r.stages.back().failure;
+  };
+  CHECK(first_failure(options) == std::nullopt);
+  SUBCASE("each test alone") {
+    affine_orb::TwoViewOptions o = options;
+    o.min_inliers = 1000000;
+    CHECK(first_failure(o) == Failure::kFewInliers);
+    o = options;
+    o.min_inlier_ratio = 1.0;
+    CHECK(first_failure(o) == Failure::kInlierRatio);
+    o = options;
+    o.max_half_disagreement = 1e-6;
+    CHECK(first_failure(o) == Failure::kImprecise);
+  }
+  SUBCASE("the support tests come before the precision test") {
+    options.max_half_disagreement = 1e-6;
+    options.min_inlier_ratio = 1.0;
+    CHECK(first_failure(options) == Failure::kInlierRatio);
+    options.min_inliers = 1000000;
+    CHECK(first_failure(options) == Failure::kFewInliers);
+  }
+  SUBCASE("images without corners give no model") {
+    const cv::Mat flat(240, 320, CV_8UC1, cv::Scalar(128));
+    const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(flat, flat);
+    CHECK_FALSE(r.verified);
+    CHECK(r.stages.back().failure == Failure::kNoModel);
+    CHECK(std::string(affine_orb::verification_failure_name(Failure::kNoModel)) == "no model");
+  }
+}
+
 TEST_CASE("a correct model supported by a few percent of the matches is verified, as the inlier ratio did not") {
   // Half the cells of image 2 but a row show the plane under a known rotation of the camera, the
   // others its negative, whose descriptors match at random; image 1 has a strip of another photo
@@ -268,6 +319,7 @@ TEST_CASE("a chance consensus, bark 1 -> 6's F on 16 of 79 matches, is not verif
   const auto r = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image6);
   REQUIRE(r.model.model == affine_orb::GeometricModel::kFundamental);
   CHECK_FALSE(r.verified);
+  CHECK(r.stages.back().failure == affine_orb::VerificationFailure::kFalseAlarms);
   REQUIRE(r.log10_false_alarms.has_value());
   CHECK(*r.log10_false_alarms > 0.0);
   CHECK(affine_orb::test::corner_error(r.model.homography, truth, image1.size()) > 50.0);
@@ -283,6 +335,7 @@ TEST_CASE("a chance consensus, bark 1 -> 6's F on 16 of 79 matches, is not verif
   const auto searched = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(image1, image6);
   REQUIRE(searched.model.model == affine_orb::GeometricModel::kHomography);
   CHECK_FALSE(searched.verified);
+  CHECK(searched.stages.back().failure == affine_orb::VerificationFailure::kFewInliers);
   CHECK(searched.inlier_count < options.min_inliers);
   CHECK(affine_orb::test::corner_error(searched.model.homography, truth, image1.size()) < 10.0);
 }

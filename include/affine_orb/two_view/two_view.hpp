@@ -129,7 +129,8 @@ class TwoViewMatcher {
       StageModel verified = verify(result.features1, result.features2, std::move(matches), image1, image2,
                                    k == n_stages || options_.all_stages);
       const Clock::time_point verified_at = Clock::now();
-      result.verified = precise(verified) && supported(verified);
+      report.failure = failed_test(verified);
+      result.verified = !report.failure;
       take_stage(result, std::move(verified), report);
       report.max_tilt = staged1.session.extracted_tilt();
       report.keypoints1 = static_cast<int>(result.features1.size());
@@ -404,14 +405,28 @@ class TwoViewMatcher {
                               stage.inlier_probability);
   }
 
-  /// The chosen model has min_inliers inliers and passes the support tests (max_false_alarms,
-  /// min_inlier_ratio).
-  bool supported(const StageModel& stage) const {
-    const double matches = static_cast<double>(stage.matches.size());
+  /// The first support test the chosen model fails: a model, min_inliers inliers, max_false_alarms,
+  /// min_inlier_ratio (nullopt: it has the support).
+  std::optional<VerificationFailure> failed_support(const StageModel& stage) const {
+    if (stage.model.model == GeometricModel::kNone) return VerificationFailure::kNoModel;
+    if (stage.inlier_count < options_.min_inliers) return VerificationFailure::kFewInliers;
     const std::optional<double> log10_nfa = false_alarms(stage);
-    return stage.inlier_count >= options_.min_inliers &&
-           (!log10_nfa || *log10_nfa <= std::log10(*options_.max_false_alarms)) &&
-           (!options_.min_inlier_ratio || stage.inlier_count >= *options_.min_inlier_ratio * matches);
+    if (log10_nfa && *log10_nfa > std::log10(*options_.max_false_alarms)) return VerificationFailure::kFalseAlarms;
+    const double matches = static_cast<double>(stage.matches.size());
+    if (options_.min_inlier_ratio && stage.inlier_count < *options_.min_inlier_ratio * matches) {
+      return VerificationFailure::kInlierRatio;
+    }
+    return std::nullopt;
+  }
+
+  bool supported(const StageModel& stage) const { return !failed_support(stage); }
+
+  /// The first verification test the chosen model fails: the support tests, then the precision
+  /// test (nullopt: the stage verifies the pair).
+  std::optional<VerificationFailure> failed_test(const StageModel& stage) const {
+    if (const std::optional<VerificationFailure> support = failed_support(stage)) return support;
+    if (!precise(stage)) return VerificationFailure::kImprecise;
+    return std::nullopt;
   }
 
   /// The chosen model passes the precision test (TwoViewOptions::max_half_disagreement; an F model

@@ -272,6 +272,33 @@ inline std::vector<ViewStage> stages_up_to(const AffineViewOptions& views) {
   return stages;
 }
 
+/// Why a stage of TwoViewMatcher::match() did not verify the pair: the first test its chosen model
+/// fails, in this order (TwoViewStageReport::failure).
+enum class VerificationFailure {
+  kNoModel,      ///< no model chosen: fewer than 8 matches, or select_model() found neither H nor F
+  kFewInliers,   ///< fewer than TwoViewOptions::min_inliers inliers
+  kFalseAlarms,  ///< more false alarms than TwoViewOptions::max_false_alarms (the a-contrario support test)
+  kInlierRatio,  ///< inliers below TwoViewOptions::min_inlier_ratio of the matches
+  kImprecise,    ///< a homography whose halves disagree by more than TwoViewOptions::max_half_disagreement
+};
+
+/// A short lowercase name of `failure`: "no model", "few inliers", "false alarms", "inlier ratio",
+/// "imprecise".
+inline const char* verification_failure_name(VerificationFailure failure) {
+  switch (failure) {
+    case VerificationFailure::kNoModel:
+      return "no model";
+    case VerificationFailure::kFewInliers:
+      return "few inliers";
+    case VerificationFailure::kFalseAlarms:
+      return "false alarms";
+    case VerificationFailure::kInlierRatio:
+      return "inlier ratio";
+    default:
+      return "imprecise";
+  }
+}
+
 /// What one stage of TwoViewMatcher::match() did.
 struct TwoViewStageReport {
   double max_tilt = 1.0;             ///< largest tilt extracted so far (1: the images alone)
@@ -299,6 +326,9 @@ struct TwoViewStageReport {
   /// The chosen model is the homography of TwoViewOptions::last_stage_search, which replaced
   /// select_model()'s choice (false when the search did not run or found nothing better).
   bool last_stage_search = false;
+  /// The first verification test the stage's chosen model fails (VerificationFailure); nullopt when
+  /// the stage verified the pair.
+  std::optional<VerificationFailure> failure;
   double extract_ms = 0.0;  ///< the stage's extraction of both images, milliseconds
   double match_ms = 0.0;    ///< matching, milliseconds
   double verify_ms = 0.0;   ///< RANSAC and model selection, milliseconds
@@ -309,7 +339,8 @@ template <int Bits>
 struct TwoViewResult {
   /// True when the last stage run verified the pair: its chosen model has at least
   /// TwoViewOptions::min_inliers inliers, passes the support tests (max_false_alarms,
-  /// min_inlier_ratio) and, for a homography, the precision test (max_half_disagreement).
+  /// min_inlier_ratio) and, for a homography, the precision test (max_half_disagreement);
+  /// stages.back().failure says which test failed when it is false.
   bool verified = false;
   /// The last stage run: 0 = the images alone, k = after TwoViewOptions::stages[k − 1].
   int stage = 0;

@@ -117,6 +117,10 @@ struct Outcome {
   /// Views on demand: the last stage's search (off with --no-last-stage-search) gave the chosen
   /// homography.
   bool searched = false;
+  /// Views on demand: the first test the last stage's model failed, with the measures behind the
+  /// support and precision tests (nullopt when verified, or not measured).
+  std::optional<affine_orb::VerificationFailure> failure;
+  std::optional<double> log10_false_alarms, half_disagreement;
   affine_orb::ModelSelectionResult selection;
   /// Where --rectified came from: "" (not written), "chosen homography", or "estimated homography"
   /// (select_model() chose F but had estimated H too).
@@ -197,6 +201,9 @@ Matched<Descriptor> match_on_demand(const cv::Mat& image1, const cv::Mat& image2
   o.verified = r.verified;
   o.stage_tilt = r.stages.back().max_tilt;
   o.searched = r.stages.back().last_stage_search;
+  o.failure = r.stages.back().failure;
+  o.log10_false_alarms = r.log10_false_alarms;
+  o.half_disagreement = r.half_disagreement;
   o.stages = static_cast<int>(matcher.options().stages.size());
   for (const affine_orb::TwoViewStageReport& s : r.stages) {
     o.ms_extract1 += s.extract_ms;
@@ -372,6 +379,11 @@ void print_json(const Settings& s, const Outcome& o) {
   } else {
     std::printf("\"stage\": %d, \"stage_max_tilt\": %.4f, \"verified\": %s, \"last_stage_search\": %s, ", o.stage,
                 o.stage_tilt, o.verified ? "true" : "false", o.searched ? "true" : "false");
+    if (o.failure) {
+      std::printf("\"failure\": \"%s\", ", affine_orb::verification_failure_name(*o.failure));
+    } else {
+      std::printf("\"failure\": null, ");
+    }
   }
   if (o.ground_truth) {
     std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct, precision);
@@ -394,6 +406,31 @@ void print_json(const Settings& s, const Outcome& o) {
       o.ms_first_extract, o.ms_extract1, o.ms_extract2, o.ms_match, o.ms_model);
 }
 
+/// Why views on demand did not verify the pair: the test the last stage's model failed, with its measure.
+std::string failure_text(const Settings& s, const Outcome& o) {
+  const affine_orb::TwoViewOptions defaults;
+  char text[200] = "";
+  switch (o.failure.value_or(affine_orb::VerificationFailure::kNoModel)) {
+    case affine_orb::VerificationFailure::kNoModel:
+      return "no model (fewer than 8 matches, or neither a homography nor F found)";
+    case affine_orb::VerificationFailure::kFewInliers:
+      std::snprintf(text, sizeof text, "fewer than %d inliers of the chosen model", s.plan.min_inliers);
+      break;
+    case affine_orb::VerificationFailure::kFalseAlarms:
+      std::snprintf(text, sizeof text, "its inliers are as many as chance gives (10^%.1f false alarms, at most %g)",
+                    o.log10_false_alarms.value_or(0.0), *defaults.max_false_alarms);
+      break;
+    case affine_orb::VerificationFailure::kInlierRatio:
+      return "too small a share of the matches are inliers";
+    case affine_orb::VerificationFailure::kImprecise:
+      std::snprintf(text, sizeof text,
+                    "the homographies of its inliers' two halves map image 1's corners %.1f px apart (at most %g)",
+                    o.half_disagreement.value_or(0.0), *defaults.max_half_disagreement);
+      break;
+  }
+  return text;
+}
+
 void print_text(const Settings& s, const Outcome& o) {
   const double precision = o.matches ? static_cast<double>(o.correct) / static_cast<double>(o.matches) : 0.0;
   const double threshold = affine_orb::ModelSelectionOptions{}.plane_parallax.significance;
@@ -404,9 +441,8 @@ void print_text(const Settings& s, const Outcome& o) {
                 o.stage == 0 ? "the images' own keypoints"
                              : ("views up to tilt " + std::to_string(o.stage_tilt).substr(0, 4)).c_str());
   } else if (!s.plan.one_shot) {
-    std::printf(
-        "not verified after stage %d of %d (views up to tilt %.2f): fewer than %d inliers of the chosen model\n",
-        o.stage, o.stages, o.stage_tilt, s.plan.min_inliers);
+    std::printf("not verified after stage %d of %d (views up to tilt %.2f): %s\n", o.stage, o.stages, o.stage_tilt,
+                failure_text(s, o).c_str());
   }
   std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
   if (o.ground_truth)

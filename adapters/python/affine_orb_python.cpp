@@ -258,6 +258,7 @@ py::dict result_dict(const affine_orb::TwoViewResult<kBits>& r) {
     stage["guided_rounds"] = s.guided_rounds;
     stage["aligned"] = s.aligned;
     stage["last_stage_search"] = s.last_stage_search;
+    stage["failure"] = s.failure ? py::object(py::str(affine_orb::verification_failure_name(*s.failure))) : py::none();
     stage["extract_ms"] = s.extract_ms;
     stage["match_ms"] = s.match_ms;
     stage["verify_ms"] = s.verify_ms;
@@ -541,7 +542,9 @@ std::string two_view_result_doc() {
          "model (\"homography\", \"fundamental\" or \"none\"), homography and fundamental (3 x 3, x2 ~ H x1 and x2^T F "
          "x1 = 0, or None) and stages (one dict per stage run: max_tilt, keypoints, matches, inliers, model, "
          "half_disagreement (pixels, or None when not measured), log10_false_alarms (or None), guided_rounds, aligned "
-         "(matches aligned), last_stage_search (the model is the last stage's search's), milliseconds). Invalid "
+         "(matches aligned), last_stage_search (the model is the last stage's search's), failure (the first test its "
+         "model failed: \"no model\", \"few inliers\", \"false alarms\", \"inlier ratio\" or \"imprecise\"; None "
+         "when it verified the pair), milliseconds). Invalid "
          "options raise ValueError, wrong types TypeError.";
 }
 

@@ -120,6 +120,9 @@ def test_match_images_equals_the_cpp_matcher(pair, min_inliers):
     stage = assert_equals_cpp_match(r, cpp_match(path1, path2, 1000, min_inliers))
     if min_inliers == 1000:
         assert stage == len(r["stages"]) - 1 == 2 and not r["verified"]
+        assert [s["failure"] for s in r["stages"]] == ["few inliers"] * 3
+    else:
+        assert r["verified"] and r["stages"][-1]["failure"] is None
     assert r["model"] in ("homography", "fundamental")
     assert r["homography"].shape == (3, 3)
 
@@ -191,6 +194,9 @@ def test_match_images_guided_matching_and_precision_test_are_reported():
     assert r["verified"] and r["stage"] == 0 and r["model"] == "homography"
     assert r["stages"][0]["guided_rounds"] > 0
     assert 0.0 <= r["stages"][0]["half_disagreement"] < 5.0
+    strict = affine_orb.match_images(image1, image2, max_half_disagreement=1e-3, stages=[])
+    assert not strict["verified"] and strict["stages"][0]["failure"] == "imprecise"
+    assert strict["stages"][0]["half_disagreement"] > 1e-3
     assert corner_distances(r["homography"], truth, image1.shape).max() < 2.0
 
 
@@ -230,7 +236,8 @@ def test_match_images_support_test_final_fit_and_progressive_sampling_reach_the_
     assert r["verified"] and r["stage"] == 0
     assert r["stages"][0]["log10_false_alarms"] < -100
     assert affine_orb.match_images(image1, image2, max_false_alarms=None)["stages"][0]["log10_false_alarms"] is None
-    assert not affine_orb.match_images(image1, image2, min_inlier_ratio=1.0, stages=[])["verified"]
+    ratio = affine_orb.match_images(image1, image2, min_inlier_ratio=1.0, stages=[])
+    assert not ratio["verified"] and ratio["stages"][0]["failure"] == "inlier ratio"
     unfitted = affine_orb.match_images(image1, image2, final_fit=False)
     assert unfitted["verified"] and not np.allclose(unfitted["homography"], r["homography"])
     h = r["homography"]

@@ -51,7 +51,9 @@
 // Writes DIR/eval_two_view.md (per subset and method, pairs solved and seconds, and the union of
 // all methods; AUC@3 / @5 / @10 of the corner error for the own model and both judges, per subset,
 // over all pairs and over the pairs of odd and even index in the run's list, the halves on which
-// a default change must win as well (docs/two_view.md); the summary over all pairs; then every pair) and
+// a default change must win as well (docs/two_view.md); the matchers' false accepts and false
+// refusals, and the unverified pairs by the test that refused them (TwoViewStageReport::failure);
+// the summary over all pairs; then every pair) and
 // DIR/eval_two_view.csv, and prints the Markdown.
 #include <algorithm>
 #include <chrono>
@@ -94,6 +96,7 @@ struct Outcome {
   int stage = -1;                            ///< matcher only: the stage it stopped at
   bool verified = false;                     ///< matcher only
   std::string stages;                        ///< matcher only: per stage run, matches / inliers and the model chosen
+  std::string failure;                       ///< matcher only: the test the last stage failed, "" when verified
   std::vector<std::pair<int, int>> octaves;  ///< ours only: per match, the octaves of its two keypoints
   std::vector<int> origins;                  ///< matcher only: per match, the stage that extracted its later keypoint
 };
@@ -190,6 +193,7 @@ Method two_view(const std::string& name, const affine_orb::TwoViewOptions& optio
             o.keypoints2 = static_cast<int>(r.features2.size());
             o.stage = r.stage;
             o.verified = r.verified;
+            if (r.stages.back().failure) o.failure = affine_orb::verification_failure_name(*r.stages.back().failure);
             for (const affine_orb::TwoViewStageReport& s : r.stages) {
               o.stages += " " + std::to_string(s.matches) + "/" + std::to_string(s.homography_inlier_count) + "/" +
                           std::to_string(s.fundamental_inlier_count) +
@@ -535,6 +539,38 @@ void verification_table(const std::vector<Method>& methods, const std::vector<Ro
     }
     md << "| " << m.name << " | " << pairs << " | " << verified << " | " << accepts << " | " << refusals << " | "
        << missed << " |\n";
+  }
+  md << "\n";
+}
+
+/// Per matcher method, the pairs not verified by the test that refused them
+/// (TwoViewStageReport::failure of the last stage), and in brackets the false refusals among them,
+/// whose own homography lies within 5 px.
+void refusal_table(const std::vector<Method>& methods, const std::vector<Row>& rows, std::ostringstream& md) {
+  using Failure = affine_orb::VerificationFailure;
+  const std::vector<Failure> tests = {Failure::kNoModel, Failure::kFewInliers, Failure::kFalseAlarms,
+                                      Failure::kInlierRatio, Failure::kImprecise};
+  md << "| not verified, by the test that refused them (false refusals: own ≤ 5 px) | pairs not verified";
+  for (const Failure f : tests) md << " | " << affine_orb::verification_failure_name(f);
+  md << " |\n|---|---:";
+  for (std::size_t i = 0; i < tests.size(); ++i) md << "|---:";
+  md << "|\n";
+  for (const Method& m : methods) {
+    if (!m.matcher) continue;
+    int refused = 0;
+    std::vector<std::pair<int, int>> by(tests.size());  // (refused, of which false refusals)
+    for (const Row& r : rows) {
+      if (r.method != m.name || r.outcome.verified) continue;
+      ++refused;
+      for (std::size_t i = 0; i < tests.size(); ++i) {
+        if (r.outcome.failure != affine_orb::verification_failure_name(tests[i])) continue;
+        ++by[i].first;
+        by[i].second += r.own_corner_error <= affine_orb::bench::kSolvedCornerError;
+      }
+    }
+    md << "| " << m.name << " | " << refused;
+    for (const auto& [count, wrong] : by) md << " | " << count << " (" << wrong << ")";
+    md << " |\n";
   }
   md << "\n";
 }
@@ -1103,7 +1139,7 @@ void write_rows(const std::vector<Row>& rows, const std::string& csv_path, std::
   std::ofstream csv(csv_path);
   csv << "pair,method,keypoints1,keypoints2,matches,correct,distinct_correct,corner_error,own_corner_error,solved,"
          "stage,verified,ms,magsac_corner_error,pair_index,judge_spread_min,judge_spread_median,judge_spread_max,"
-         "seed\n";
+         "seed,failure\n";
   for (const Row& r : rows) {
     char line[512];
     std::snprintf(line, sizeof(line), "| %s | %s | %d | %d | %zu | %zu | %.1f / %.1f / %.1f | %s | %s | %.0f |\n",
@@ -1124,7 +1160,7 @@ void write_rows(const std::vector<Row>& rows, const std::string& csv_path, std::
     } else {
       csv << ",,";
     }
-    csv << ',' << r.seed << '\n';
+    csv << ',' << r.seed << ',' << r.outcome.failure << '\n';
   }
 }
 
@@ -1158,6 +1194,7 @@ int main(int argc, char** argv) {
   solved_table(methods, rows, subset_names, md);
   auc_tables(methods, rows, subset_names, md);
   verification_table(methods, rows, md);
+  refusal_table(methods, rows, md);
   if (args->origins) origin_table(methods, rows, pairs, subset_names, md);
   if (args->judge_spread > 0) spread_tables(methods, rows, args->judge_spread, md);
   if (args->seeds > 1) seed_tables(methods, seeded_rows, args->seeds, auc_groups(subset_names), md);

@@ -174,6 +174,20 @@ void check_verification(const Result& r, const affine_orb::TwoViewOptions& optio
   // The precision test is measured only when on and a homography was chosen.
   if (!options.max_half_disagreement || r.model.model != affine_orb::GeometricModel::kHomography)
     require(!r.half_disagreement);
+  // Every stage but a verified last one names the test its model failed, and the last stage's
+  // failure is what its numbers show.
+  using Failure = affine_orb::VerificationFailure;
+  require(r.verified == !r.stages.back().failure);
+  for (std::size_t k = 0; k + 1 < r.stages.size(); ++k) require(r.stages[k].failure || options.all_stages);
+  if (const std::optional<Failure> f = r.stages.back().failure) {
+    require((*f == Failure::kNoModel) == (r.model.model == affine_orb::GeometricModel::kNone));
+    if (*f == Failure::kFewInliers) require(r.inlier_count < options.min_inliers);
+    if (*f == Failure::kFalseAlarms)
+      require(r.log10_false_alarms && *r.log10_false_alarms > std::log10(*options.max_false_alarms));
+    if (*f == Failure::kInlierRatio) require(options.min_inlier_ratio.has_value());
+    if (*f == Failure::kImprecise)
+      require(r.inlier_count >= options.min_inliers && r.model.model == affine_orb::GeometricModel::kHomography);
+  }
   // The last stage's search replaces a model only when on, on a reported stage, by a homography.
   for (std::size_t k = 0; k < r.stages.size(); ++k) {
     const affine_orb::TwoViewStageReport& s = r.stages[k];

@@ -27,11 +27,12 @@
 // ModelSelectionOptions, so the own homographies come from the same estimator. --peer-cache FILE reads the OpenCV
 // peers' rows from FILE when there and appends the ones it computes, so that reruns of our methods are cheap.
 // --sweep adds matcher variants (stages, min_inliers, the support tests, the final fit's Cauchy
-// scale and max_error, the last stage's search, the rule choosing between H and F), the measurement behind
-// TwoViewOptions' defaults. --placement adds where the keypoints land: for plain 2000 and views on
-// demand, with and without sub-pixel positions, per octave of the keypoint in image 1 and in image
-// 2, the residuals |H·x1 − x2| (ground truth H, pixels of image 2, level-0 coordinates) of the
-// matches correct within 3 px over all pairs run: count, median and 90th percentile. --repeats N
+// scale and max_error, the RANSAC searches, the last stage's search, the alignment's options, the
+// rule choosing between H and F), the measurement behind TwoViewOptions' defaults. --placement
+// adds where the keypoints land: for plain 2000 and views on demand, with and without sub-pixel
+// positions, per octave of the keypoint in image 1 and in image 2, the residuals |H·x1 − x2|
+// (ground truth H, pixels of image 2, level-0 coordinates) of the matches correct within 3 px over
+// all pairs run: count, median and 90th percentile. --repeats N
 // runs every method it computes N times on each pair in a row and reports the median time (the
 // methods are deterministic: the outcome is the last run's); one run by default. Rows read from
 // --peer-cache keep the time of the run that wrote them. --origins adds, per matcher and subset, the
@@ -851,7 +852,8 @@ void stage_and_support_variants(const Variant& variant) {
 }
 
 /// --sweep's variants of the estimation: the final fit's Cauchy scale and max_error, the RANSAC
-/// searches, the last stage's search, a plain stage of 1000.
+/// searches, the last stage's search, aligned correspondences with other
+/// CorrespondenceAlignmentOptions, a plain stage of 1000.
 void estimation_variants(const Variant& variant) {
   for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{{1.0, 2.0},
                                                                            {1.0, 2.4},
@@ -886,6 +888,18 @@ void estimation_variants(const Variant& variant) {
     variant(name, [sigma](auto& o) {
       o.last_stage_search = affine_orb::LastStageSearchOptions{};
       o.last_stage_search->sigma = sigma;
+    });
+  }
+  const std::vector<std::pair<std::string, std::function<void(affine_orb::CorrespondenceAlignmentOptions&)>>> aligned =
+      {{"patch_radius 4", [](auto& a) { a.patch_radius = 4; }},
+       {"patch_radius 7", [](auto& a) { a.patch_radius = 7; }},
+       {"min_correlation 0.9", [](auto& a) { a.min_correlation = 0.9; }},
+       {"max_shift 1 px", [](auto& a) { a.max_shift = 1.0; }},
+       {"min_texture 16", [](auto& a) { a.min_texture = 16.0; }}};
+  for (const auto& [name, change] : aligned) {
+    variant("aligned, " + name, [change = change](auto& o) {
+      o.align_correspondences = affine_orb::CorrespondenceAlignmentOptions{};
+      change(*o.align_correspondences);
     });
   }
   variant("plain 1000 first", [](auto& o) {

@@ -408,24 +408,24 @@ void print_json(const Settings& s, const Outcome& o) {
 
 /// Why views on demand did not verify the pair: the test the last stage's model failed, with its measure.
 std::string failure_text(const Settings& s, const Outcome& o) {
-  const affine_orb::TwoViewOptions defaults;
+  const affine_orb::TwoViewOptions options = two_view_options(s.plan);
   char text[200] = "";
   switch (o.failure.value_or(affine_orb::VerificationFailure::kNoModel)) {
     case affine_orb::VerificationFailure::kNoModel:
       return "no model (fewer than 8 matches, or neither a homography nor F found)";
     case affine_orb::VerificationFailure::kFewInliers:
-      std::snprintf(text, sizeof text, "fewer than %d inliers of the chosen model", s.plan.min_inliers);
+      std::snprintf(text, sizeof text, "fewer than %d inliers of the chosen model", options.min_inliers);
       break;
     case affine_orb::VerificationFailure::kFalseAlarms:
       std::snprintf(text, sizeof text, "its inliers are as many as chance gives (10^%.1f false alarms, at most %g)",
-                    o.log10_false_alarms.value_or(0.0), *defaults.max_false_alarms);
+                    o.log10_false_alarms.value_or(0.0), *options.max_false_alarms);
       break;
     case affine_orb::VerificationFailure::kInlierRatio:
       return "too small a share of the matches are inliers";
     case affine_orb::VerificationFailure::kImprecise:
       std::snprintf(text, sizeof text,
                     "the homographies of its inliers' two halves map image 1's corners %.1f px apart (at most %g)",
-                    o.half_disagreement.value_or(0.0), *defaults.max_half_disagreement);
+                    o.half_disagreement.value_or(0.0), *options.max_half_disagreement);
       break;
   }
   return text;

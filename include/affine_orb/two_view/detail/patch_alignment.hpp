@@ -68,10 +68,19 @@ inline std::optional<PatchTemplate> patch_template(const cv::Mat& image1, const 
   const std::size_t n = static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
   if (!samplable(image1, point1, Eigen::Matrix2d::Identity(), radius + 1.0)) return std::nullopt;
   work.bordered.resize(static_cast<std::size_t>(bside) * static_cast<std::size_t>(bside));
+  // The samples lie a whole number of pixels apart, so all share the bilinear weights of the
+  // first: the values sample_bilinear() gives at each, without its per-sample conversions.
+  const double x0 = point1.x() - radius - 1, y0 = point1.y() - radius - 1;
+  const int ix = static_cast<int>(x0), iy = static_cast<int>(y0);
+  const double ax = x0 - ix, ay = y0 - iy;
   for (int j = 0; j < bside; ++j) {
+    const std::uint8_t* r0 = image1.ptr<std::uint8_t>(iy + j) + ix;
+    const std::uint8_t* r1 = r0 + image1.step[0];
+    double* out = work.bordered.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(bside);
     for (int i = 0; i < bside; ++i) {
-      work.bordered[static_cast<std::size_t>(j * bside + i)] =
-          sample_bilinear(image1, point1.x() + (i - radius - 1), point1.y() + (j - radius - 1));
+      const double top = r0[i] + ax * (r0[i + 1] - r0[i]);
+      const double bottom = r1[i] + ax * (r1[i + 1] - r1[i]);
+      out[i] = top + ay * (bottom - top);
     }
   }
   work.templ.resize(n);
@@ -120,12 +129,14 @@ inline std::optional<WarpedPatch> warp_patch(const cv::Mat& image2, const Eigen:
   if (!samplable(image2, c, a, radius)) return std::nullopt;
   work.warped.resize(n);
   double wmean = 0.0;
+  double* out = work.warped.data();
   for (int j = 0; j < side; ++j) {
     // x2 = c + A·(i − r, j − r), stepped along the row.
-    Eigen::Vector2d x2 = c + a * Eigen::Vector2d(-radius, j - radius);
-    for (int i = 0; i < side; ++i, x2 += a.col(0)) {
-      const double v = sample_bilinear(image2, x2.x(), x2.y());
-      work.warped[static_cast<std::size_t>(j * side + i)] = v;
+    double x = c.x() + (a(0, 0) * -radius + a(0, 1) * (j - radius));
+    double y = c.y() + (a(1, 0) * -radius + a(1, 1) * (j - radius));
+    for (int i = 0; i < side; ++i, x += a(0, 0), y += a(1, 0)) {
+      const double v = sample_bilinear(image2, x, y);
+      *out++ = v;
       wmean += v;
     }
   }

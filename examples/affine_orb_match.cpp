@@ -1,15 +1,16 @@
 // affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]
 //                  [--features N] [--threads K] [--spreading strongest|quadtree] [--all-stages]
-//                  [--min-inliers N] [--no-last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]
-//                  [--save-matches FILE] [--json]
+//                  [--min-inliers N] [--no-last-stage-search] [--align] [--one-shot] [--out PNG]
+//                  [--rectified PNG] [--save-matches FILE] [--json]
 //
 // Matches two images with views on demand (TwoViewMatcher, two_view.hpp): plain Affine-ORB
 // keypoints first, the affine views of stronger tilts only while the pair is not verified; each
 // stage matches (SPEC §4) and selects the homography or the fundamental matrix (SPEC §5). With a
 // ground-truth homography (x2 ~ H x1: the Oxford plain-text format or OpenCV's XML/YAML) it counts
-// the correct matches (SPEC §7: ‖H x1 − x2‖ < 3 px). --one-shot extracts every view at once
-// instead (Extractor::extract). With no image arguments it uses Debian opencv-doc's graf1.png,
-// graf3.png and H1to3p.xml.
+// the correct matches (SPEC §7: ‖H x1 − x2‖ < 3 px) and their median error. --align aligns the
+// matches of a verified homography with image 1's patches (sub-pixel correspondences). --one-shot extracts every view
+// at once instead (Extractor::extract). With no image arguments it uses Debian opencv-doc's graf1.png, graf3.png and
+// H1to3p.xml.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -52,8 +53,8 @@ std::string usage() {
   const affine_orb::ExtractorOptions one_shot;
   return "usage: affine_orb_match [IMG1 IMG2] [--homography FILE] [--max-tilt T] [--descriptor rbrief|brisk]\n"
          "                        [--features N] [--threads K] [--spreading S] [--all-stages] [--min-inliers N]\n"
-         "                        [--no-last-stage-search] [--one-shot] [--out PNG] [--rectified PNG]\n"
-         "                        [--save-matches FILE] [--json]\n"
+         "                        [--no-last-stage-search] [--align] [--one-shot] [--out PNG]\n"
+         "                        [--rectified PNG] [--save-matches FILE] [--json]\n"
          "  no images: /usr/share/doc/opencv-doc/examples/data/graf1.png, graf3.png and H1to3p.xml (Debian\n"
          "             opencv-doc), writing matches.png and rectified.png unless --out/--rectified say otherwise\n"
          "  views on demand (the default): stage 0 matches the images' own keypoints; while the pair is not\n"
@@ -79,6 +80,10 @@ std::string usage() {
          std::to_string(affine_orb::LastStageSearchOptions{}.ransac.max_iterations) +
          " samples for a homography alone on its matches\n"
          "                     replaces it when it scores higher (not with --one-shot)\n"
+         "  --align            image 2's point of every match of a verified homography aligned with image 1's\n"
+         "                     patch under it (sub-pixel, TwoViewOptions::align_correspondences), the homography\n"
+         "                     fitted again on them; --save-matches and --out then show the aligned points\n"
+         "                     (not with --one-shot)\n"
          "  --one-shot         every view at once (Extractor::extract), matched once; --features then defaults to " +
          std::to_string(one_shot.features) +
          "\n"
@@ -86,7 +91,8 @@ std::string usage() {
          std::to_string(one_shot.features +
                         static_cast<int>(std::lround(one_shot.additive_budget()->view_features * one_shot.features))) +
          " keypoints per image in all\n"
-         "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix\n"
+         "  --homography FILE  ground truth x2 ~ H x1: 9 numbers (Oxford format) or an OpenCV XML/YAML matrix;\n"
+         "                     the output then counts the correct matches (within 3 px) and their median error\n"
          "  --spreading S      strongest (default: most repeatable) or quadtree (spread over the image, for SLAM)\n"
          "  --out PNG          the matches side by side (green correct, red wrong; without ground truth:\n"
          "                     green = inlier of the chosen model)\n"
@@ -106,6 +112,11 @@ cv::Mat read_gray(const std::string& path) {
 struct Outcome {
   std::size_t keypoints1 = 0, keypoints2 = 0, views = 0, matches = 0, correct = 0, distinct = 0, inliers = 0;
   bool ground_truth = false;
+  /// With ground truth: the median distance of the correct matches' image-2 points from where it
+  /// puts their image-1 points, pixels (0 when none is correct).
+  double median_error = 0.0;
+  /// --align: the matches whose image-2 point was aligned.
+  int aligned = 0;
   /// The first call of a new Extractor or matcher (it sizes its workspace), then steady-state times
   /// (views on demand: ms_extract1 is both images' extraction over every stage run).
   double ms_first_extract = 0, ms_extract1 = 0, ms_extract2 = 0, ms_match = 0, ms_model = 0;
@@ -134,6 +145,7 @@ struct Plan {
   bool all_stages = false;
   int min_inliers = affine_orb::TwoViewOptions{}.min_inliers;
   bool last_stage_search = affine_orb::TwoViewOptions{}.last_stage_search.has_value();
+  bool align = false;
 };
 
 /// The matcher's options for `plan`: its stages up to the extractor's max_tilt (stages_up_to()).
@@ -144,6 +156,7 @@ affine_orb::TwoViewOptions two_view_options(const Plan& plan) {
   options.all_stages = plan.all_stages;
   options.min_inliers = plan.min_inliers;
   if (!plan.last_stage_search) options.last_stage_search.reset();
+  if (plan.align) options.align_correspondences.emplace();
   return options;
 }
 
@@ -152,6 +165,9 @@ template <class Descriptor>
 struct Matched {
   affine_orb::Features<Descriptor::kBits> features1, features2;
   std::vector<affine_orb::Match> matches;
+  /// Views on demand: image 2's point of each match (TwoViewResult::points2, aligned with --align);
+  /// empty for --one-shot, whose points are the keypoints'.
+  std::vector<cv::Point2f> points2;
   Outcome outcome;
 };
 
@@ -196,6 +212,8 @@ Matched<Descriptor> match_on_demand(const cv::Mat& image1, const cv::Mat& image2
   m.features1 = std::move(r.features1);
   m.features2 = std::move(r.features2);
   m.matches = std::move(r.matches);
+  m.points2 = std::move(r.points2);
+  o.aligned = r.aligned_count;
   o.selection = std::move(r.model);
   o.stage = r.stage;
   o.verified = r.verified;
@@ -221,21 +239,30 @@ Matched<Descriptor> match_on_demand(const cv::Mat& image1, const cv::Mat& image2
 struct Correctness {
   std::vector<char> correct;
   std::size_t count = 0, distinct = 0;
+  double median_error = 0.0;  ///< of the correct matches, pixels (0 when none is)
 };
 
 Correctness check_matches(const cv::Matx33d& truth, const affine_orb::MatchedPoints& pairs) {
   Correctness c;
   c.correct.assign(pairs.points1.size(), 0);
   std::set<std::pair<int, int>> cells;
+  std::vector<double> errors;
   for (std::size_t k = 0; k < pairs.points1.size(); ++k) {
     const cv::Vec3d q = truth * cv::Vec3d(pairs.points1[k].x, pairs.points1[k].y, 1.0);
-    c.correct[k] = std::hypot(q[0] / q[2] - pairs.points2[k].x, q[1] / q[2] - pairs.points2[k].y) < 3.0;
-    if (c.correct[k])
-      cells.insert(
-          {static_cast<int>(std::floor(pairs.points1[k].x / 2)), static_cast<int>(std::floor(pairs.points1[k].y / 2))});
+    const double error = std::hypot(q[0] / q[2] - pairs.points2[k].x, q[1] / q[2] - pairs.points2[k].y);
+    c.correct[k] = error < 3.0;
+    if (!c.correct[k]) continue;
+    errors.push_back(error);
+    cells.insert(
+        {static_cast<int>(std::floor(pairs.points1[k].x / 2)), static_cast<int>(std::floor(pairs.points1[k].y / 2))});
   }
-  c.count = static_cast<std::size_t>(std::count(c.correct.begin(), c.correct.end(), 1));
+  c.count = errors.size();
   c.distinct = cells.size();
+  if (!errors.empty()) {
+    const auto middle = errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2);
+    std::nth_element(errors.begin(), middle, errors.end());
+    c.median_error = *middle;
+  }
   return c;
 }
 
@@ -293,8 +320,8 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
   o.keypoints1 = m.features1.size();
   o.keypoints2 = m.features2.size();
   o.matches = m.matches.size();
-  const affine_orb::MatchedPoints pairs =
-      affine_orb::matched_points(m.features1.keypoints, m.features2.keypoints, m.matches);
+  affine_orb::MatchedPoints pairs = affine_orb::matched_points(m.features1.keypoints, m.features2.keypoints, m.matches);
+  if (!m.points2.empty()) pairs.points2 = m.points2;
   const std::vector<std::uint8_t> inlier_mask = o.selection.chosen_inliers();
   o.inliers = o.selection.chosen_inlier_count();
   Correctness correctness;
@@ -303,6 +330,7 @@ Outcome run(const cv::Mat& image1, const cv::Mat& image2, const Plan& plan, cons
     correctness = check_matches(*truth, pairs);
     o.correct = correctness.count;
     o.distinct = correctness.distinct;
+    o.median_error = correctness.median_error;
   }
   if (!save_matches_path.empty()) save_matches(save_matches_path, pairs);
   if (!out.empty()) {
@@ -338,6 +366,10 @@ std::optional<Settings> parse_settings(affine_orb::examples::Args& args) {
     throw std::invalid_argument("--no-last-stage-search: a stage of views on demand, not --one-shot");
   }
   s.plan.last_stage_search = !no_search;
+  s.plan.align = args.flag("--align");
+  if (s.plan.one_shot && s.plan.align) {
+    throw std::invalid_argument("--align: an option of views on demand, not --one-shot");
+  }
   affine_orb::ExtractorOptions& options = s.plan.extractor;
   // Views on demand: the matcher's extractor (2000 image keypoints, the strongest corners). One
   // shot: 1000 from each image and as many from its views (the additive budget), 2000 in all.
@@ -386,9 +418,15 @@ void print_json(const Settings& s, const Outcome& o) {
     }
   }
   if (o.ground_truth) {
-    std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, ", o.correct, o.distinct, precision);
+    std::printf("\"correct\": %zu, \"distinct_correct\": %zu, \"precision\": %.4f, \"median_correct_error\": %.4f, ",
+                o.correct, o.distinct, precision, o.median_error);
   } else {
-    std::printf("\"correct\": null, \"distinct_correct\": null, \"precision\": null, ");
+    std::printf("\"correct\": null, \"distinct_correct\": null, \"precision\": null, \"median_correct_error\": null, ");
+  }
+  if (s.plan.align) {
+    std::printf("\"aligned\": %d, ", o.aligned);
+  } else {
+    std::printf("\"aligned\": null, ");
   }
   std::printf(
       "\"model\": \"%s\", \"parallax_significance\": %.3f, \"parallax_significance_threshold\": %.2f, "
@@ -445,8 +483,11 @@ void print_text(const Settings& s, const Outcome& o) {
                 failure_text(s, o).c_str());
   }
   std::printf("keypoints %zu / %zu, matches %zu", o.keypoints1, o.keypoints2, o.matches);
-  if (o.ground_truth)
-    std::printf(", correct %zu (%.0f%%), distinct correct %zu", o.correct, 100 * precision, o.distinct);
+  if (o.ground_truth) {
+    std::printf(", correct %zu (%.0f%%, median error %.2f px), distinct correct %zu", o.correct, 100 * precision,
+                o.median_error, o.distinct);
+  }
+  if (s.plan.align) std::printf(", aligned %d", o.aligned);
   if (o.searched) {
     // The parallax verdict belongs to the stage's own estimate, which the search replaced.
     std::printf("\nmodel homography (the last stage's search for a homography alone), %zu inliers\n", o.inliers);

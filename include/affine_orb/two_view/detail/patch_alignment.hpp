@@ -17,16 +17,20 @@
 
 namespace affine_orb::detail {
 
+/// Bilinear interpolation at fractions (ax, ay) of a pixel between r0[0], r0[1] (one image row)
+/// and r1[0], r1[1] (the next).
+inline double interpolate(const std::uint8_t* r0, const std::uint8_t* r1, double ax, double ay) {
+  const double top = r0[0] + ax * (r0[1] - r0[0]);
+  const double bottom = r1[0] + ax * (r1[1] - r1[0]);
+  return top + ay * (bottom - top);
+}
+
 /// Grey level of a CV_8UC1 image at (x, y), bilinear between the four pixel centres around it.
 /// The caller keeps 0 <= x < cols − 1 and 0 <= y < rows − 1.
 inline double sample_bilinear(const cv::Mat& image, double x, double y) {
   const int ix = static_cast<int>(x), iy = static_cast<int>(y);
-  const double ax = x - ix, ay = y - iy;
   const std::uint8_t* r0 = image.ptr<std::uint8_t>(iy) + ix;
-  const std::uint8_t* r1 = r0 + image.step[0];
-  const double top = r0[0] + ax * (r0[1] - r0[0]);
-  const double bottom = r1[0] + ax * (r1[1] - r1[0]);
-  return top + ay * (bottom - top);
+  return interpolate(r0, r0 + image.step[0], x - ix, y - iy);
 }
 
 /// True when the parallelogram centre + A·[−half, half]² lies where sample_bilinear() may read.
@@ -77,11 +81,7 @@ inline std::optional<PatchTemplate> patch_template(const cv::Mat& image1, const 
     const std::uint8_t* r0 = image1.ptr<std::uint8_t>(iy + j) + ix;
     const std::uint8_t* r1 = r0 + image1.step[0];
     double* out = work.bordered.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(bside);
-    for (int i = 0; i < bside; ++i) {
-      const double top = r0[i] + ax * (r0[i + 1] - r0[i]);
-      const double bottom = r1[i] + ax * (r1[i + 1] - r1[i]);
-      out[i] = top + ay * (bottom - top);
-    }
+    for (int i = 0; i < bside; ++i) out[i] = interpolate(r0 + i, r1 + i, ax, ay);
   }
   work.templ.resize(n);
   work.gx.resize(n);

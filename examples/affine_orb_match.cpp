@@ -8,9 +8,9 @@
 // stage matches (SPEC §4) and selects the homography or the fundamental matrix (SPEC §5). With a
 // ground-truth homography (x2 ~ H x1: the Oxford plain-text format or OpenCV's XML/YAML) it counts
 // the correct matches (SPEC §7: ‖H x1 − x2‖ < 3 px) and their median error. --align aligns the
-// matches of a verified homography with image 1's patches (sub-pixel correspondences). --one-shot extracts every view
-// at once instead (Extractor::extract). With no image arguments it uses Debian opencv-doc's graf1.png, graf3.png and
-// H1to3p.xml.
+// matches of a verified homography with image 1's patches (sub-pixel correspondences). --one-shot
+// extracts every view at once instead (Extractor::extract). With no image arguments it uses Debian
+// opencv-doc's graf1.png, graf3.png and H1to3p.xml.
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <string>
 #include <utility>
@@ -74,6 +75,40 @@ double mean_error(const std::vector<cv::Point2f>& points, const std::vector<Eige
   return n > 0 ? sum / n : std::numeric_limits<double>::infinity();
 }
 
+/// Normalised cross-correlation, computed naively, of image 1's (2·radius + 1)² patch around x1
+/// with image 2 sampled at x2 + A·u (bilinear, per sample).
+double naive_correlation(const cv::Mat& image1, const cv::Mat& image2, const Eigen::Vector2d& x1,
+                         const Eigen::Vector2d& x2, const Eigen::Matrix2d& a, int radius) {
+  const auto bilinear = [](const cv::Mat& image, const Eigen::Vector2d& x) {
+    const int ix = static_cast<int>(std::floor(x.x())), iy = static_cast<int>(std::floor(x.y()));
+    const double fx = x.x() - ix, fy = x.y() - iy;
+    const auto at = [&](int r, int c) { return static_cast<double>(image.at<std::uint8_t>(r, c)); };
+    return (1 - fy) * ((1 - fx) * at(iy, ix) + fx * at(iy, ix + 1)) +
+           fy * ((1 - fx) * at(iy + 1, ix) + fx * at(iy + 1, ix + 1));
+  };
+  std::vector<double> t, w;
+  for (int j = -radius; j <= radius; ++j) {
+    for (int i = -radius; i <= radius; ++i) {
+      t.push_back(bilinear(image1, x1 + Eigen::Vector2d(i, j)));
+      w.push_back(bilinear(image2, x2 + a * Eigen::Vector2d(i, j)));
+    }
+  }
+  const auto centred = [](std::vector<double>& v) {
+    double mean = 0.0;
+    for (double x : v) mean += x / static_cast<double>(v.size());
+    for (double& x : v) x -= mean;
+  };
+  centred(t);
+  centred(w);
+  double tw = 0.0, tt = 0.0, ww = 0.0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    tw += t[k] * w[k];
+    tt += t[k] * t[k];
+    ww += w[k] * w[k];
+  }
+  return tw / std::sqrt(tt * ww);
+}
+
 }  // namespace
 
 TEST_CASE("aligned points land within a twentieth of a pixel of the truth on a known warp") {
@@ -97,6 +132,36 @@ TEST_CASE("aligned points land within a twentieth of a pixel of the truth on a k
   for (std::size_t i = 0; i < r.points2.size(); ++i) {
     if (!r.aligned[i]) CHECK(r.points2[i] == p.points2[i]);
   }
+}
+
+TEST_CASE("align_patch reports the correlation of the patches at the point it returns") {
+  // The alignment stops after an update below 0.01 px without sampling image 2 again, so the
+  // correlation it reports is the one before that update: it must still be the returned point's.
+  const cv::Mat image1 = affine_orb::test::graf(1);
+  const Eigen::Matrix3d h = known_homography();
+  const cv::Mat image2 = warped(image1, h);
+  const Perturbed p = perturbed_keypoints(image1, h, 1.5);
+  affine_orb::detail::PatchAlignmentWork work;
+  int checked = 0;
+  double worst = 0.0;
+  for (std::size_t i = 0; i < p.points1.size(); i += 7) {
+    const Eigen::Vector2d x1(p.points1[i].x, p.points1[i].y);
+    const Eigen::Vector3d hx = h * x1.homogeneous();
+    const Eigen::Vector2d projected = hx.hnormalized();
+    Eigen::Matrix2d a;
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 2; ++c) a(r, c) = (h(r, c) - projected(r) * h(2, c)) / hx.z();
+    const Eigen::Vector2d start(p.points2[i].x, p.points2[i].y);
+    const std::optional<affine_orb::detail::PatchAlignment> found =
+        affine_orb::detail::align_patch(image1, image2, x1, start, a, 5, 5, 4.0, 2.0, work);
+    if (!found) continue;
+    CHECK((found->point2 - start).norm() <= 2.0);
+    worst = std::max(worst, std::abs(found->correlation - naive_correlation(image1, image2, x1, found->point2, a, 5)));
+    ++checked;
+  }
+  MESSAGE(checked << " patches, largest difference from the correlation at the returned point " << worst);
+  CHECK(checked > 50);
+  CHECK(worst < 2e-3);
 }
 
 TEST_CASE("a change of light between the images does not move the aligned points") {

@@ -33,9 +33,10 @@ struct CorrespondenceAlignmentOptions {
   /// Lucas–Kanade updates at most, in [1, 100]; an alignment that starts within 1.5 px converges
   /// in 3–5 (10 gains 0.004 px over 5 on the same warp).
   int iterations = 5;
-  /// An alignment that moves the image-2 point further than this from where it started, pixels of
-  /// image 2, is rejected (the point keeps its position): the matches handed in are inliers of H
-  /// within about 2.4 px, so a longer move is a slide along an edge or onto a neighbour. In (0, 16].
+  /// An alignment whose update moves the image-2 point further than this from where it started,
+  /// pixels of image 2, stops there and is rejected (the point keeps its position): the matches
+  /// handed in are inliers of H within about 2.4 px, so a longer move is a slide along an edge or
+  /// onto a neighbour. In (0, 16].
   double max_shift = 2.0;
   /// An alignment whose patches correlate less than this (normalised cross-correlation after
   /// alignment, [-1, 1]) is rejected: the patches do not show the same surface (occlusion, a
@@ -73,9 +74,9 @@ struct AlignedCorrespondences {
 /// sampled through H's first-order (affine) expansion at points1[i], starting from points2[i],
 /// with mean and contrast normalised (a change of light does not move it). scales1[i] is the scale
 /// of the image-1 keypoint's octave, s^octave (>= 1; 1 for level-0 points). A correspondence whose
-/// patch leaves an image, is too weakly textured, moves more than max_shift or correlates less than
-/// min_correlation keeps points2[i]. Throws std::invalid_argument for images that are not CV_8UC1
-/// or empty, lists of different lengths, a non-finite point or scale, a scale below 1, a
+/// patch leaves an image, is too weakly textured, moves further than max_shift or correlates less
+/// than min_correlation keeps points2[i]. Throws std::invalid_argument for images that are not
+/// CV_8UC1 or empty, lists of different lengths, a non-finite point or scale, a scale below 1, a
 /// homography that is not finite, or invalid options.
 inline AlignedCorrespondences align_correspondences(const cv::Mat& image1, const cv::Mat& image2,
                                                     const std::vector<cv::Point2f>& points1,
@@ -113,11 +114,8 @@ inline AlignedCorrespondences align_correspondences(const cv::Mat& image1, const
     const Eigen::Vector2d start(q.x, q.y);
     const std::optional<detail::PatchAlignment> patch =
         detail::align_patch(image1, image2, Eigen::Vector2d(p.x, p.y), start, jacobian, radius, options.iterations,
-                            options.min_texture, work);
-    if (!patch || patch->correlation < options.min_correlation ||
-        !((patch->point2 - start).norm() <= options.max_shift)) {
-      continue;
-    }
+                            options.min_texture, options.max_shift, work);
+    if (!patch || patch->correlation < options.min_correlation) continue;
     out.points2[i] = cv::Point2f(static_cast<float>(patch->point2.x()), static_cast<float>(patch->point2.y()));
     out.aligned[i] = 1;
     ++out.aligned_count;

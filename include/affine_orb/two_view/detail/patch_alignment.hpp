@@ -168,29 +168,30 @@ inline Eigen::Vector2d alignment_step(const PatchAlignmentWork& work, double gai
 /// image2 sampled through x2 = c + A·u (u the patch offset from point1, pixels of image 1), starting
 /// from c = `start`: translation-only inverse-compositional Lucas–Kanade on mean- and
 /// contrast-normalised patches, until an update is below 0.01 pixels of image 1 or `iterations`
-/// updates. nullopt when a sample would fall outside either image, the patch is too weakly textured in
-/// one direction (the smaller eigenvalue of its structure tensor below `min_texture` grey levels²
-/// per sample) or an update is not finite.
+/// updates. The correlation is measured on the last patch sampled: after a converged update, the
+/// one before it (the update moves c by less than 0.01 pixels of image 1, so the patch is not
+/// sampled again). nullopt when a sample would fall outside either image, the patch is too weakly
+/// textured in one direction (the smaller eigenvalue of its structure tensor below `min_texture`
+/// grey levels² per sample), an update is not finite or moves c further than `max_shift` pixels of
+/// image 2 from `start` (the alignment stops there: it slides along an edge or onto a neighbour).
 inline std::optional<PatchAlignment> align_patch(const cv::Mat& image1, const cv::Mat& image2,
                                                  const Eigen::Vector2d& point1, const Eigen::Vector2d& start,
                                                  const Eigen::Matrix2d& a, int radius, int iterations,
-                                                 double min_texture, PatchAlignmentWork& work) {
+                                                 double min_texture, double max_shift, PatchAlignmentWork& work) {
   const std::optional<PatchTemplate> templ = patch_template(image1, point1, radius, min_texture, work);
   if (!templ) return std::nullopt;
   Eigen::Vector2d c = start;
-  double correlation = 0.0;
-  bool converged = false;
   for (int it = 0;; ++it) {
     const std::optional<WarpedPatch> warped = warp_patch(image2, c, a, radius, work);
     if (!warped) return std::nullopt;
-    correlation = warped->cross / (warped->norm * templ->norm);
-    if (converged || it == iterations) break;
+    const double correlation = warped->cross / (warped->norm * templ->norm);
+    if (it == iterations) return PatchAlignment{c, correlation};
     const Eigen::Vector2d delta = alignment_step(work, templ->norm / warped->norm, templ->inverse_hessian);
     if (!delta.allFinite()) return std::nullopt;
     c -= a * delta;
-    converged = delta.norm() < 0.01;  // one more pass measures the correlation at the final c
+    if (!((c - start).norm() <= max_shift)) return std::nullopt;
+    if (delta.norm() < 0.01) return PatchAlignment{c, correlation};
   }
-  return PatchAlignment{c, correlation};
 }
 
 }  // namespace affine_orb::detail

@@ -146,17 +146,14 @@ TEST_CASE("align_patch reports the correlation of the patches at the point it re
   double worst = 0.0;
   for (std::size_t i = 0; i < p.points1.size(); i += 7) {
     const Eigen::Vector2d x1(p.points1[i].x, p.points1[i].y);
-    const Eigen::Vector3d hx = h * x1.homogeneous();
-    const Eigen::Vector2d projected = hx.hnormalized();
-    Eigen::Matrix2d a;
-    for (int r = 0; r < 2; ++r)
-      for (int c = 0; c < 2; ++c) a(r, c) = (h(r, c) - projected(r) * h(2, c)) / hx.z();
+    const std::optional<Eigen::Matrix2d> a = affine_orb::detail::homography_jacobian(h, x1);
+    REQUIRE(a);
     const Eigen::Vector2d start(p.points2[i].x, p.points2[i].y);
     const std::optional<affine_orb::detail::PatchAlignment> found =
-        affine_orb::detail::align_patch(image1, image2, x1, start, a, 5, 5, 4.0, 2.0, work);
+        affine_orb::detail::align_patch(image1, image2, x1, start, *a, 5, 5, 4.0, 2.0, work);
     if (!found) continue;
     CHECK((found->point2 - start).norm() <= 2.0);
-    worst = std::max(worst, std::abs(found->correlation - naive_correlation(image1, image2, x1, found->point2, a, 5)));
+    worst = std::max(worst, std::abs(found->correlation - naive_correlation(image1, image2, x1, found->point2, *a, 5)));
     ++checked;
   }
   MESSAGE(checked << " patches, largest difference from the correlation at the returned point " << worst);

@@ -101,20 +101,14 @@ inline AlignedCorrespondences align_correspondences(const cv::Mat& image1, const
                     "align_correspondences: points must be finite");
     detail::require(std::isfinite(scales1[i]) && scales1[i] >= 1.0f,
                     "align_correspondences: scales must be finite and >= 1");
-    // H's Jacobian at x1: d(π(H x))/dx for the projection π(a, b, c) = (a/c, b/c).
-    const Eigen::Vector3d hx = homography * Eigen::Vector3d(p.x, p.y, 1.0);
-    if (!(std::abs(hx.z()) > 1e-12)) continue;
-    const Eigen::Vector2d projected = hx.head<2>() / hx.z();
-    Eigen::Matrix2d jacobian;
-    for (int r = 0; r < 2; ++r)
-      for (int c = 0; c < 2; ++c) jacobian(r, c) = (homography(r, c) - projected(r) * homography(2, c)) / hx.z();
-    if (!jacobian.allFinite()) continue;
+    const Eigen::Vector2d x1(p.x, p.y);
+    const std::optional<Eigen::Matrix2d> jacobian = detail::homography_jacobian(homography, x1);
+    if (!jacobian) continue;
     const int radius = static_cast<int>(
         std::lround(std::min(2.0 * options.patch_radius, options.patch_radius * static_cast<double>(scales1[i]))));
     const Eigen::Vector2d start(q.x, q.y);
-    const std::optional<detail::PatchAlignment> patch =
-        detail::align_patch(image1, image2, Eigen::Vector2d(p.x, p.y), start, jacobian, radius, options.iterations,
-                            options.min_texture, options.max_shift, work);
+    const std::optional<detail::PatchAlignment> patch = detail::align_patch(
+        image1, image2, x1, start, *jacobian, radius, options.iterations, options.min_texture, options.max_shift, work);
     if (!patch || patch->correlation < options.min_correlation) continue;
     out.points2[i] = cv::Point2f(static_cast<float>(patch->point2.x()), static_cast<float>(patch->point2.y()));
     out.aligned[i] = 1;

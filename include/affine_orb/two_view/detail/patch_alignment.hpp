@@ -41,6 +41,19 @@ inline bool samplable(const cv::Mat& image, const Eigen::Vector2d& centre, const
          centre.y() + ey < image.rows - 1;
 }
 
+/// H's first-order (affine) map at x (pixels): d(π(H x))/dx for the projection
+/// π(a, b, c) = (a/c, b/c). nullopt where H x lies at infinity or the map is not finite.
+inline std::optional<Eigen::Matrix2d> homography_jacobian(const Eigen::Matrix3d& h, const Eigen::Vector2d& x) {
+  const Eigen::Vector3d hx = h * Eigen::Vector3d(x.x(), x.y(), 1.0);
+  if (!(std::abs(hx.z()) > 1e-12)) return std::nullopt;
+  const Eigen::Vector2d projected = hx.head<2>() / hx.z();
+  Eigen::Matrix2d jacobian;
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) jacobian(r, c) = (h(r, c) - projected(r) * h(2, c)) / hx.z();
+  if (!jacobian.allFinite()) return std::nullopt;
+  return jacobian;
+}
+
 /// Buffers of align_patch(), reused across correspondences.
 struct PatchAlignmentWork {
   std::vector<double> bordered;  ///< image 1's patch with a one-sample border, for the gradients

@@ -136,13 +136,19 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
   // Random source rows (extremes included) and column tables of several ratios; column ranges of
   // every remainder modulo 8.
   std::mt19937 rng(34);
-  for (const auto& widths : {std::pair<int, int>(640, 533), {533, 444}, {37, 31}, {100, 100}, {90, 200}}) {
+  std::size_t windowed = 0;  // blocks of the AVX2 column blend with a window, and without
+  std::size_t unwindowed = 0;
+  // 640 -> 200 spans more than a window per half block: the AVX2 blend's loads without one.
+  for (const auto& widths : {std::pair<int, int>(640, 533), {533, 444}, {37, 31}, {100, 100}, {90, 200}, {640, 200}}) {
     const int from = widths.first;  // not a structured binding: CAPTURE's lambda captures it
     const int to = widths.second;
     CAPTURE(from);
     CAPTURE(to);
     affine_orb::detail::ResizeWork work;
     work.prepare(cv::Size(from, 4), cv::Size(to, 3));
+    const auto with_window = static_cast<std::size_t>(std::count(work.windowed.begin(), work.windowed.end(), 1));
+    windowed += with_window;
+    unwindowed += work.windowed.size() - with_window;
     std::vector<std::uint8_t> top(static_cast<std::size_t>(from));
     std::vector<std::uint8_t> bottom(top.size());
     int mismatches = 0;
@@ -155,8 +161,10 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
       const int c0 = static_cast<int>(rng() % static_cast<unsigned>(from));
       const int c1 = c0 + static_cast<int>(rng() % static_cast<unsigned>(from - c0 + 1));
       mismatches += row_blend_mismatches(top, bottom, b, c0, c1);
-      // The column blend reads the whole blended row (plus the repeated last column).
-      std::vector<std::int16_t> blended(static_cast<std::size_t>(from) + 1, 0);
+      // The column blend reads the whole blended row (plus the repeated last column, plus the
+      // entries a window may load beyond it, which no column may use).
+      std::vector<std::int16_t> blended(static_cast<std::size_t>(from) + 1 + affine_orb::detail::ResizeWork::kWindow,
+                                        -1);
       affine_orb::detail::blend_rows_scalar(top.data(), bottom.data(), b, 0, from, blended.data());
       blended[static_cast<std::size_t>(from)] = blended[static_cast<std::size_t>(from) - 1];
       const int x0 = static_cast<int>(rng() % static_cast<unsigned>(to));
@@ -165,6 +173,8 @@ TEST_CASE("every resize row and column blend path gives the scalar references' v
     }
     CHECK(mismatches == 0);
   }
+  CHECK(windowed > 0);
+  CHECK(unwindowed > 0);
 }
 
 TEST_CASE("cv::resize's row pass: the SSE2 and AVX2 kernels give the scalar reference's sums") {

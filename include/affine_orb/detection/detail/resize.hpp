@@ -13,6 +13,7 @@
 /// has AVX2, chosen per row: core/detail/simd.hpp) give the same bytes.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -55,12 +56,24 @@ struct ResizeAxis {
 /// Buffers and tables of resize_bilinear(), recomputed when the sizes change (in the vectors'
 /// capacity: no allocation once they have held the largest sizes).
 struct ResizeWork {
+  /// Output columns per block of the AVX2 column blend.
+  static constexpr int kBlock = 8;
+  /// 16-bit entries of a window: each half of a block reads its four pairs from one 16-byte load.
+  static constexpr int kWindow = 8;
   cv::Size source;
   cv::Size target;
   ResizeAxis x;
   ResizeAxis y;
   std::vector<std::int32_t> x_weights;  ///< per output column: (128 − a) | a << 16
-  std::vector<std::int16_t> row;        ///< one vertically interpolated source row, plus one column
+  /// Per block of kBlock output columns (columns 8b .. 8b + 7): whether both its halves find their
+  /// pairs (row[i], row[i + 1]) within the kWindow entries from the half's first index, and the
+  /// vpshufb mask that moves each pair's four bytes from its half's window into the column's
+  /// 32-bit lane.
+  std::vector<std::uint8_t> windowed;
+  std::vector<std::array<std::uint8_t, 32>> spread;
+  /// One vertically interpolated source row, plus one column, plus kWindow entries that a window
+  /// may cover beyond the row (loaded, never selected).
+  std::vector<std::int16_t> row;
 
   void prepare(cv::Size from, cv::Size to) {
     if (from == source && to == target && !x.index.empty()) return;
@@ -73,7 +86,27 @@ struct ResizeWork {
       const std::int32_t a = x.fraction[d];
       x_weights[d] = (128 - a) | (a << 16);
     }
-    row.assign(static_cast<std::size_t>(from.width) + 1, 0);
+    set_windows();
+    row.assign(static_cast<std::size_t>(from.width) + 1 + kWindow, 0);
+  }
+
+ private:
+  void set_windows() {
+    const std::size_t blocks = x.index.size() / kBlock;
+    windowed.assign(blocks, 0);
+    spread.resize(blocks);
+    for (std::size_t b = 0; b < blocks; ++b) {
+      bool fits = true;
+      for (std::size_t k = 0; k < kBlock; ++k) {
+        const std::size_t d = b * kBlock + k;
+        const int offset = x.index[d] - x.index[d & ~std::size_t{3}];  // from its half's first index
+        fits = fits && offset + 2 <= kWindow;
+        for (int byte = 0; byte < 4; ++byte) {
+          spread[b][4 * k + static_cast<std::size_t>(byte)] = static_cast<std::uint8_t>(2 * offset + byte);
+        }
+      }
+      windowed[b] = fits;
+    }
   }
 };
 
@@ -84,7 +117,8 @@ inline void blend_rows_scalar(const std::uint8_t* top, const std::uint8_t* botto
   for (int c = c0; c < c1; ++c) row[c] = static_cast<std::int16_t>((128 - b) * top[c] + b * bottom[c]);
 }
 
-/// Output columns [x0, x1) from the blended row: the scalar reference.
+/// Output columns [x0, x1) from the blended row (ResizeWork::row: its source columns, the last one
+/// repeated, then kWindow more entries for the AVX2 path's windows): the scalar reference.
 inline void blend_columns_scalar(const ResizeWork& w, const std::int16_t* row, int x0, int x1, std::uint8_t* out) {
   for (int x = x0; x < x1; ++x) {
     const int i = w.x.index[static_cast<std::size_t>(x)];
@@ -159,10 +193,12 @@ inline void blend_rows_avx2(const std::uint8_t* top, const std::uint8_t* bottom,
   blend_rows_scalar(top, bottom, b, c, c1, row);
 }
 
-/// blend_columns_scalar(), eight columns at a time, identical bytes; the rest through
-/// blend_columns_sse2(). (A 32-bit gather of the pairs measured much slower on an AMD EPYC than
-/// these scalar loads.)
+/// blend_columns_scalar(), eight columns at a time, identical bytes: the blocks of
+/// ResizeWork::windowed with two 16-byte loads and one vpshufb, the others with eight scalar loads
+/// of their pairs (a 32-bit gather measured much slower on an AMD EPYC); columns before the first
+/// whole block and after the last through blend_columns_sse2().
 inline void blend_columns_avx2(const ResizeWork& w, const std::int16_t* row, int x0, int x1, std::uint8_t* out) {
+  constexpr int kBlock = ResizeWork::kBlock;
   const __m256i round = _mm256_set1_epi32(1 << 13);
   const int* index = w.x.index.data();
   auto pair = [&](int x) {
@@ -170,11 +206,25 @@ inline void blend_columns_avx2(const ResizeWork& w, const std::int16_t* row, int
     std::memcpy(&v, row + index[x], sizeof(v));
     return v;
   };
-  int x = x0;
-  for (; x + 8 <= x1; x += 8) {
-    const __m256i pairs = _mm256_setr_epi32(pair(x), pair(x + 1), pair(x + 2), pair(x + 3), pair(x + 4), pair(x + 5),
-                                            pair(x + 6), pair(x + 7));
-    const __m256i weights = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w.x_weights.data() + x));
+  auto window = [&](int x) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + index[x])); };
+  // The tables through local pointers: the stores to `out` may alias anything as far as the
+  // compiler knows, so members would be reloaded per block.
+  const std::uint8_t* windowed = w.windowed.data();
+  const std::array<std::uint8_t, 32>* spread = w.spread.data();
+  const std::int32_t* x_weights = w.x_weights.data();
+  const int start = std::min((x0 + kBlock - 1) / kBlock * kBlock, x1);
+  blend_columns_sse2(w, row, x0, start, out);
+  int x = start;
+  for (std::size_t b = static_cast<std::size_t>(start / kBlock); x + kBlock <= x1; x += kBlock, ++b) {
+    __m256i pairs;
+    if (windowed[b] != 0) {
+      pairs = _mm256_shuffle_epi8(_mm256_inserti128_si256(_mm256_castsi128_si256(window(x)), window(x + 4), 1),
+                                  _mm256_loadu_si256(reinterpret_cast<const __m256i*>(spread[b].data())));
+    } else {
+      pairs = _mm256_setr_epi32(pair(x), pair(x + 1), pair(x + 2), pair(x + 3), pair(x + 4), pair(x + 5), pair(x + 6),
+                                pair(x + 7));
+    }
+    const __m256i weights = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x_weights + x));
     const __m256i v = _mm256_srai_epi32(_mm256_add_epi32(_mm256_madd_epi16(pairs, weights), round), 14);
     const __m256i bytes = _mm256_packus_epi16(_mm256_packs_epi32(v, v), _mm256_setzero_si256());
     _mm_storel_epi64(reinterpret_cast<__m128i*>(out + x),

@@ -128,14 +128,15 @@ inline void blend_columns_scalar(const ResizeWork& w, const std::int16_t* row, i
 }
 
 #if defined(__SSE2__)
-/// blend_rows_scalar(), 16 columns at a time, identical values.
+/// blend_rows_scalar(), 16 columns at a time, identical values; the last 16 end at c1, overlapping
+/// the previous ones (a column computed twice gets the same value), and rows shorter than 16 go
+/// through the reference.
 inline void blend_rows_sse2(const std::uint8_t* top, const std::uint8_t* bottom, int b, int c0, int c1,
                             std::int16_t* row) {
   const __m128i wt = _mm_set1_epi16(static_cast<short>(128 - b));
   const __m128i wb = _mm_set1_epi16(static_cast<short>(b));
   const __m128i zero = _mm_setzero_si128();
-  int c = c0;
-  for (; c + 16 <= c1; c += 16) {
+  auto sixteen = [&](int c) {
     const __m128i t = _mm_loadu_si128(reinterpret_cast<const __m128i*>(top + c));
     const __m128i u = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bottom + c));
     const __m128i lo =
@@ -144,8 +145,14 @@ inline void blend_rows_sse2(const std::uint8_t* top, const std::uint8_t* bottom,
         _mm_add_epi16(_mm_mullo_epi16(_mm_unpackhi_epi8(t, zero), wt), _mm_mullo_epi16(_mm_unpackhi_epi8(u, zero), wb));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(row + c), lo);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(row + c + 8), hi);
+  };
+  int c = c0;
+  for (; c + 16 <= c1; c += 16) sixteen(c);
+  if (c < c1 && c1 - c0 >= 16) {
+    sixteen(c1 - 16);
+  } else {
+    blend_rows_scalar(top, bottom, b, c, c1, row);
   }
-  blend_rows_scalar(top, bottom, b, c, c1, row);
 }
 
 /// blend_columns_scalar(), eight and then four columns at a time, identical bytes.
@@ -178,19 +185,24 @@ inline void blend_columns_sse2(const ResizeWork& w, const std::int16_t* row, int
 }
 #if AFFINE_ORB_AVX2
 AFFINE_ORB_TARGET_AVX2_BEGIN
-/// blend_rows_scalar(), 32 columns at a time, identical values; the rest through blend_rows_sse2().
+/// blend_rows_sse2() with 16 columns in one 256-bit vector, identical values.
 inline void blend_rows_avx2(const std::uint8_t* top, const std::uint8_t* bottom, int b, int c0, int c1,
                             std::int16_t* row) {
   const __m256i wt = _mm256_set1_epi16(static_cast<short>(128 - b));
   const __m256i wb = _mm256_set1_epi16(static_cast<short>(b));
-  int c = c0;
-  for (; c + 16 <= c1; c += 16) {
+  auto sixteen = [&](int c) {
     const __m256i t = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(top + c)));
     const __m256i u = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(bottom + c)));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(row + c),
                         _mm256_add_epi16(_mm256_mullo_epi16(t, wt), _mm256_mullo_epi16(u, wb)));
+  };
+  int c = c0;
+  for (; c + 16 <= c1; c += 16) sixteen(c);
+  if (c < c1 && c1 - c0 >= 16) {
+    sixteen(c1 - 16);
+  } else {
+    blend_rows_scalar(top, bottom, b, c, c1, row);
   }
-  blend_rows_scalar(top, bottom, b, c, c1, row);
 }
 
 /// blend_columns_scalar(), eight columns at a time, identical bytes: the blocks of

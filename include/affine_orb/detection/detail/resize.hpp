@@ -136,7 +136,11 @@ inline void blend_rows_sse2(const std::uint8_t* top, const std::uint8_t* bottom,
   const __m128i wt = _mm_set1_epi16(static_cast<short>(128 - b));
   const __m128i wb = _mm_set1_epi16(static_cast<short>(b));
   const __m128i zero = _mm_setzero_si128();
-  auto sixteen = [&](int c) {
+  if (c1 - c0 < 16) {
+    blend_rows_scalar(top, bottom, b, c0, c1, row);
+    return;
+  }
+  for (int c = c0;; c = std::min(c + 16, c1 - 16)) {
     const __m128i t = _mm_loadu_si128(reinterpret_cast<const __m128i*>(top + c));
     const __m128i u = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bottom + c));
     const __m128i lo =
@@ -145,13 +149,7 @@ inline void blend_rows_sse2(const std::uint8_t* top, const std::uint8_t* bottom,
         _mm_add_epi16(_mm_mullo_epi16(_mm_unpackhi_epi8(t, zero), wt), _mm_mullo_epi16(_mm_unpackhi_epi8(u, zero), wb));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(row + c), lo);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(row + c + 8), hi);
-  };
-  int c = c0;
-  for (; c + 16 <= c1; c += 16) sixteen(c);
-  if (c < c1 && c1 - c0 >= 16) {
-    sixteen(c1 - 16);
-  } else {
-    blend_rows_scalar(top, bottom, b, c, c1, row);
+    if (c + 16 >= c1) break;
   }
 }
 
@@ -190,18 +188,16 @@ inline void blend_rows_avx2(const std::uint8_t* top, const std::uint8_t* bottom,
                             std::int16_t* row) {
   const __m256i wt = _mm256_set1_epi16(static_cast<short>(128 - b));
   const __m256i wb = _mm256_set1_epi16(static_cast<short>(b));
-  auto sixteen = [&](int c) {
+  if (c1 - c0 < 16) {
+    blend_rows_scalar(top, bottom, b, c0, c1, row);
+    return;
+  }
+  for (int c = c0;; c = std::min(c + 16, c1 - 16)) {
     const __m256i t = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(top + c)));
     const __m256i u = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(bottom + c)));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(row + c),
                         _mm256_add_epi16(_mm256_mullo_epi16(t, wt), _mm256_mullo_epi16(u, wb)));
-  };
-  int c = c0;
-  for (; c + 16 <= c1; c += 16) sixteen(c);
-  if (c < c1 && c1 - c0 >= 16) {
-    sixteen(c1 - 16);
-  } else {
-    blend_rows_scalar(top, bottom, b, c, c1, row);
+    if (c + 16 >= c1) break;
   }
 }
 

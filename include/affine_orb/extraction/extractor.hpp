@@ -233,7 +233,11 @@ class Extractor {
       }
       if (!turns_->wait(v)) return;
       if (!empty) {
-        if (merging() && v > 0) detail::drop_repeats(repeats_, work.levels);
+        if (merging() && v > 0) {
+          for (int l = 0; l < options_.pyramid.levels; ++l) {
+            detail::drop_repeats(repeats_, l, work.levels[static_cast<std::size_t>(l)]);
+          }
+        }
         choose(v, image.size(), work);
       }
       turns_->pass(v);
@@ -260,10 +264,12 @@ class Extractor {
     }
   }
 
-  /// Step 2 for view v: candidates of every level into work.levels (detail::detect_view()).
+  /// Step 2 for view v: candidates of every level into work.levels (detail::collect_candidates()).
   void detect_view(int v, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, ThreadWork& work) {
-    detail::detect_view(view_work_[static_cast<std::size_t>(v)], image, mask, pyramid, support_border(),
-                        options_.detector, work.detector, work.levels);
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      detail::collect_candidates(view_work_[static_cast<std::size_t>(v)], l, image, mask, pyramid, support_border(),
+                                 options_.detector, work.detector, work.levels[static_cast<std::size_t>(l)]);
+    }
   }
 
   /// Step 3, in view v's turn: the candidates each level describes (its final keypoints when

@@ -112,55 +112,49 @@ void prepare_view(const AffineView& view, cv::Size size, double antialias, const
   }
 }
 
-/// Step 2 of an Extractor for one view: the FAST candidates of every level of its `pyramid` among the
-/// level's valid pixels (support border `border` level pixels), kept where their original position
-/// lies in the image and the mask allows, into `levels` (one entry per level).
+/// Step 2 of an Extractor for level l of a view: the FAST candidates of level l of `view` (in
+/// `pyramid`) among the level's valid pixels (support border `border` level pixels) under
+/// `detector`, kept where their original position lies
+/// in the image and the mask allows, into `c`.
 template <int Bits>
-void detect_view(const ViewWork<Bits>& view, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid,
-                 int border, const DetectorOptions& detector, DetectorWorkspace& workspace,
-                 std::vector<LevelCandidates>& levels) {
+void collect_candidates(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask,
+                        const Pyramid& pyramid, int border, const DetectorOptions& detector,
+                        DetectorWorkspace& workspace, LevelCandidates& c) {
+  c.level_points.clear();
+  c.original_points.clear();
+  c.responses.clear();
+  const RowSpans& valid = view.levels[static_cast<std::size_t>(l)].valid;
+  if (valid.rows() == 0) return;
+  detect_candidates(pyramid.level(l), valid, cv::Point(border, border), detector, workspace, c.detected);
   const cv::Matx23d& back = view.view.to_original;
-  for (std::size_t l = 0; l < view.levels.size(); ++l) {
-    LevelCandidates& c = levels[l];
-    c.level_points.clear();
-    c.original_points.clear();
-    c.responses.clear();
-    const RowSpans& valid = view.levels[l].valid;
-    if (valid.rows() == 0) continue;
-    detect_candidates(pyramid.level(static_cast<int>(l)), valid, cv::Point(border, border), detector, workspace,
-                      c.detected);
-    for (std::size_t i = 0; i < c.detected.corners.size(); ++i) {
-      const Corner& corner = c.detected.corners[i];
-      const cv::Point2f p(static_cast<float>(corner.x), static_cast<float>(corner.y));
-      const cv::Point2d q = apply_affine(back, pyramid.to_level0(p, static_cast<int>(l)));
-      const int mx = cvRound(q.x);
-      const int my = cvRound(q.y);
-      if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) continue;
-      if (!mask.empty() && mask.at<std::uint8_t>(my, mx) == 0) continue;
-      c.level_points.push_back(p);
-      c.original_points.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
-      c.responses.push_back(c.detected.responses[i]);
-    }
+  for (std::size_t i = 0; i < c.detected.corners.size(); ++i) {
+    const Corner& corner = c.detected.corners[i];
+    const cv::Point2f p(static_cast<float>(corner.x), static_cast<float>(corner.y));
+    const cv::Point2d q = apply_affine(back, pyramid.to_level0(p, l));
+    const int mx = cvRound(q.x);
+    const int my = cvRound(q.y);
+    if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) continue;
+    if (!mask.empty() && mask.at<std::uint8_t>(my, mx) == 0) continue;
+    c.level_points.push_back(p);
+    c.original_points.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+    c.responses.push_back(c.detected.responses[i]);
   }
 }
 
 /// Step 3 of an Extractor, in a tilted view's turn, with DuplicatePolicy::kMerge: drops the
-/// candidates of every level that repeat a keypoint chosen by an earlier view (`repeats`).
-inline void drop_repeats(const RepeatGrids& repeats, std::vector<LevelCandidates>& levels) {
-  for (std::size_t l = 0; l < levels.size(); ++l) {
-    LevelCandidates& c = levels[l];
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < c.responses.size(); ++i) {
-      if (repeats.repeats(c.original_points[i], static_cast<int>(l))) continue;
-      c.level_points[n] = c.level_points[i];
-      c.original_points[n] = c.original_points[i];
-      c.responses[n] = c.responses[i];
-      ++n;
-    }
-    c.level_points.resize(n);
-    c.original_points.resize(n);
-    c.responses.resize(n);
+/// candidates of level l that repeat a keypoint chosen by an earlier view (`repeats`).
+inline void drop_repeats(const RepeatGrids& repeats, int l, LevelCandidates& c) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < c.responses.size(); ++i) {
+    if (repeats.repeats(c.original_points[i], l)) continue;
+    c.level_points[n] = c.level_points[i];
+    c.original_points[n] = c.original_points[i];
+    c.responses[n] = c.responses[i];
+    ++n;
   }
+  c.level_points.resize(n);
+  c.original_points.resize(n);
+  c.responses.resize(n);
 }
 
 /// The box, in original pixels, that the spreading of a view's level l divides (Extractor's step

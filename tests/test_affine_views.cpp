@@ -1,6 +1,7 @@
 // Affine view simulation (paper eqs. 13–16), mapping back to the original image, thread
-// determinism, repeats across views, the mask in tilted views, the renderer against its definition
-// and its SIMD paths, and the correct matches the views add on graf 1→3 (SPEC §1, §2, §4, §7).
+// determinism, repeats across views, a level's strong candidates first for a strongest selection,
+// the mask in tilted views, the renderer against its definition and its SIMD paths, and the correct
+// matches the views add on graf 1→3 (SPEC §1, §2, §4, §7).
 // Views on demand are tested in test_views_on_demand.cpp, the snapping of view keypoints to corners
 // in test_corner_snapping.cpp, the matching of affine feature sets in test_affine_matching.cpp.
 #include <doctest/doctest.h>
@@ -352,6 +353,100 @@ TEST_CASE("repeat suppression equals a brute-force reference") {
     }
     CHECK(want.size() < tilted * 3 / 4);  // the suppression really removes candidates
     CHECK(got == want);
+  }
+}
+
+namespace {
+
+/// How many of the k strongest of `got` differ from the k strongest of `want` (position in the
+/// level and in the image, response), and −1 when they are not as many.
+int strongest_differences(const affine_orb::detail::LevelCandidates& got,
+                          const affine_orb::detail::LevelCandidates& want, int k) {
+  const std::vector<int> a = affine_orb::select_strongest(got.responses, k);
+  const std::vector<int> b = affine_orb::select_strongest(want.responses, k);
+  if (a.size() != b.size()) return -1;
+  int differences = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const auto p = static_cast<std::size_t>(a[i]);
+    const auto q = static_cast<std::size_t>(b[i]);
+    differences += got.level_points[p] != want.level_points[q] || got.original_points[p] != want.original_points[q] ||
+                   got.responses[p] != want.responses[q];
+  }
+  return differences;
+}
+
+int count_at_least(const std::vector<float>& responses, int threshold) {
+  return static_cast<int>(
+      std::count_if(responses.begin(), responses.end(), [&](float r) { return r >= static_cast<float>(threshold); }));
+}
+
+}  // namespace
+
+TEST_CASE("a tilted view level's strong candidates hold the strongest of all its candidates") {
+  // detail::detect_level() with a selection size k scores only the corners at initial_threshold
+  // when there are k or more; the k strongest of them must be the k strongest of all the level's
+  // candidates (collect_candidates() at both thresholds, the reference), and with fewer it must
+  // give all the candidates. After repeats of an earlier view are dropped (here: of the level's
+  // strongest corners), drop_repeats_and_refill() must leave the k strongest of the reference
+  // without those repeats, refilling when the strong ones left are fewer than k.
+  const affine_orb::ExtractorOptions options;
+  const int border = 19;
+  const int initial = options.detector.initial_threshold;
+  for (const bool graf : {true, false}) {
+    CAPTURE(graf);
+    const cv::Mat image = graf ? affine_orb::test::graf(1) : affine_orb::test::textured_photo();
+    const affine_orb::AffineView view = affine_orb::make_view(2.0, 40.0, image.size());
+    affine_orb::detail::ViewWork<256> work;
+    affine_orb::detail::prepare_view(view, image.size(), options.views.antialias, options.pyramid, border, 8.0, work);
+    affine_orb::Pyramid pyramid(options.pyramid);
+    cv::Mat scratch;
+    work.renderer.render(image, &work.regions.front(), scratch, pyramid.level0(view.size));
+    pyramid.build_from_level0(&work.regions);
+    affine_orb::DetectorWorkspace detector;
+    int strong_only = 0;
+    int refilled = 0;
+    for (int l = 0; l < options.pyramid.levels; ++l) {
+      CAPTURE(l);
+      affine_orb::detail::LevelCandidates all;
+      affine_orb::detail::collect_candidates(work, l, image, cv::Mat(), pyramid, border, options.detector, detector,
+                                             all);
+      const int strong = count_at_least(all.responses, initial);
+      const int n = static_cast<int>(all.responses.size());
+      for (const int k : {0, 1, strong / 2, strong - 1, strong, strong + 1, n}) {
+        if (k < 0) continue;
+        CAPTURE(k);
+        affine_orb::detail::LevelCandidates c;
+        affine_orb::detail::detect_level(work, l, image, cv::Mat(), pyramid, border, options.detector, k, detector, c);
+        CHECK(c.complete == (k > strong));
+        strong_only += !c.complete;
+        CHECK(strongest_differences(c, all, k) == 0);
+        if (c.complete) CHECK(c.responses.size() == all.responses.size());
+      }
+
+      // An earlier view chose the level's four strongest corners.
+      affine_orb::detail::RepeatGrids repeats;
+      repeats.reset(image.size(), options.pyramid, 2.5, 0);
+      for (const int i : affine_orb::select_strongest(all.responses, 4)) {
+        repeats.enter(all.original_points[static_cast<std::size_t>(i)], l);
+      }
+      affine_orb::detail::LevelCandidates rest = all;
+      affine_orb::detail::drop_repeats(repeats, l, rest);
+      const int strong_left = count_at_least(rest.responses, initial);
+      REQUIRE(strong_left < strong);
+      for (const int k : {strong_left, strong_left + 1, strong}) {
+        CAPTURE(k);
+        affine_orb::detail::LevelCandidates c;
+        affine_orb::detail::detect_level(work, l, image, cv::Mat(), pyramid, border, options.detector, k, detector, c);
+        const bool strong_before = !c.complete;
+        affine_orb::detail::drop_repeats_and_refill(repeats, k, work, l, image, cv::Mat(), pyramid, border,
+                                                    options.detector, detector, c);
+        CHECK(c.complete == (k > strong_left));
+        refilled += strong_before && c.complete;
+        CHECK(strongest_differences(c, rest, k) == 0);
+      }
+    }
+    CHECK(strong_only > 0);
+    CHECK(refilled > 0);
   }
 }
 

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -233,11 +234,7 @@ class Extractor {
       }
       if (!turns_->wait(v)) return;
       if (!empty) {
-        if (merging() && v > 0) {
-          for (int l = 0; l < options_.pyramid.levels; ++l) {
-            detail::drop_repeats(repeats_, l, work.levels[static_cast<std::size_t>(l)]);
-          }
-        }
+        if (merging() && v > 0) drop_repeats(v, image, mask, pyramid, work);
         choose(v, image.size(), work);
       }
       turns_->pass(v);
@@ -264,12 +261,38 @@ class Extractor {
     }
   }
 
-  /// Step 2 for view v: candidates of every level into work.levels (detail::collect_candidates()).
+  /// Step 2 for view v: candidates of every level into work.levels (detail::detect_level()), only
+  /// the strong ones where they fill the level's shortlist of the strongest (strongest_needed())
+  /// and did in the thread's last view.
   void detect_view(int v, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, ThreadWork& work) {
     for (int l = 0; l < options_.pyramid.levels; ++l) {
-      detail::collect_candidates(view_work_[static_cast<std::size_t>(v)], l, image, mask, pyramid, support_border(),
-                                 options_.detector, work.detector, work.levels[static_cast<std::size_t>(l)]);
+      const std::size_t k = static_cast<std::size_t>(l);
+      detail::detect_level(view_work_[static_cast<std::size_t>(v)], l, image, mask, pyramid, support_border(),
+                           options_.detector, work.strong_sufficed[k] ? strongest_needed(v, l) : -1, work.detector,
+                           work.levels[k]);
     }
+  }
+
+  /// Step 3, in tilted view v's turn: drops the candidates of every level that repeat a keypoint of
+  /// an earlier view, refilling a level left with too few strong ones
+  /// (detail::drop_repeats_and_refill()).
+  void drop_repeats(int v, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, ThreadWork& work) {
+    for (int l = 0; l < options_.pyramid.levels; ++l) {
+      detail::drop_repeats_and_refill(repeats_, strongest_needed(v, l), view_work_[static_cast<std::size_t>(v)], l,
+                                      image, mask, pyramid, support_border(), options_.detector, work.detector,
+                                      work.levels[static_cast<std::size_t>(l)]);
+    }
+  }
+
+  /// The candidates of view v, level l that step 3 keeps at most when it chooses the strongest by
+  /// FAST score (ExtractorOptions::spreading, DetectorOptions::score): its shortlist; −1 when it
+  /// chooses otherwise or its final keypoints, whose budgets depend on every level's candidates.
+  int strongest_needed(int v, int l) const {
+    if (direct(v) || options_.spreading != Spreading::kStrongest || options_.detector.score != ScoreType::kFast) {
+      return -1;
+    }
+    return detail::shortlist_size(std::numeric_limits<int>::max(), budgets_.group(v * options_.pyramid.levels + l),
+                                  options_.shortlist);
   }
 
   /// Step 3, in view v's turn: the candidates each level describes (its final keypoints when
@@ -287,6 +310,10 @@ class Extractor {
       const int target = direct(v) ? budgets_.take(g)
                                    : detail::shortlist_size(static_cast<int>(c.responses.size()), budgets_.group(g),
                                                             options_.shortlist);
+      if (const int needed = strongest_needed(v, l); needed >= 0) {
+        work.strong_sufficed[static_cast<std::size_t>(l)] =
+            detail::strong_enough(c, needed, options_.detector.initial_threshold);
+      }
       const cv::Rect2f region = spread_region(v, l, size);
       detail::spread(options_.spreading, c.original_points, c.responses, region, target, work.spread);
       c.chosen = work.spread.kept;
@@ -390,6 +417,7 @@ class Extractor {
     // which view in later frames never makes one allocate.
     for (ThreadWork& work : thread_work_) {
       work.levels.resize(static_cast<std::size_t>(options_.pyramid.levels));
+      work.strong_sufficed.assign(static_cast<std::size_t>(options_.pyramid.levels), 1);
       if (largest_tilted.area() > 0) {
         work.pyramid.reserve(largest_tilted);
         detail::fit_buffer(work.detector.scores, largest_tilted, CV_8UC1);

@@ -43,6 +43,9 @@ struct LevelCandidates {
   std::vector<cv::Point2f> original_points;  ///< the same, original pixels
   std::vector<float> responses;
   std::vector<int> chosen;  ///< the candidates to describe, ascending
+  /// Whether the candidates include those at DetectorOptions::min_threshold; false when they are
+  /// the corners scoring initial_threshold or more only (detect_level()).
+  bool complete = true;
 };
 
 /// The buffers one thread of an Extractor processes views with, reused view after view and frame after frame:
@@ -57,6 +60,10 @@ struct ThreadWork {
   typename Descriptor::LevelData descriptor_data;  ///< one level at a time
   std::vector<cv::Point2f> describe_points;
   SpreadWork spread;
+  /// Per level, whether the strong candidates of the last view this thread chose the strongest of
+  /// were enough there (strong_enough()); where not, its next view detects all the level's
+  /// candidates at once instead of the strong ones first (detect_level()), which only costs time.
+  std::vector<char> strong_sufficed;
 };
 
 /// What a (view, level) keeps of its view once the view's pixels are gone: its described
@@ -112,9 +119,8 @@ void prepare_view(const AffineView& view, cv::Size size, double antialias, const
   }
 }
 
-/// Step 2 of an Extractor for level l of a view: the FAST candidates of level l of `view` (in
-/// `pyramid`) among the level's valid pixels (support border `border` level pixels) under
-/// `detector`, kept where their original position lies
+/// The FAST candidates of level l of `view` (in `pyramid`) among the level's valid pixels
+/// (support border `border` level pixels) under `detector`, kept where their original position lies
 /// in the image and the mask allows, into `c`.
 template <int Bits>
 void collect_candidates(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask,
@@ -141,6 +147,27 @@ void collect_candidates(const ViewWork<Bits>& view, int l, const cv::Mat& image,
   }
 }
 
+/// Step 2 of an Extractor for level l of a view: collect_candidates(). With `strongest` >= 0, for a
+/// selection of at most that many of the strongest by FAST score (Spreading::kStrongest,
+/// ScoreType::kFast), first only the corners scoring initial_threshold or more, and all the
+/// candidates only when those are fewer (c.complete). The fallback corners of the cells without
+/// such a corner all score less, and whether a pixel is a local maximum does not depend on the
+/// threshold, so such a selection keeps the same corners from either set, for less scoring.
+template <int Bits>
+void detect_level(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid,
+                  int border, const DetectorOptions& detector, int strongest, DetectorWorkspace& workspace,
+                  LevelCandidates& c) {
+  if (strongest >= 0 && detector.min_threshold < detector.initial_threshold) {
+    DetectorOptions strong = detector;
+    strong.min_threshold = detector.initial_threshold;
+    collect_candidates(view, l, image, mask, pyramid, border, strong, workspace, c);
+    c.complete = static_cast<int>(c.responses.size()) < strongest;
+    if (!c.complete) return;
+  }
+  c.complete = true;
+  collect_candidates(view, l, image, mask, pyramid, border, detector, workspace, c);
+}
+
 /// Step 3 of an Extractor, in a tilted view's turn, with DuplicatePolicy::kMerge: drops the
 /// candidates of level l that repeat a keypoint chosen by an earlier view (`repeats`).
 inline void drop_repeats(const RepeatGrids& repeats, int l, LevelCandidates& c) {
@@ -155,6 +182,29 @@ inline void drop_repeats(const RepeatGrids& repeats, int l, LevelCandidates& c) 
   c.level_points.resize(n);
   c.original_points.resize(n);
   c.responses.resize(n);
+}
+
+/// Whether `c` holds at least `strongest` candidates scoring `initial_threshold` or more: whether a
+/// selection of that many of the strongest by FAST score needs none of the fallback corners.
+inline bool strong_enough(const LevelCandidates& c, int strongest, int initial_threshold) {
+  if (!c.complete) return static_cast<int>(c.responses.size()) >= strongest;
+  const auto strong = std::count_if(c.responses.begin(), c.responses.end(),
+                                    [&](float r) { return r >= static_cast<float>(initial_threshold); });
+  return strong >= strongest;
+}
+
+/// Step 3 of an Extractor for level l of a tilted view, in its turn, with DuplicatePolicy::kMerge:
+/// drop_repeats(); when that leaves fewer than `strongest` of strong candidates only (c.complete
+/// false, detect_level()), all the level's candidates, and drop_repeats() again, so that the
+/// strongest selection still sees every candidate it could keep.
+template <int Bits>
+void drop_repeats_and_refill(const RepeatGrids& repeats, int strongest, const ViewWork<Bits>& view, int l,
+                             const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, int border,
+                             const DetectorOptions& detector, DetectorWorkspace& workspace, LevelCandidates& c) {
+  drop_repeats(repeats, l, c);
+  if (c.complete || static_cast<int>(c.responses.size()) >= strongest) return;
+  detect_level(view, l, image, mask, pyramid, border, detector, -1, workspace, c);
+  drop_repeats(repeats, l, c);
 }
 
 /// The box, in original pixels, that the spreading of a view's level l divides (Extractor's step

@@ -358,19 +358,18 @@ TEST_CASE("repeat suppression equals a brute-force reference") {
 
 namespace {
 
-/// How many of the k strongest of `got` differ from the k strongest of `want` (position in the
-/// level and in the image, response), and −1 when they are not as many.
+/// How many candidates of `got` differ from the k strongest of `want` in raster order
+/// (select_strongest(), the reference: position in the level and in the image, response), and −1
+/// when they are not as many.
 int strongest_differences(const affine_orb::detail::LevelCandidates& got,
                           const affine_orb::detail::LevelCandidates& want, int k) {
-  const std::vector<int> a = affine_orb::select_strongest(got.responses, k);
   const std::vector<int> b = affine_orb::select_strongest(want.responses, k);
-  if (a.size() != b.size()) return -1;
+  if (got.responses.size() != b.size()) return -1;
   int differences = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const auto p = static_cast<std::size_t>(a[i]);
+  for (std::size_t i = 0; i < b.size(); ++i) {
     const auto q = static_cast<std::size_t>(b[i]);
-    differences += got.level_points[p] != want.level_points[q] || got.original_points[p] != want.original_points[q] ||
-                   got.responses[p] != want.responses[q];
+    differences += got.level_points[i] != want.level_points[q] || got.original_points[i] != want.original_points[q] ||
+                   got.responses[i] != want.responses[q];
   }
   return differences;
 }
@@ -380,74 +379,96 @@ int count_at_least(const std::vector<float>& responses, int threshold) {
       std::count_if(responses.begin(), responses.end(), [&](float r) { return r >= static_cast<float>(threshold); }));
 }
 
+/// How often detail::keep_strongest() started from the strong corners alone, and how often it
+/// then detected all the corners.
+struct StrongestPaths {
+  int strong_only = 0;
+  int refilled = 0;
+};
+
+/// The support border of the views in check_strongest_taken(), level pixels.
+constexpr int kStrongestBorder = 19;
+
+/// The checks of the test case below on level l of `work`, rendered into `pyramid`, under `mask`.
+void check_strongest_taken(const affine_orb::detail::ViewWork<256>& work, int l, const cv::Mat& image,
+                           const cv::Mat& mask, const affine_orb::Pyramid& pyramid, StrongestPaths& paths) {
+  const affine_orb::ExtractorOptions options;
+  const int border = kStrongestBorder;
+  affine_orb::DetectorWorkspace detector;
+  const auto take = [&](int k, const affine_orb::detail::RepeatGrids* repeats) {
+    affine_orb::detail::LevelCandidates c;
+    affine_orb::detail::detect_level(work, l, image, mask, pyramid, border, options.detector, k, true, detector, c);
+    const bool strong_before = !c.complete;
+    paths.strong_only += strong_before;
+    affine_orb::detail::keep_strongest(work, l, image, mask, pyramid, border, options.detector, repeats, k, detector,
+                                       c);
+    paths.refilled += strong_before && c.complete;
+    return c;
+  };
+  affine_orb::detail::LevelCandidates all;
+  affine_orb::detail::collect_candidates(work, l, image, mask, pyramid, border, options.detector, detector, all);
+  const int strong = count_at_least(all.responses, options.detector.initial_threshold);
+  const int n = static_cast<int>(all.responses.size());
+  for (const int k : {0, 1, strong / 2, strong - 1, strong, strong + 1, n}) {
+    if (k < 0) continue;
+    CAPTURE(k);
+    const affine_orb::detail::LevelCandidates c = take(k, nullptr);
+    CHECK(c.complete == (k > strong));
+    CHECK(strongest_differences(c, all, k) == 0);
+  }
+
+  // An earlier view chose the level's four strongest corners.
+  affine_orb::detail::RepeatGrids repeats;
+  repeats.reset(image.size(), options.pyramid, 2.5, 0);
+  for (const int i : affine_orb::select_strongest(all.responses, 4)) {
+    repeats.enter(all.original_points[static_cast<std::size_t>(i)], l);
+  }
+  affine_orb::detail::LevelCandidates rest = all;
+  affine_orb::detail::drop_repeats(repeats, l, rest);
+  const int strong_left = count_at_least(rest.responses, options.detector.initial_threshold);
+  REQUIRE(strong_left < strong);
+  for (const int k : {strong_left, strong_left + 1, strong}) {
+    CAPTURE(k);
+    const affine_orb::detail::LevelCandidates c = take(k, &repeats);
+    CHECK(c.complete == (k > strong_left));
+    CHECK(strongest_differences(c, rest, k) == 0);
+  }
+}
+
 }  // namespace
 
-TEST_CASE("a tilted view level's strong candidates hold the strongest of all its candidates") {
-  // detail::detect_level() with a selection size k scores only the corners at initial_threshold
-  // when there are k or more; the k strongest of them must be the k strongest of all the level's
-  // candidates (collect_candidates() at both thresholds, the reference), and with fewer it must
-  // give all the candidates. After repeats of an earlier view are dropped (here: of the level's
-  // strongest corners), drop_repeats_and_refill() must leave the k strongest of the reference
-  // without those repeats, refilling when the strong ones left are fewer than k.
+TEST_CASE("a tilted view level's strongest candidates are taken from its strong corners first") {
+  // For a selection of the k strongest, detail::detect_level() scores only the corners at
+  // initial_threshold when there are k or more, and detail::keep_strongest() maps and tests
+  // them in decreasing score until k pass, detecting all the corners when fewer do. What it
+  // leaves must be the k strongest of all the level's candidates (collect_candidates() at both
+  // thresholds, under the mask, the reference) in raster order; after an earlier view chose the
+  // level's strongest corners, the k strongest of the reference without their repeats.
   const affine_orb::ExtractorOptions options;
-  const int border = 19;
-  const int initial = options.detector.initial_threshold;
+  StrongestPaths paths;
   for (const bool graf : {true, false}) {
     CAPTURE(graf);
     const cv::Mat image = graf ? affine_orb::test::graf(1) : affine_orb::test::textured_photo();
     const affine_orb::AffineView view = affine_orb::make_view(2.0, 40.0, image.size());
     affine_orb::detail::ViewWork<256> work;
-    affine_orb::detail::prepare_view(view, image.size(), options.views.antialias, options.pyramid, border, 8.0, work);
+    affine_orb::detail::prepare_view(view, image.size(), options.views.antialias, options.pyramid, kStrongestBorder,
+                                     8.0, work);
     affine_orb::Pyramid pyramid(options.pyramid);
     cv::Mat scratch;
     work.renderer.render(image, &work.regions.front(), scratch, pyramid.level0(view.size));
     pyramid.build_from_level0(&work.regions);
-    affine_orb::DetectorWorkspace detector;
-    int strong_only = 0;
-    int refilled = 0;
-    for (int l = 0; l < options.pyramid.levels; ++l) {
-      CAPTURE(l);
-      affine_orb::detail::LevelCandidates all;
-      affine_orb::detail::collect_candidates(work, l, image, cv::Mat(), pyramid, border, options.detector, detector,
-                                             all);
-      const int strong = count_at_least(all.responses, initial);
-      const int n = static_cast<int>(all.responses.size());
-      for (const int k : {0, 1, strong / 2, strong - 1, strong, strong + 1, n}) {
-        if (k < 0) continue;
-        CAPTURE(k);
-        affine_orb::detail::LevelCandidates c;
-        affine_orb::detail::detect_level(work, l, image, cv::Mat(), pyramid, border, options.detector, k, detector, c);
-        CHECK(c.complete == (k > strong));
-        strong_only += !c.complete;
-        CHECK(strongest_differences(c, all, k) == 0);
-        if (c.complete) CHECK(c.responses.size() == all.responses.size());
-      }
-
-      // An earlier view chose the level's four strongest corners.
-      affine_orb::detail::RepeatGrids repeats;
-      repeats.reset(image.size(), options.pyramid, 2.5, 0);
-      for (const int i : affine_orb::select_strongest(all.responses, 4)) {
-        repeats.enter(all.original_points[static_cast<std::size_t>(i)], l);
-      }
-      affine_orb::detail::LevelCandidates rest = all;
-      affine_orb::detail::drop_repeats(repeats, l, rest);
-      const int strong_left = count_at_least(rest.responses, initial);
-      REQUIRE(strong_left < strong);
-      for (const int k : {strong_left, strong_left + 1, strong}) {
-        CAPTURE(k);
-        affine_orb::detail::LevelCandidates c;
-        affine_orb::detail::detect_level(work, l, image, cv::Mat(), pyramid, border, options.detector, k, detector, c);
-        const bool strong_before = !c.complete;
-        affine_orb::detail::drop_repeats_and_refill(repeats, k, work, l, image, cv::Mat(), pyramid, border,
-                                                    options.detector, detector, c);
-        CHECK(c.complete == (k > strong_left));
-        refilled += strong_before && c.complete;
-        CHECK(strongest_differences(c, rest, k) == 0);
+    cv::Mat half(image.size(), CV_8UC1, cv::Scalar(255));
+    half.colRange(0, image.cols / 2).setTo(0);
+    for (const cv::Mat& mask : {cv::Mat(), half}) {
+      CAPTURE(mask.empty());
+      for (int l = 0; l < options.pyramid.levels; ++l) {
+        CAPTURE(l);
+        check_strongest_taken(work, l, image, mask, pyramid, paths);
       }
     }
-    CHECK(strong_only > 0);
-    CHECK(refilled > 0);
   }
+  CHECK(paths.strong_only > 0);
+  CHECK(paths.refilled > 0);
 }
 
 TEST_CASE("no two output keypoints repeat each other under the merge; keep-all keeps repeats") {

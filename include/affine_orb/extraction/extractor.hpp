@@ -261,26 +261,37 @@ class Extractor {
     }
   }
 
-  /// Step 2 for view v: candidates of every level into work.levels (detail::detect_level()), only
-  /// the strong ones where they fill the level's shortlist of the strongest (strongest_needed())
-  /// and did in the thread's last view.
+  /// Step 2 for view v: candidates of every level into work.levels (detail::detect_level()); for
+  /// a level that keeps its strongest (strongest_needed()), only the strong corners first where
+  /// they sufficed in the thread's last view, and, unless a merge waits for the view's turn, its
+  /// strongest taken at once (detail::keep_strongest()).
   void detect_view(int v, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, ThreadWork& work) {
     for (int l = 0; l < options_.pyramid.levels; ++l) {
       const std::size_t k = static_cast<std::size_t>(l);
-      detail::detect_level(view_work_[static_cast<std::size_t>(v)], l, image, mask, pyramid, support_border(),
-                           options_.detector, work.strong_sufficed[k] ? strongest_needed(v, l) : -1, work.detector,
-                           work.levels[k]);
+      const int strongest = strongest_needed(v, l);
+      const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
+      detail::detect_level(view, l, image, mask, pyramid, support_border(), options_.detector, strongest,
+                           work.strong_sufficed[k] != 0, work.detector, work.levels[k]);
+      if (strongest >= 0 && !(merging() && v > 0)) {
+        detail::keep_strongest(view, l, image, mask, pyramid, support_border(), options_.detector, nullptr, strongest,
+                               work.detector, work.levels[k]);
+      }
     }
   }
 
   /// Step 3, in tilted view v's turn: drops the candidates of every level that repeat a keypoint of
-  /// an earlier view, refilling a level left with too few strong ones
-  /// (detail::drop_repeats_and_refill()).
+  /// an earlier view (detail::drop_repeats()), or, for a level that keeps its strongest, takes
+  /// its strongest that repeat none (detail::keep_strongest()).
   void drop_repeats(int v, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, ThreadWork& work) {
     for (int l = 0; l < options_.pyramid.levels; ++l) {
-      detail::drop_repeats_and_refill(repeats_, strongest_needed(v, l), view_work_[static_cast<std::size_t>(v)], l,
-                                      image, mask, pyramid, support_border(), options_.detector, work.detector,
-                                      work.levels[static_cast<std::size_t>(l)]);
+      detail::LevelCandidates& c = work.levels[static_cast<std::size_t>(l)];
+      const int strongest = strongest_needed(v, l);
+      if (strongest < 0) {
+        detail::drop_repeats(repeats_, l, c);
+        continue;
+      }
+      detail::keep_strongest(view_work_[static_cast<std::size_t>(v)], l, image, mask, pyramid, support_border(),
+                             options_.detector, &repeats_, strongest, work.detector, c);
     }
   }
 

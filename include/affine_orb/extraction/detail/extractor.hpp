@@ -38,13 +38,14 @@ struct SpreadWork {
 
 /// The candidates of one level of the view a thread is processing.
 struct LevelCandidates {
-  Candidates detected;
+  Candidates detected;                       ///< the level's FAST corners and their scores, raster order
   std::vector<cv::Point2f> level_points;     ///< level pixels of the view
   std::vector<cv::Point2f> original_points;  ///< the same, original pixels
   std::vector<float> responses;
   std::vector<int> chosen;  ///< the candidates to describe, ascending
-  /// Whether the candidates include those at DetectorOptions::min_threshold; false when they are
-  /// the corners scoring initial_threshold or more only (detect_level()).
+  std::vector<int> order;   ///< take_strongest()'s buffer: the detected corners by score
+  /// Whether the detected corners include those at DetectorOptions::min_threshold; false when
+  /// they are the corners scoring initial_threshold or more only (detect_level()).
   bool complete = true;
 };
 
@@ -119,9 +120,34 @@ void prepare_view(const AffineView& view, cv::Size size, double antialias, const
   }
 }
 
-/// The FAST candidates of level l of `view` (in `pyramid`) among the level's valid pixels
-/// (support border `border` level pixels) under `detector`, kept where their original position lies
-/// in the image and the mask allows, into `c`.
+/// Where corner `corner` of level l of `view` (in `pyramid`) lies in the original image, into
+/// `original`; whether that position lies in the image and the mask allows it.
+template <int Bits>
+bool map_candidate(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid,
+                   const Corner& corner, cv::Point2f& original) {
+  const cv::Point2f p(static_cast<float>(corner.x), static_cast<float>(corner.y));
+  const cv::Point2d q = apply_affine(view.view.to_original, pyramid.to_level0(p, l));
+  original = cv::Point2f(static_cast<float>(q.x), static_cast<float>(q.y));
+  const int mx = cvRound(q.x);
+  const int my = cvRound(q.y);
+  if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) return false;
+  return mask.empty() || mask.at<std::uint8_t>(my, mx) != 0;
+}
+
+/// The FAST corners of level l of `view` (in `pyramid`) among the level's valid pixels (support
+/// border `border` level pixels) under `detector`, into c.detected.
+template <int Bits>
+void detect_corners(const ViewWork<Bits>& view, int l, const Pyramid& pyramid, int border,
+                    const DetectorOptions& detector, DetectorWorkspace& workspace, LevelCandidates& c) {
+  c.detected.corners.clear();
+  c.detected.responses.clear();
+  const RowSpans& valid = view.levels[static_cast<std::size_t>(l)].valid;
+  if (valid.rows() == 0) return;
+  detect_candidates(pyramid.level(l), valid, cv::Point(border, border), detector, workspace, c.detected);
+}
+
+/// The FAST candidates of level l of `view` (detect_corners()), kept where map_candidate()
+/// allows them, into c's candidates.
 template <int Bits>
 void collect_candidates(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask,
                         const Pyramid& pyramid, int border, const DetectorOptions& detector,
@@ -129,43 +155,42 @@ void collect_candidates(const ViewWork<Bits>& view, int l, const cv::Mat& image,
   c.level_points.clear();
   c.original_points.clear();
   c.responses.clear();
-  const RowSpans& valid = view.levels[static_cast<std::size_t>(l)].valid;
-  if (valid.rows() == 0) return;
-  detect_candidates(pyramid.level(l), valid, cv::Point(border, border), detector, workspace, c.detected);
-  const cv::Matx23d& back = view.view.to_original;
+  detect_corners(view, l, pyramid, border, detector, workspace, c);
   for (std::size_t i = 0; i < c.detected.corners.size(); ++i) {
     const Corner& corner = c.detected.corners[i];
-    const cv::Point2f p(static_cast<float>(corner.x), static_cast<float>(corner.y));
-    const cv::Point2d q = apply_affine(back, pyramid.to_level0(p, l));
-    const int mx = cvRound(q.x);
-    const int my = cvRound(q.y);
-    if (mx < 0 || my < 0 || mx >= image.cols || my >= image.rows) continue;
-    if (!mask.empty() && mask.at<std::uint8_t>(my, mx) == 0) continue;
-    c.level_points.push_back(p);
-    c.original_points.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+    cv::Point2f original;
+    if (!map_candidate(view, l, image, mask, pyramid, corner, original)) continue;
+    c.level_points.emplace_back(static_cast<float>(corner.x), static_cast<float>(corner.y));
+    c.original_points.push_back(original);
     c.responses.push_back(c.detected.responses[i]);
   }
 }
 
-/// Step 2 of an Extractor for level l of a view: collect_candidates(). With `strongest` >= 0, for a
-/// selection of at most that many of the strongest by FAST score (Spreading::kStrongest,
-/// ScoreType::kFast), first only the corners scoring initial_threshold or more, and all the
-/// candidates only when those are fewer (c.complete). The fallback corners of the cells without
-/// such a corner all score less, and whether a pixel is a local maximum does not depend on the
-/// threshold, so such a selection keeps the same corners from either set, for less scoring.
+/// Step 2 of an Extractor for level l of a view. Without a selection of the strongest
+/// (`strongest` < 0): collect_candidates(). With one (at most `strongest` candidates, the
+/// strongest by FAST score: Spreading::kStrongest, ScoreType::kFast): the level's corners alone
+/// (detect_corners()), which keep_strongest() maps and tests in decreasing score; with
+/// `strong_first`, only the corners scoring initial_threshold or more when there are at least
+/// `strongest` of them (c.complete false). The fallback corners of the cells without such a
+/// corner all score less, and whether a pixel is a local maximum does not depend on the
+/// threshold, so the selection keeps the same corners from either set, for less scoring.
 template <int Bits>
 void detect_level(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid,
-                  int border, const DetectorOptions& detector, int strongest, DetectorWorkspace& workspace,
-                  LevelCandidates& c) {
-  if (strongest >= 0 && detector.min_threshold < detector.initial_threshold) {
+                  int border, const DetectorOptions& detector, int strongest, bool strong_first,
+                  DetectorWorkspace& workspace, LevelCandidates& c) {
+  c.complete = true;
+  if (strongest < 0) {
+    collect_candidates(view, l, image, mask, pyramid, border, detector, workspace, c);
+    return;
+  }
+  if (strong_first && detector.min_threshold < detector.initial_threshold) {
     DetectorOptions strong = detector;
     strong.min_threshold = detector.initial_threshold;
-    collect_candidates(view, l, image, mask, pyramid, border, strong, workspace, c);
-    c.complete = static_cast<int>(c.responses.size()) < strongest;
+    detect_corners(view, l, pyramid, border, strong, workspace, c);
+    c.complete = static_cast<int>(c.detected.corners.size()) < strongest;
     if (!c.complete) return;
   }
-  c.complete = true;
-  collect_candidates(view, l, image, mask, pyramid, border, detector, workspace, c);
+  detect_corners(view, l, pyramid, border, detector, workspace, c);
 }
 
 /// Step 3 of an Extractor, in a tilted view's turn, with DuplicatePolicy::kMerge: drops the
@@ -184,27 +209,70 @@ inline void drop_repeats(const RepeatGrids& repeats, int l, LevelCandidates& c) 
   c.responses.resize(n);
 }
 
-/// Whether `c` holds at least `strongest` candidates scoring `initial_threshold` or more: whether a
-/// selection of that many of the strongest by FAST score needs none of the fallback corners.
+/// The indices of c.detected's corners by decreasing FAST score, the earlier first among equal
+/// scores (select_strongest()'s order), into c.order: a stable counting sort on the 8-bit scores.
+inline void order_by_score(LevelCandidates& c) {
+  std::array<int, 257> start{};
+  for (const Corner& corner : c.detected.corners) ++start[static_cast<std::size_t>(256 - corner.score)];
+  for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+  c.order.resize(c.detected.corners.size());
+  for (std::size_t i = 0; i < c.detected.corners.size(); ++i) {
+    const std::size_t bin = static_cast<std::size_t>(255 - c.detected.corners[i].score);
+    c.order[static_cast<std::size_t>(start[bin]++)] = static_cast<int>(i);
+  }
+}
+
+/// The first `strongest` corners of c.detected in order_by_score() whose position map_candidate()
+/// allows and, with `repeats` (DuplicatePolicy::kMerge, a tilted view's turn), repeats no
+/// keypoint of an earlier view, as c's candidates in raster order: the corners a selection of
+/// the `strongest` strongest keeps among all that pass, tested only until that many pass.
+template <int Bits>
+void take_strongest(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask,
+                    const Pyramid& pyramid, const RepeatGrids* repeats, int strongest, LevelCandidates& c) {
+  order_by_score(c);
+  std::size_t taken = 0;  // the corners taken move to the front of c.order
+  cv::Point2f original;
+  for (std::size_t k = 0; k < c.order.size() && static_cast<int>(taken) < strongest; ++k) {
+    const Corner& corner = c.detected.corners[static_cast<std::size_t>(c.order[k])];
+    if (!map_candidate(view, l, image, mask, pyramid, corner, original)) continue;
+    if (repeats && repeats->repeats(original, l)) continue;
+    c.order[taken++] = c.order[k];
+  }
+  std::sort(c.order.begin(), c.order.begin() + static_cast<std::ptrdiff_t>(taken));
+  c.level_points.clear();
+  c.original_points.clear();
+  c.responses.clear();
+  for (std::size_t k = 0; k < taken; ++k) {
+    const std::size_t i = static_cast<std::size_t>(c.order[k]);
+    map_candidate(view, l, image, mask, pyramid, c.detected.corners[i], original);
+    c.level_points.emplace_back(static_cast<float>(c.detected.corners[i].x),
+                                static_cast<float>(c.detected.corners[i].y));
+    c.original_points.push_back(original);
+    c.responses.push_back(c.detected.responses[i]);
+  }
+}
+
+/// Step 3 of an Extractor for level l of a view detected for a selection of the `strongest`
+/// strongest (detect_level()): take_strongest(); when fewer than that pass among the strong
+/// corners alone (c.complete false), all the level's corners are detected and taken from again,
+/// so that the selection sees every candidate it could keep.
+template <int Bits>
+void keep_strongest(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask,
+                    const Pyramid& pyramid, int border, const DetectorOptions& detector, const RepeatGrids* repeats,
+                    int strongest, DetectorWorkspace& workspace, LevelCandidates& c) {
+  take_strongest(view, l, image, mask, pyramid, repeats, strongest, c);
+  if (c.complete || static_cast<int>(c.responses.size()) >= strongest) return;
+  detect_level(view, l, image, mask, pyramid, border, detector, strongest, false, workspace, c);
+  take_strongest(view, l, image, mask, pyramid, repeats, strongest, c);
+}
+
+/// Whether `c`, as keep_strongest() leaves it, holds `strongest` candidates scoring
+/// `initial_threshold` or more: whether the selection of that many needs none of the fallback
+/// corners.
 inline bool strong_enough(const LevelCandidates& c, int strongest, int initial_threshold) {
-  if (!c.complete) return static_cast<int>(c.responses.size()) >= strongest;
   const auto strong = std::count_if(c.responses.begin(), c.responses.end(),
                                     [&](float r) { return r >= static_cast<float>(initial_threshold); });
   return strong >= strongest;
-}
-
-/// Step 3 of an Extractor for level l of a tilted view, in its turn, with DuplicatePolicy::kMerge:
-/// drop_repeats(); when that leaves fewer than `strongest` of strong candidates only (c.complete
-/// false, detect_level()), all the level's candidates, and drop_repeats() again, so that the
-/// strongest selection still sees every candidate it could keep.
-template <int Bits>
-void drop_repeats_and_refill(const RepeatGrids& repeats, int strongest, const ViewWork<Bits>& view, int l,
-                             const cv::Mat& image, const cv::Mat& mask, const Pyramid& pyramid, int border,
-                             const DetectorOptions& detector, DetectorWorkspace& workspace, LevelCandidates& c) {
-  drop_repeats(repeats, l, c);
-  if (c.complete || static_cast<int>(c.responses.size()) >= strongest) return;
-  detect_level(view, l, image, mask, pyramid, border, detector, -1, workspace, c);
-  drop_repeats(repeats, l, c);
 }
 
 /// The box, in original pixels, that the spreading of a view's level l divides (Extractor's step

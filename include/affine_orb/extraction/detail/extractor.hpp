@@ -252,10 +252,11 @@ void take_strongest(const ViewWork<Bits>& view, int l, const cv::Mat& image, con
   }
 }
 
-/// Step 3 of an Extractor for level l of a view detected for a selection of the `strongest`
-/// strongest (detect_level()): take_strongest(); when fewer than that pass among the strong
-/// corners alone (c.complete false), all the level's corners are detected and taken from again,
-/// so that the selection sees every candidate it could keep.
+/// For level l of a view detected for a selection of the `strongest` strongest (detect_level()),
+/// in the view's turn with a merge (step 3), else right after step 2: take_strongest(); when
+/// fewer than that pass among the strong corners alone (c.complete false), all the level's
+/// corners are detected and taken from again, so that the selection sees every candidate it
+/// could keep.
 template <int Bits>
 void keep_strongest(const ViewWork<Bits>& view, int l, const cv::Mat& image, const cv::Mat& mask,
                     const Pyramid& pyramid, int border, const DetectorOptions& detector, const RepeatGrids* repeats,

@@ -234,7 +234,7 @@ class Extractor {
       }
       if (!turns_->wait(v)) return;
       if (!empty) {
-        if (merging() && v > 0) drop_repeats(v, image, mask, pyramid, work);
+        if (drops_repeats(v)) drop_repeats(v, image, mask, pyramid, work);
         choose(v, image.size(), work);
       }
       turns_->pass(v);
@@ -272,7 +272,7 @@ class Extractor {
       const ViewWork& view = view_work_[static_cast<std::size_t>(v)];
       detail::detect_level(view, l, image, mask, pyramid, support_border(), options_.detector, strongest,
                            work.strong_sufficed[k] != 0, work.detector, work.levels[k]);
-      if (strongest >= 0 && !(merging() && v > 0)) {
+      if (strongest >= 0 && !drops_repeats(v)) {
         detail::keep_strongest(view, l, image, mask, pyramid, support_border(), options_.detector, nullptr, strongest,
                                work.detector, work.levels[k]);
       }
@@ -392,6 +392,9 @@ class Extractor {
   /// Whether the views' repeats are merged: ExtractorOptions::merge_duplicates, and views besides
   /// the image to merge (with the image alone the repeat grids would be filled and never read).
   bool merging() const { return options_.merge_duplicates.has_value() && view_work_.size() > 1; }
+  /// Whether view v drops the repeats of earlier views in its turn (step 3): a level that keeps
+  /// its strongest then takes them there, else right after detection.
+  bool drops_repeats(int v) const { return merging() && v > 0; }
   bool fork() const { return options_.fork_keypoints(); }
 
   /// Whether view v's keypoints are final when it is processed (the image with kAdditive, or the

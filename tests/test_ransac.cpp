@@ -173,6 +173,16 @@ Eigen::Vector3d back_project(const Eigen::Matrix3d& k, const Eigen::Vector2d& p,
 
 Eigen::Matrix3d unit(const Eigen::Matrix3d& m) { return (m(2, 2) < 0.0 ? -1.0 : 1.0) * m / m.norm(); }
 
+/// The largest distance between the images under h and g of a 640 x 480 image's corners, pixels.
+double max_corner_distance(const Eigen::Matrix3d& h, const Eigen::Matrix3d& g) {
+  double distance = 0.0;
+  for (const Eigen::Vector2d& c :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 0), Eigen::Vector2d(0, 479), Eigen::Vector2d(639, 479)}) {
+    distance = std::max(distance, ((h * c.homogeneous()).hnormalized() - (g * c.homogeneous()).hnormalized()).norm());
+  }
+  return distance;
+}
+
 std::vector<cv::Point2f> to_cv(const std::vector<Eigen::Vector2d>& points) {
   std::vector<cv::Point2f> out;
   for (const Eigen::Vector2d& p : points) out.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
@@ -649,13 +659,7 @@ TEST_CASE("geometric estimators inside ransac: plane with outliers (H) and 3-D s
   }
   const auto hr = affine_orb::ransac(affine_orb::HomographyEstimator(to_cv(plane1), to_cv(plane2)));
   REQUIRE(hr.success);
-  double corner_error = 0.0;
-  for (const Eigen::Vector2d& c :
-       {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 0), Eigen::Vector2d(0, 479), Eigen::Vector2d(639, 479)}) {
-    corner_error = std::max(
-        corner_error, ((hr.model.h * c.homogeneous()).hnormalized() - (h * c.homogeneous()).hnormalized()).norm());
-  }
-  CHECK(corner_error < 1.0);
+  CHECK(max_corner_distance(hr.model.h, h) < 1.0);
   int recovered = 0, total = 0;
   for (std::size_t i = 0; i < plane1.size(); ++i) {
     total += plane_truth[i];
@@ -678,6 +682,149 @@ TEST_CASE("geometric estimators inside ransac: plane with outliers (H) and 3-D s
   // A random outlier passes the epipolar test when it falls within ~2 px of its epipolar line: a
   // few percent of them.
   CHECK(outliers_accepted < 0.1 * 400 * 0.3);
+}
+
+namespace {
+
+/// Correspondences of the plane of `v` (x2 = H x1 for the first `inliers`, random positions after
+/// them) with keypoint orientations in degrees: an inlier's image-2 orientation is the direction
+/// its image-1 orientation takes under H, measured by central differences of H's point map (not by
+/// the estimator's Jacobian), turned by `turn(i)` degrees; an outlier's is uniform.
+struct OrientedPlane {
+  std::vector<cv::Point2f> points1, points2;
+  std::vector<float> angles1, angles2;
+};
+
+template <class Turn>
+OrientedPlane oriented_plane(const Eigen::Matrix3d& h, int count, int inliers, std::uint64_t seed, Turn turn) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> px(0.0, 639.0), py(0.0, 479.0), degrees(0.0, 360.0);
+  const auto map = [&](const Eigen::Vector2d& p) { return (h * p.homogeneous()).hnormalized(); };
+  OrientedPlane plane;
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector2d p(px(rng), py(rng));
+    const double a1 = degrees(rng);
+    const Eigen::Vector2d u(std::cos(a1 * M_PI / 180.0), std::sin(a1 * M_PI / 180.0));
+    const Eigen::Vector2d q = i < inliers ? map(p) : Eigen::Vector2d(px(rng), py(rng));
+    const Eigen::Vector2d d = map(p + 1e-3 * u) - map(p - 1e-3 * u);
+    const double a2 = i < inliers ? std::atan2(d.y(), d.x()) * 180.0 / M_PI + turn(i) : degrees(rng);
+    plane.points1.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+    plane.points2.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
+    plane.angles1.push_back(static_cast<float>(a1));
+    plane.angles2.push_back(static_cast<float>(a2));
+  }
+  return plane;
+}
+
+/// The estimator of `plane`'s correspondences and orientations under the 45° test.
+affine_orb::OrientedHomographyEstimator oriented_estimator(const OrientedPlane& plane) {
+  return affine_orb::OrientedHomographyEstimator(plane.points1, plane.points2, plane.angles1, plane.angles2, 45.0);
+}
+
+/// Calls f(sample) for `count` samples of four distinct indices in [0, n), drawn with seed `seed`.
+template <class F>
+void for_each_sample(std::size_t n, std::uint64_t seed, int count, F f) {
+  affine_orb::detail::IndexSampler sampler(n, seed);
+  for (int t = 0; t < count; ++t) {
+    std::array<int, 4> sample{};
+    sampler.draw(sample.data(), 4);
+    f(sample);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("oriented homography estimator: a sample's model is kept exactly when its orientations agree") {
+  // Every correspondence is on the plane; correspondence i's image-2 orientation is turned by
+  // 0–80° (away from the 45° bound by more than the float angles' rounding). A sample's model is
+  // the plain estimator's, kept exactly when all four turns are within 45°.
+  const TwoViews v;
+  std::vector<double> turns;
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> small(0.0, 40.0), large(50.0, 80.0), sign(-1.0, 1.0);
+  for (int i = 0; i < 300; ++i) turns.push_back((i % 3 == 0 ? large(rng) : small(rng)) * (sign(rng) < 0 ? -1 : 1));
+  const OrientedPlane plane = oriented_plane(v.homography(), 300, 300, 22, [&](int i) { return turns[i]; });
+  const affine_orb::HomographyEstimator plain(plane.points1, plane.points2);
+  const affine_orb::OrientedHomographyEstimator oriented = oriented_estimator(plane);
+  int kept = 0, refused = 0;
+  for_each_sample(300, 23, 2000, [&](const std::array<int, 4>& sample) {
+    const auto expected = plain.generate(sample);
+    const auto got = oriented.generate(sample);
+    bool agree = true;
+    for (const int i : sample) agree = agree && std::abs(turns[static_cast<std::size_t>(i)]) <= 45.0;
+    if (expected.count == 0) {
+      CHECK(got.count == 0);
+      return;
+    }
+    REQUIRE(got.count == (agree ? 1 : 0));
+    kept += agree ? 1 : 0;
+    refused += agree ? 0 : 1;
+    if (agree) CHECK((got.models[0].h - expected.models[0].h).norm() == 0.0);
+  });
+  CHECK(kept > 300);  // (2/3)⁴ of the samples
+  CHECK(refused > 1000);
+  // Score and refinement are the plain estimator's.
+  const std::optional<affine_orb::HomographyModel> truth = affine_orb::HomographyModel::from_pixels(v.homography());
+  REQUIRE(truth);
+  CHECK(oriented.score(*truth, 7).value == plain.score(*truth, 7).value);
+  CHECK(oriented.max_point_score() == plain.max_point_score());
+}
+
+TEST_CASE("oriented homography estimator: wrong matches pass with the chance their orientations agree") {
+  // Samples of four outliers, whose image-2 orientations are uniform and independent of the
+  // model: each passes the 45° test with probability 90/360, a sample with (1/4)⁴ = 0.39 %.
+  const TwoViews v;
+  const OrientedPlane plane = oriented_plane(v.homography(), 400, 0, 31, [](int) { return 0.0; });
+  const affine_orb::HomographyEstimator plain(plane.points1, plane.points2);
+  const affine_orb::OrientedHomographyEstimator oriented = oriented_estimator(plane);
+  int models = 0, kept = 0;
+  for_each_sample(400, 32, 150000, [&](const std::array<int, 4>& sample) {
+    models += plain.generate(sample).count;
+    kept += oriented.generate(sample).count;
+  });
+  // Binomial(models, 1/256): mean and standard deviation; the bounds are 4 deviations wide.
+  const double mean = models / 256.0, deviation = std::sqrt(mean * (1.0 - 1.0 / 256.0));
+  CHECK(models > 20000);
+  CHECK(kept > mean - 4.0 * deviation);
+  CHECK(kept < mean + 4.0 * deviation);
+}
+
+TEST_CASE("oriented homography estimator inside ransac: a plane among 90 % wrong matches") {
+  // 40 correct correspondences of 400, 0.5 px noise, orientations within 20° of the truth. Four
+  // correct ones are drawn with probability 10⁻⁴; 30 000 samples of which the orientation test
+  // scores a fraction find the plane.
+  const TwoViews v;
+  const Eigen::Matrix3d h = v.homography();
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> turn(-20.0, 20.0);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  OrientedPlane plane = oriented_plane(h, 400, 40, 42, [&](int) { return turn(rng); });
+  for (std::size_t i = 0; i < 40; ++i) {
+    plane.points2[i] += cv::Point2f(static_cast<float>(noise(rng)), static_cast<float>(noise(rng)));
+  }
+  const affine_orb::OrientedHomographyEstimator oriented = oriented_estimator(plane);
+  RansacOptions options;
+  options.max_iterations = 30000;
+  options.confidence = 0.999;
+  const auto found = affine_orb::ransac(oriented, options);
+  REQUIRE(found.success);
+  CHECK(max_corner_distance(found.model.h, h) < 2.0);
+  int correct = 0;
+  for (std::size_t i = 0; i < 40; ++i) correct += found.inliers[i] != 0 ? 1 : 0;
+  CHECK(correct >= 36);
+
+  // Bad input.
+  const auto make = [&](std::vector<float> a1, std::vector<float> a2, double bound) {
+    return affine_orb::OrientedHomographyEstimator(plane.points1, plane.points2, a1, a2, bound);
+  };
+  CHECK_THROWS_AS(make(plane.angles1, {}, 45.0), std::invalid_argument);
+  CHECK_THROWS_AS(make(plane.angles1, plane.angles2, 0.0), std::invalid_argument);
+  CHECK_THROWS_AS(make(plane.angles1, plane.angles2, 181.0), std::invalid_argument);
+  CHECK_THROWS_AS(make(plane.angles1, plane.angles2, std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
+  std::vector<float> nan = plane.angles1;
+  nan[3] = std::numeric_limits<float>::quiet_NaN();
+  CHECK_THROWS_AS(make(nan, plane.angles2, 45.0), std::invalid_argument);
+  CHECK_NOTHROW(make(plane.angles1, plane.angles2, 180.0));
 }
 
 TEST_CASE("geometric estimators at their minimal sizes: 3, 4 and 5 correspondences for H, 7 and 8 for F") {

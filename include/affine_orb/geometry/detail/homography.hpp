@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Internals (namespace detail, not part of the API): the DLT equations, the sample consistency test and the normalised
-/// 4-point solver behind geometry/homography.hpp.
+/// Internals (namespace detail, not part of the API): the DLT equations, the sample consistency test, the normalised
+/// 4-point solver and the transfer of a direction behind geometry/homography.hpp.
 
 #include <array>
 #include <cmath>
@@ -77,6 +77,19 @@ inline std::optional<Eigen::Matrix3d> homography_4_point_normalized(const std::a
   // vanishing determinant means the sample maps a line to a point.
   if (!(std::abs(hn.determinant()) > kRankTolerance)) return std::nullopt;
   return hn;
+}
+
+/// The direction J u, where J is the Jacobian at p (pixels) of the map x -> H x dehomogenised:
+/// J = (H₂ₓ₂ − q h₃ᵀ) / w with w the third coordinate of H p, q its image and h₃ᵀ the first two
+/// entries of H's last row. Not normalised; not finite when H maps p to infinity.
+inline Eigen::Vector2d transfer_direction(const Eigen::Matrix3d& h, const Eigen::Vector2d& p,
+                                          const Eigen::Vector2d& u) {
+  const double inv_w = 1.0 / (h(2, 0) * p.x() + h(2, 1) * p.y() + h(2, 2));
+  const double qx = (h(0, 0) * p.x() + h(0, 1) * p.y() + h(0, 2)) * inv_w;
+  const double qy = (h(1, 0) * p.x() + h(1, 1) * p.y() + h(1, 2)) * inv_w;
+  const double h3u = h(2, 0) * u.x() + h(2, 1) * u.y();
+  return Eigen::Vector2d((h(0, 0) * u.x() + h(0, 1) * u.y() - qx * h3u) * inv_w,
+                         (h(1, 0) * u.x() + h(1, 1) * u.y() - qy * h3u) * inv_w);
 }
 
 }  // namespace detail

@@ -852,8 +852,8 @@ void stage_and_support_variants(const Variant& variant) {
 }
 
 /// --sweep's variants of the estimation: the final fit's Cauchy scale and max_error, the RANSAC
-/// searches, the last stage's search, aligned correspondences with other
-/// CorrespondenceAlignmentOptions, a plain stage of 1000.
+/// searches, the last stage's search (its σ, samples and orientation test), aligned
+/// correspondences with other CorrespondenceAlignmentOptions, a plain stage of 1000.
 void estimation_variants(const Variant& variant) {
   for (const auto& [scale, bound] : std::vector<std::pair<double, double>>{{1.0, 2.0},
                                                                            {1.0, 2.4},
@@ -889,6 +889,19 @@ void estimation_variants(const Variant& variant) {
       o.last_stage_search = affine_orb::LastStageSearchOptions{};
       o.last_stage_search->sigma = sigma;
     });
+  }
+  variant("last-stage search, no orientation test, up to 10000 samples", [](auto& o) {
+    o.last_stage_search->max_orientation_difference.reset();
+    o.last_stage_search->ransac.max_iterations = 10000;
+  });
+  for (const int samples : {10000, 100000}) {
+    variant("last-stage search, up to " + std::to_string(samples) + " samples",
+            [samples](auto& o) { o.last_stage_search->ransac.max_iterations = samples; });
+  }
+  for (const double angle : {30.0, 60.0}) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "last-stage search, orientation test %.0f degrees", angle);
+    variant(name, [angle](auto& o) { o.last_stage_search->max_orientation_difference = angle; });
   }
   const std::vector<std::pair<std::string, std::function<void(affine_orb::CorrespondenceAlignmentOptions&)>>> aligned =
       {{"patch_radius 4", [](auto& a) { a.patch_radius = 4; }},

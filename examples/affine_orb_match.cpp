@@ -79,6 +79,10 @@ std::string usage() {
          "                     lacks support, a RANSAC of up to " +
          std::to_string(affine_orb::LastStageSearchOptions{}.ransac.max_iterations) +
          " samples for a homography alone on its matches\n"
+         "                     (a sample scored only when it maps its keypoints' orientations within " +
+         std::to_string(std::lround(*affine_orb::LastStageSearchOptions{}.max_orientation_difference)) +
+         " degrees\n"
+         "                     of their matches')\n"
          "                     replaces it when it scores higher (not with --one-shot)\n"
          "  --align            image 2's point of every match of a verified homography aligned with image 1's\n"
          "                     patch under it (sub-pixel, TwoViewOptions::align_correspondences), the homography\n"

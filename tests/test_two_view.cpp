@@ -360,8 +360,9 @@ TEST_CASE("the defaults verify bark 1 -> 6's plane on its 12 stage-1 inliers" * 
 TEST_CASE("the last stage's search finds the homography that 500 uniform samples miss") {
   // The day-and-night scene with Lowe's ratio 0.9: about a fifth of the matches are correct,
   // so four correct ones are drawn with probability ~10⁻³ per sample, and select_model()'s 500
-  // uniform samples end on a wrong model that lacks support. LastStageSearchOptions' 10 000
-  // samples on the same matches find the plane's homography, which then passes the tests.
+  // uniform samples end on a wrong model that lacks support. LastStageSearchOptions' 30 000
+  // samples under the orientation test on the same matches find the plane's homography, which
+  // then passes the tests; so do 10 000 samples without the test.
   const DayNightScene scene = day_night_scene();
   affine_orb::TwoViewOptions options = day_night_options(0.9f);
   options.last_stage_search.reset();
@@ -377,6 +378,12 @@ TEST_CASE("the last stage's search finds the homography that 500 uniform samples
   CHECK(searched.stages.back().last_stage_search);
   CHECK(affine_orb::test::corner_error(searched.model.homography, scene.truth, scene.plane) < 2.0);
   CHECK(inlier_precision(searched, scene.truth) > 0.9);
+  options.last_stage_search->max_orientation_difference.reset();
+  options.last_stage_search->ransac.max_iterations = 10000;
+  const auto untested = affine_orb::TwoViewMatcher<affine_orb::Rbrief>(options).match(scene.image1, scene.image2);
+  CHECK(untested.verified);
+  CHECK(untested.stages.back().last_stage_search);
+  CHECK(affine_orb::test::corner_error(untested.model.homography, scene.truth, scene.plane) < 2.0);
 }
 
 TEST_CASE("two-view matching honours masks and refuses bad input") {
@@ -431,6 +438,8 @@ TEST_CASE("two-view matching honours masks and refuses bad input") {
         o.last_stage_search = affine_orb::LastStageSearchOptions{};
         o.last_stage_search->ransac.max_iterations = 0;
       },
+      [](auto& o) { o.last_stage_search->max_orientation_difference = 0.0; },
+      [](auto& o) { o.last_stage_search->max_orientation_difference = 180.5; },
   };
   for (const auto& change : invalid) {
     affine_orb::TwoViewOptions bad;

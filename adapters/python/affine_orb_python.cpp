@@ -527,10 +527,11 @@ std::string two_view_options_doc() {
          "homography that passed the precision test is fitted to all its correspondences within 4 px (IRLS of the "
          "Sampson error), and the returned matches are the stage's own matches plus the guided ones that homography "
          "accepts, never looser than the unguided ones. last_stage_search (on by default): when the last stage's model "
-         "lacks support, a RANSAC of up to 10 000 samples for a homography alone on its matches, whose homography "
-         "replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). progressive_sampling: "
-         "RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for pairs whose correct "
-         "matches are a few percent. ";
+         "lacks support, a RANSAC of up to 30 000 samples (each scored only when its homography maps the four "
+         "keypoints' orientations within 45 degrees of their matches') for a homography alone on its matches, whose "
+         "homography replaces the stage's when it scores higher (affine_orb::LastStageSearchOptions). "
+         "progressive_sampling: RANSAC draws from the matches of smallest descriptor distance first (PROSAC), for "
+         "pairs whose correct matches are a few percent. ";
 }
 
 /// What TwoViewMatcher.match() and match_images() return, for their docstrings.

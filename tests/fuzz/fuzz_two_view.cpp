@@ -4,12 +4,12 @@
 // tests (max_false_alarms, min_inlier_ratio), PROSAC (progressive_sampling), all_stages, the precision test
 // (max_half_disagreement), guided matching (rounds, gate radius, ratio), the aligned correspondences
 // (align_correspondences), the final fit (final_fit: Cauchy scale, max_error, iterations, some invalid), the last
-// stage's search (last_stage_search: σ, some invalid), stages to the extreme tilts 4 and 4√2, given or from
-// stages_up_to(). Invalid options must end in std::invalid_argument, valid ones in a result that keeps every documented
-// invariant: stage reports, the stopping rule, inlier flags, match indices, keypoints inside their image and mask,
-// image-2 points of the correspondences within max_shift of their keypoints, each stage's
-// keypoints a superset of the stage before;
-// anything else (a crash, a sanitizer report, another exception, a broken invariant) is a finding.
+// stage's search (last_stage_search: σ and the orientation test, some invalid), stages to the extreme tilts 4 and 4√2,
+// given or from stages_up_to(). Invalid options must end in std::invalid_argument, valid ones in a result that keeps
+// every documented invariant: stage reports, the stopping rule, inlier flags, match indices, keypoints inside their
+// image and mask, image-2 points of the correspondences within max_shift of their keypoints, each stage's keypoints a
+// superset of the stage before; anything else (a crash, a sanitizer report, another exception, a broken invariant) is a
+// finding.
 //   clang++ -fsanitize=fuzzer,address,undefined ... (see tests/CMakeLists.txt, AFFINE_ORB_BUILD_FUZZERS)
 #include <algorithm>
 #include <cmath>
@@ -107,12 +107,14 @@ void read_estimation(Bytes& bytes, affine_orb::TwoViewOptions& options) {
     options.final_fit->max_error = 3.0 * ((fit >> 3) & 3);
     options.final_fit->iterations = (fit >> 5) & 3;
   }
-  // The last stage's search off or on, with as many samples as model selection and σ 0 (invalid)
-  // to 2.25 px.
+  // The last stage's search off or on, with as many samples as model selection, σ 0 (invalid)
+  // to 2.25 px, and the orientation test off, at 0° (invalid), 45° or 180°.
   if (fit & 128) {
     options.last_stage_search = affine_orb::LastStageSearchOptions{};
     options.last_stage_search->ransac = options.model.ransac;
     options.last_stage_search->sigma = 0.75 * ((fit >> 1) & 3);
+    static constexpr std::optional<double> kOrientation[4] = {std::nullopt, 0.0, 45.0, 180.0};
+    options.last_stage_search->max_orientation_difference = kOrientation[(fit >> 5) & 3];
   } else {
     options.last_stage_search.reset();
   }

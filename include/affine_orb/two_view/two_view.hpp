@@ -196,7 +196,7 @@ class TwoViewMatcher {
     stage.inliers = stage.model.chosen_inliers();
     stage.inlier_count = stage.model.chosen_inlier_count();
     stage.inlier_probability = inlier_probability(stage.model.model, image1.size(), image2.size());
-    if (reported && options_.last_stage_search && !supported(stage) && search_homography(stage)) {
+    if (reported && options_.last_stage_search && !supported(stage) && search_homography(features1, features2, stage)) {
       stage.searched = true;
       stage.inlier_probability = inlier_probability(stage.model.model, image1.size(), image2.size());
     }
@@ -215,13 +215,15 @@ class TwoViewMatcher {
     return stage;
   }
 
-  /// TwoViewOptions::last_stage_search on `stage`'s matches: when it finds a homography that
-  /// scores higher under its σ than the stage's estimated one, that homography, its inliers and
-  /// score become the stage's chosen model; returns whether they did.
-  bool search_homography(StageModel& stage) const {
+  /// TwoViewOptions::last_stage_search on `stage`'s matches (of `features1` and `features2`): when
+  /// it finds a homography that scores higher under its σ than the stage's estimated one, that
+  /// homography, its inliers and score become the stage's chosen model; returns whether they did.
+  bool search_homography(const Features<kBits>& features1, const Features<kBits>& features2, StageModel& stage) const {
     const LastStageSearchOptions& search = *options_.last_stage_search;
     const HomographyEstimator estimator(stage.points.points1, stage.points.points2, homography_scoring(search.sigma));
-    const RansacResult<HomographyModel> found = ransac(estimator, search.ransac);
+    const RansacResult<HomographyModel> found = search.max_orientation_difference
+                                                    ? search_oriented(features1, features2, stage)
+                                                    : ransac(estimator, search.ransac);
     if (!found.success) return false;
     const std::optional<HomographyModel> current = HomographyModel::from_pixels(stage.model.homography);
     if (current && evaluate_model(estimator, *current).score >= found.score) return false;
@@ -229,6 +231,21 @@ class TwoViewMatcher {
     stage.model.model = GeometricModel::kHomography;
     take_homography(stage, found);
     return true;
+  }
+
+  /// The last stage's search with LastStageSearchOptions::max_orientation_difference: ransac() of
+  /// an OrientedHomographyEstimator on `stage`'s matches and their keypoints' orientations.
+  RansacResult<HomographyModel> search_oriented(const Features<kBits>& features1, const Features<kBits>& features2,
+                                                const StageModel& stage) const {
+    const LastStageSearchOptions& search = *options_.last_stage_search;
+    std::vector<float> angles1(stage.matches.size()), angles2(stage.matches.size());
+    for (std::size_t i = 0; i < stage.matches.size(); ++i) {
+      angles1[i] = features1.keypoints[static_cast<std::size_t>(stage.matches[i].query)].angle;
+      angles2[i] = features2.keypoints[static_cast<std::size_t>(stage.matches[i].train)].angle;
+    }
+    const OrientedHomographyEstimator estimator(stage.points.points1, stage.points.points2, angles1, angles2,
+                                                *search.max_orientation_difference, homography_scoring(search.sigma));
+    return ransac(estimator, search.ransac);
   }
 
   /// TwoViewOptions::final_fit on the chosen homography of `stage`: with `fit`, refine_homography()

@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// Internals (namespace detail, not part of the API): the DLT equations, the sample consistency test, the normalised
-/// 4-point solver and the transfer of a direction behind geometry/homography.hpp.
+/// 4-point solver, a homography's local affine map and the transfer of a direction behind geometry/homography.hpp and
+/// two_view/alignment.hpp.
 
 #include <array>
 #include <cmath>
@@ -77,6 +78,19 @@ inline std::optional<Eigen::Matrix3d> homography_4_point_normalized(const std::a
   // vanishing determinant means the sample maps a line to a point.
   if (!(std::abs(hn.determinant()) > kRankTolerance)) return std::nullopt;
   return hn;
+}
+
+/// H's first-order (affine) map at x (pixels): d(π(H x))/dx for the projection
+/// π(a, b, c) = (a/c, b/c). nullopt where H x lies at infinity or the map is not finite.
+inline std::optional<Eigen::Matrix2d> homography_jacobian(const Eigen::Matrix3d& h, const Eigen::Vector2d& x) {
+  const Eigen::Vector3d hx = h * Eigen::Vector3d(x.x(), x.y(), 1.0);
+  if (!(std::abs(hx.z()) > 1e-12)) return std::nullopt;
+  const Eigen::Vector2d projected = hx.head<2>() / hx.z();
+  Eigen::Matrix2d jacobian;
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) jacobian(r, c) = (h(r, c) - projected(r) * h(2, c)) / hx.z();
+  if (!jacobian.allFinite()) return std::nullopt;
+  return jacobian;
 }
 
 /// The direction J u, where J is the Jacobian at p (pixels) of the map x -> H x dehomogenised:

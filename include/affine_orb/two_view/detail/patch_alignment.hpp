@@ -15,6 +15,8 @@
 #include <Eigen/LU>
 #include <opencv2/core.hpp>
 
+#include "affine_orb/geometry/detail/homography.hpp"
+
 namespace affine_orb::detail {
 
 /// Bilinear interpolation at fractions (ax, ay) of a pixel between r0[0], r0[1] (one image row)
@@ -39,19 +41,6 @@ inline bool samplable(const cv::Mat& image, const Eigen::Vector2d& centre, const
   const double ey = half * (std::abs(a(1, 0)) + std::abs(a(1, 1)));
   return centre.x() - ex >= 0.0 && centre.y() - ey >= 0.0 && centre.x() + ex < image.cols - 1 &&
          centre.y() + ey < image.rows - 1;
-}
-
-/// H's first-order (affine) map at x (pixels): d(π(H x))/dx for the projection
-/// π(a, b, c) = (a/c, b/c). nullopt where H x lies at infinity or the map is not finite.
-inline std::optional<Eigen::Matrix2d> homography_jacobian(const Eigen::Matrix3d& h, const Eigen::Vector2d& x) {
-  const Eigen::Vector3d hx = h * Eigen::Vector3d(x.x(), x.y(), 1.0);
-  if (!(std::abs(hx.z()) > 1e-12)) return std::nullopt;
-  const Eigen::Vector2d projected = hx.head<2>() / hx.z();
-  Eigen::Matrix2d jacobian;
-  for (int r = 0; r < 2; ++r)
-    for (int c = 0; c < 2; ++c) jacobian(r, c) = (h(r, c) - projected(r) * h(2, c)) / hx.z();
-  if (!jacobian.allFinite()) return std::nullopt;
-  return jacobian;
 }
 
 /// Buffers of align_patch(), reused across correspondences.

@@ -239,10 +239,11 @@ class OrientedHomographyEstimator {
   /// True when `h` maps the orientation of correspondence `index` in image 1 to within
   /// max_difference of its orientation in image 2.
   bool oriented(const Eigen::Matrix3d& h, std::size_t index) const {
-    const Eigen::Vector2d mapped = detail::transfer_direction(h, points1_[index], directions1_[index]);
+    const std::optional<Eigen::Matrix2d> jacobian = detail::homography_jacobian(h, points1_[index]);
+    if (!jacobian) return false;  // the point maps to infinity
+    const Eigen::Vector2d mapped = *jacobian * directions1_[index];
     const double norm = mapped.norm();
-    // The comparison is false for a direction mapped to infinity or to zero (NaN): not oriented.
-    return mapped.dot(directions2_[index]) >= min_cosine_ * norm && norm > 0.0;
+    return norm > 0.0 && mapped.dot(directions2_[index]) >= min_cosine_ * norm;
   }
 
  private:

@@ -1,8 +1,7 @@
 #pragma once
 /// \file
 /// Internals (namespace detail, not part of the API): the DLT equations, the sample consistency test, the normalised
-/// 4-point solver, a homography's local affine map and the transfer of a direction behind geometry/homography.hpp and
-/// two_view/alignment.hpp.
+/// 4-point solver and a homography's local affine map behind geometry/homography.hpp and two_view/alignment.hpp.
 
 #include <array>
 #include <cmath>
@@ -91,19 +90,6 @@ inline std::optional<Eigen::Matrix2d> homography_jacobian(const Eigen::Matrix3d&
     for (int c = 0; c < 2; ++c) jacobian(r, c) = (h(r, c) - projected(r) * h(2, c)) / hx.z();
   if (!jacobian.allFinite()) return std::nullopt;
   return jacobian;
-}
-
-/// The direction J u, where J is the Jacobian at p (pixels) of the map x -> H x dehomogenised:
-/// J = (H₂ₓ₂ − q h₃ᵀ) / w with w the third coordinate of H p, q its image and h₃ᵀ the first two
-/// entries of H's last row. Not normalised; not finite when H maps p to infinity.
-inline Eigen::Vector2d transfer_direction(const Eigen::Matrix3d& h, const Eigen::Vector2d& p,
-                                          const Eigen::Vector2d& u) {
-  const double inv_w = 1.0 / (h(2, 0) * p.x() + h(2, 1) * p.y() + h(2, 2));
-  const double qx = (h(0, 0) * p.x() + h(0, 1) * p.y() + h(0, 2)) * inv_w;
-  const double qy = (h(1, 0) * p.x() + h(1, 1) * p.y() + h(1, 2)) * inv_w;
-  const double h3u = h(2, 0) * u.x() + h(2, 1) * u.y();
-  return Eigen::Vector2d((h(0, 0) * u.x() + h(0, 1) * u.y() - qx * h3u) * inv_w,
-                         (h(1, 0) * u.x() + h(1, 1) * u.y() - qy * h3u) * inv_w);
 }
 
 }  // namespace detail

@@ -220,10 +220,27 @@ class TwoViewMatcher {
   /// homography, its inliers and score become the stage's chosen model; returns whether they did.
   bool search_homography(const Features<kBits>& features1, const Features<kBits>& features2, StageModel& stage) const {
     const LastStageSearchOptions& search = *options_.last_stage_search;
-    const HomographyEstimator estimator(stage.points.points1, stage.points.points2, homography_scoring(search.sigma));
-    const RansacResult<HomographyModel> found = search.max_orientation_difference
-                                                    ? search_oriented(features1, features2, stage)
-                                                    : ransac(estimator, search.ransac);
+    const TruncatedChi2Score scoring = homography_scoring(search.sigma);
+    if (!search.max_orientation_difference) {
+      return take_search(HomographyEstimator(stage.points.points1, stage.points.points2, scoring), stage);
+    }
+    std::vector<float> angles1(stage.matches.size()), angles2(stage.matches.size());
+    for (std::size_t i = 0; i < stage.matches.size(); ++i) {
+      angles1[i] = features1.keypoints[static_cast<std::size_t>(stage.matches[i].query)].angle;
+      angles2[i] = features2.keypoints[static_cast<std::size_t>(stage.matches[i].train)].angle;
+    }
+    return take_search(OrientedHomographyEstimator(stage.points.points1, stage.points.points2, angles1, angles2,
+                                                   *search.max_orientation_difference, scoring),
+                       stage);
+  }
+
+  /// ransac() of the last stage's search with `estimator` (a HomographyEstimator, or an
+  /// OrientedHomographyEstimator under LastStageSearchOptions::max_orientation_difference; both
+  /// score alike) on `stage`'s matches; its homography becomes the stage's chosen model when it
+  /// scores higher than the stage's own. Returns whether it did.
+  template <class Estimator>
+  bool take_search(const Estimator& estimator, StageModel& stage) const {
+    const RansacResult<HomographyModel> found = ransac(estimator, options_.last_stage_search->ransac);
     if (!found.success) return false;
     const std::optional<HomographyModel> current = HomographyModel::from_pixels(stage.model.homography);
     if (current && evaluate_model(estimator, *current).score >= found.score) return false;
@@ -231,21 +248,6 @@ class TwoViewMatcher {
     stage.model.model = GeometricModel::kHomography;
     take_homography(stage, found);
     return true;
-  }
-
-  /// The last stage's search with LastStageSearchOptions::max_orientation_difference: ransac() of
-  /// an OrientedHomographyEstimator on `stage`'s matches and their keypoints' orientations.
-  RansacResult<HomographyModel> search_oriented(const Features<kBits>& features1, const Features<kBits>& features2,
-                                                const StageModel& stage) const {
-    const LastStageSearchOptions& search = *options_.last_stage_search;
-    std::vector<float> angles1(stage.matches.size()), angles2(stage.matches.size());
-    for (std::size_t i = 0; i < stage.matches.size(); ++i) {
-      angles1[i] = features1.keypoints[static_cast<std::size_t>(stage.matches[i].query)].angle;
-      angles2[i] = features2.keypoints[static_cast<std::size_t>(stage.matches[i].train)].angle;
-    }
-    const OrientedHomographyEstimator estimator(stage.points.points1, stage.points.points2, angles1, angles2,
-                                                *search.max_orientation_difference, homography_scoring(search.sigma));
-    return ransac(estimator, search.ransac);
   }
 
   /// TwoViewOptions::final_fit on the chosen homography of `stage`: with `fit`, refine_homography()
